@@ -47,7 +47,9 @@ void ModalState::apply(std::string_view s) {
         else if (integral && iv == 80) motion = "G80";
         break;
       case 'M':
-        if (iv == 3 || iv == 4 || iv == 5) spindle = "M" + std::to_string(iv);
+        if (iv == 3) spindle = "M3";
+        else if (iv == 4) spindle = "M4";
+        else if (iv == 5) spindle = "M5";
         else if (iv == 7) mist = true;
         else if (iv == 8) flood = true;
         else if (iv == 9) mist = flood = false;
