@@ -95,7 +95,9 @@ void FirmwareIdentifier::finish(const char* why) {
     if (chosen) break;
   }
   Identification id;
-  if (!chosen) chosen = candidate_;
+  // A more specific banner (higher priority) beats a generic version line:
+  // grblHAL answers [VER:1.1f...] like GRBL 1.1 does.
+  if (candidate_ && (!chosen || candidate_->priority > chosen->priority)) chosen = candidate_;
   if (chosen) {
     id.profile = *chosen;
     id.recognised = true;
