@@ -1,0 +1,62 @@
+#pragma once
+// Ties it together for `cncstream FILE PORT`: serial transport, firmware
+// identification, the protocol engine, and the journal, on one Asio event loop
+// (single thread; the engine stays a pure state machine driven from here).
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "cncstream/protocol/engine.hpp"
+#include "cncstream/protocol/identifier.hpp"
+#include "cncstream/transport/serial_transport.hpp"
+
+namespace cncstream::transport {
+
+struct RunnerOptions {
+  std::string port;  // device path (resolve "auto" with choose_auto_port first)
+  SerialSettings serial;
+  std::filesystem::path profiles_dir;
+  std::optional<std::string> force_profile;  // skip identification's choice (still waits for the banner)
+  protocol::IdentifyOptions identify;
+  protocol::JobMode mode = protocol::JobMode::Run;
+  std::optional<std::filesystem::path> journal_path;  // nullopt: no journal
+  double tick_s = 0.02;
+  double progress_interval_s = 0.1;  // journal rows at least this often while lines are answered
+  double max_run_s = 0;              // 0: no limit (tests set one)
+  std::function<void(const protocol::Event&)> on_event;
+  std::function<void(const std::string&)> on_log;
+  std::function<void()> on_port_opened;  // e.g. a test's fake controller "resets" here
+};
+
+struct RunResult {
+  protocol::JobOutcome outcome = protocol::JobOutcome::None;
+  std::string message;
+  std::string profile;
+  std::int64_t job_id = 0;
+  std::size_t lines_answered = 0;
+  long last_answered_line = 0;
+  std::size_t bytes_written = 0;
+  double seconds = 0;
+};
+
+class StreamRunner {
+ public:
+  explicit StreamRunner(RunnerOptions opt);
+  ~StreamRunner();
+  // Blocking: streams `gcode_path` and returns how the job ended. Throws for
+  // bad input (unreadable file, lines too long for the controller, no port).
+  RunResult run(const std::filesystem::path& gcode_path);
+  // Safe from a signal-watching thread or handler context: asks for a
+  // controlled stop (hold, wait, reset) at the next tick.
+  void request_stop() { stop_requested_ = true; }
+
+ private:
+  struct State;
+  RunnerOptions opt_;
+  std::atomic<bool> stop_requested_{false};
+};
+
+}  // namespace cncstream::transport
