@@ -250,10 +250,17 @@ void GrblSession::on_status(const StatusReport& raw) {
   } else if (r.state != MachineState::Tool) {
     tool_state_reported_ = false;
   }
+  // A "Hold" without a sub-state (some forks) counts as stopped once two
+  // reports in a row give the same machine position.
+  const bool hold_unmoved = r.state == MachineState::Hold && r.substate < 0 && r.mpos && last_mpos_ &&
+                            *r.mpos == *last_mpos_;
+  last_mpos_ = r.mpos;
   if (stop_requested_ && !expect_reset_ && progress_.state == JobState::Stopping) {
-    const bool still = (r.state == MachineState::Hold && r.substate == 0) || r.state == MachineState::Idle ||
-                       r.state == MachineState::Alarm || r.state == MachineState::Check ||
-                       r.state == MachineState::Sleep || (r.state == MachineState::Door && r.substate == 0);
+    // Door:0 ready to resume, Door:1 stopped with the door ajar; 2 and 3 still move.
+    const bool still = (r.state == MachineState::Hold && r.substate == 0) || hold_unmoved ||
+                       r.state == MachineState::Idle || r.state == MachineState::Alarm ||
+                       r.state == MachineState::Check || r.state == MachineState::Sleep ||
+                       (r.state == MachineState::Door && (r.substate == 0 || r.substate == 1));
     // Reset only once motion has stopped: a reset in motion raises ALARM:3
     // and loses the position; after Hold:0 it is clean.
     if (still) soft_reset();

@@ -200,6 +200,18 @@ TEST(GrblSession, StopHoldsWaitsForHold0ThenResetsWithoutAlarm) {
   EXPECT_EQ(s.counter().in_flight_count(), 0u);
 }
 
+TEST(GrblSession, StopWithoutHoldSubstateWaitsForTheMachineToSettle) {
+  GrblSession s(grbl(), no_poll());
+  s.start_job(program({"G1X100F100", "G1X0"}), JobMode::Run, 0);
+  s.take_output();
+  s.stop();
+  s.take_output();
+  s.on_bytes("<Hold|MPos:5,0,0>\n<Hold|MPos:5.5,0,0>\n<Door:2|MPos:5.6,0,0>\n", 1);
+  EXPECT_EQ(s.take_output().find('\x18'), std::string::npos);  // still moving
+  s.on_bytes("<Hold|MPos:5.6,0,0>\n", 1.2);
+  EXPECT_NE(s.take_output().find('\x18'), std::string::npos);
+}
+
 TEST(GrblSession, AlarmStopsExplainsAndResetsWhenRequired) {
   GrblSession s(grbl(), no_poll());
   s.start_job(program({"G0X1000", "G1X1F10"}), JobMode::Run, 0);

@@ -111,10 +111,18 @@ TEST(Identify, FluidNc) {
 }
 
 TEST(Identify, MarlinUsesM115) {
-  std::string q;
-  auto r = identify({"start", "echo:Marlin 2.1.2.1"}, {"FIRMWARE_NAME:Marlin 2.1.2.1 (Jun 1 2023)", "ok"}, &q);
-  EXPECT_EQ(q, "M115\n");
-  EXPECT_EQ(r.profile.id, "marlin");
+  FirmwareIdentifier id(profiles());
+  id.start(0);
+  id.on_line("start", 0.1);
+  id.on_line("echo:Marlin 2.1.2.1", 0.1);
+  EXPECT_EQ(id.take_output(), "M115\n");
+  id.on_line("FIRMWARE_NAME:Marlin 2.1.2.1 (Jun 1 2023) SOURCE_CODE_URL:github.com/MarlinFirmware/Marlin", 0.2);
+  id.on_line("Cap:SERIAL_XON_XOFF:0", 0.2);
+  id.on_line("ok", 0.3);
+  EXPECT_EQ(id.take_output(), "");  // exactly one query: the answer is not mistaken for a new banner
+  ASSERT_TRUE(id.done());
+  EXPECT_EQ(id.result().profile.id, "marlin");
+  EXPECT_EQ(id.result().query_lines.size(), 2u);
 }
 
 TEST(Identify, UnknownFallsBackToConservativeSubsetWithWarning) {

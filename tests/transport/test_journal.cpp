@@ -20,6 +20,13 @@ fs::path temp_db(const char* name) {
   for (const char* ext : {"", "-wal", "-shm"}) fs::remove(p.string() + ext);
   return p;
 }
+struct JournalCleanup : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(fs::temp_directory_path() / ("cncstream_journal_" + std::to_string(::getpid())), ec);
+  }
+};
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new JournalCleanup);
 }  // namespace
 
 TEST(Sha256, KnownVectors) {

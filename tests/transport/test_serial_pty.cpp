@@ -44,6 +44,15 @@ RunnerOptions options(FakeGrbl& fake, const fs::path& journal) {
   return o;
 }
 
+// Removes the per-process temp folder when the test program ends.
+struct TempCleanup : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(fs::temp_directory_path() / ("cncstream_pty_" + std::to_string(::getpid())), ec);
+  }
+};
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new TempCleanup);
+
 }  // namespace
 
 TEST(SerialPty, ExchangesBytesAndReportsDisconnectAtOnce) {

@@ -91,6 +91,7 @@ class GrblSession final : public ProtocolEngine {
   bool stop_requested_ = false;
   bool hold_sent_ = false;
   bool mpg_owned_ = false;
+  std::optional<Axes> last_mpos_;
 
   std::optional<JogDirection> jog_dir_;
   double jog_feed_ = 0;
