@@ -106,7 +106,7 @@ double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter&
         cut = sw.lowest_vertical(px * px + py * py);
       } else {
         const double along = px * sw.ux() + py * sw.uy(), perp = py * sw.ux() - px * sw.uy();
-        cut = sw.lowest(along, perp * perp);
+        cut = sw.lowest(along, perp * perp, z);
       }
       if (cut < z) {
         dropped += z - cut;

@@ -62,7 +62,7 @@ class SweptCutter {
 
   // Lowest height reached above (x, y); +inf if the cutter never covers it.
   double lowest_at(double x, double y) const {
-    const double px = x - a_.x, py = y - a_.y;
+    const double px = x - a_.x, py = y - a_.y;  // no ceiling: the exact value
     if (vertical_) return lowest_vertical(px * px + py * py);
     const double along = px * ux_ + py * uy_, perp = py * ux_ - px * uy_;
     return lowest(along, perp * perp);
@@ -75,8 +75,9 @@ class SweptCutter {
   }
 
   // along: the point's foot on the path, measured from a; e2: squared
-  // distance from the path line.
-  double lowest(double along, double e2) const {
+  // distance from the path line. Returns kOut early when the result cannot
+  // go below `ceiling` (the node's current height).
+  double lowest(double along, double e2, double ceiling = kOut) const {
     const double w2 = R_ * R_ - e2;
     if (w2 < 0) return kOut;
     const double sa = -along, sb = L_ - along;  // the tip's s at a and at b
@@ -91,6 +92,8 @@ class SweptCutter {
     const double lo = std::max(sa, -w), hi = std::min(sb, w);
     if (lo > hi) return kOut;
     const double z0 = a_.z + m_ * along;  // tip height when over the foot (s = 0)
+    // The lowest tip height while in reach bounds the result from below.
+    if (z0 + m_ * (m_ > 0 ? lo : hi) >= ceiling) return kOut;
     switch (shape_) {
       case Shape::Flat: return z0 + m_ * (m_ > 0 ? lo : hi);
       case Shape::Ball: {
