@@ -56,7 +56,7 @@ RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> dev, 
     return DeviationPalette::within;
   };
 
-  const int dec = std::max(3, mf::decimals_for(tol));
+  const int dec = std::max(3, mf::decimals_for(tol) - 1);
   auto mm = [&](double v) { return mf::fixed(v, dec) + " mm"; };
   auto at = [&](std::size_t k) {
     const std::size_t i = k % grid.nx, j = k / grid.nx;

@@ -226,3 +226,31 @@ TEST(HeightFieldSolid, ClosedAndEnclosesTheVolume) {
   EXPECT_NEAR(vol, want, 1e-9 * want);
   EXPECT_THROW(height_field_solid(g, s.heights(), 0.6), std::invalid_argument);
 }
+
+#include "cncstream/image/height_map.hpp"
+
+TEST(MachinedPicture, HeightMapOfAFinishedPocket) {
+  // Rough a pocket with a flat end mill, then a ball-nose raster over a dome:
+  // the picture shows walls, scallops and the untouched rim.
+  const auto g = GridSpec::covering(0, 0, 60, 40, 0.1, 0.1);
+  HeightFieldStock s(g, 0.0);
+  const auto flat = Cutter::flat(6), ball = Cutter::ball(3.175);
+  for (double y = 8; y <= 32; y += 4) s.cut_segment({8, y, -1.5}, {52, y, -1.5}, flat);
+  for (double y = 8; y <= 32; y += 1.0) {
+    Vec3 p{8, y, -1.5};
+    for (double x = 8.5; x <= 52; x += 0.5) {
+      const double z = -1.5 - 2.5 * std::exp(-((x - 30) * (x - 30) + (y - 20) * (y - 20)) / 60);
+      const Vec3 q{x, y, z};
+      s.cut_segment(p, q, ball);
+      p = q;
+    }
+  }
+  const MapGrid mg{g.nx, g.ny, g.dx, g.dy, g.x0, g.y0};
+  HeightMapOptions o;
+  o.title = "Machined stock";
+  o.subtitle = "flat 6 mm roughing, ball 3.175 mm finish, 1 mm stepover";
+  const auto img = render_height_map(mg, s.heights(), {}, o);
+  write_png(out_dir() / "machined_height_map.png", img);
+  EXPECT_GT(img.width(), 800);
+  EXPECT_LT(s.heights()[0], 1e-12);
+}
