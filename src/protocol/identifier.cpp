@@ -1,6 +1,7 @@
 #include "cncstream/protocol/identifier.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <regex>
 #include <stdexcept>
 
@@ -75,7 +76,9 @@ void FirmwareIdentifier::on_line(std::string_view line, double now) {
 
 void FirmwareIdentifier::tick(double now) {
   if (phase_ == Phase::WaitBanner && now >= deadline_) {
-    warnings_.push_back("no banner within " + std::to_string(opt_.banner_timeout_s) +
+    char secs[32];
+    std::snprintf(secs, sizeof secs, "%.1f", opt_.banner_timeout_s);
+    warnings_.push_back(std::string("no banner within ") + secs +
                         " s after opening the port (board without DTR reset?); asking with $I");
     send_query("$I", now);
   } else if (phase_ == Phase::Query && now >= deadline_) {
