@@ -11,6 +11,7 @@
 #include "cncstream/transport/serial_transport.hpp"
 #include "cncstream/transport/stream_runner.hpp"
 #include "fake_grbl.hpp"
+#include "fake_marlin.hpp"
 
 using namespace cncstream::transport;
 using cncstream::protocol::JobOutcome;
@@ -164,4 +165,25 @@ TEST(StreamRunner, ErrorHoldsThenStopResetsCleanly) {
   const auto jobs = j.jobs();
   EXPECT_EQ(*jobs[0].outcome, "error");
   EXPECT_GE(j.progress_count(jobs[0].id), 2);
+}
+
+TEST(StreamRunner, MarlinWithChecksumsAndAForcedResend) {
+  FakeMarlin fake;
+  fake.corrupt_once = 7;
+  fake.start();
+  const auto prog = write_program("marlin.gcode", 60);
+  const auto db = temp_dir() / "journal4.sqlite";
+  for (const char* ext : {"", "-wal", "-shm"}) fs::remove(db.string() + ext);
+  RunnerOptions o;
+  o.port = fake.slave_path();
+  o.profiles_dir = CNCSTREAM_SOURCE_DIR "/firmware-profiles";
+  o.journal_path = db;
+  o.max_run_s = 30;
+  o.on_port_opened = [&fake] { fake.reset(); };
+  StreamRunner r(o);
+  const auto res = r.run(prog);
+  EXPECT_EQ(res.outcome, JobOutcome::Completed) << res.message;
+  EXPECT_EQ(res.profile, "marlin");
+  EXPECT_EQ(fake.bad_checksums(), 1);
+  EXPECT_EQ(fake.accepted(), 62);  // G21 G90, 60 moves, M2: each accepted once, in order
 }
