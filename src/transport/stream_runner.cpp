@@ -207,6 +207,20 @@ RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
             log("stop requested: holding, then resetting once motion has stopped");
             engine->stop();
           }
+          std::deque<Request> reqs;
+          {
+            std::lock_guard<std::mutex> l(mu_);
+            reqs.swap(requests_);
+          }
+          for (const auto& q : reqs) {
+            if (q.kind == Request::Pause) engine->pause();
+            else if (q.kind == Request::Resume) engine->resume();
+            else if (auto* g = dynamic_cast<GrblSession*>(engine.get()); !g || !g->realtime(q.realtime)) {
+              Event w{EventKind::Warning, std::string("real-time command '") + realtime_key(q.realtime) +
+                                              "' is not available on " + engine->profile().id};
+              if (opt_.on_event) opt_.on_event(w);
+            }
+          }
           engine->tick(t);
           drain();
         }

@@ -49,6 +49,10 @@ class FakeGrbl {
     return lines_;
   }
   int resets() const { return resets_; }
+  std::string realtime_seen() {
+    std::lock_guard<std::mutex> l(mu_);
+    return realtime_seen_;
+  }
 
  private:
   void send(const std::string& s) {
@@ -91,7 +95,11 @@ class FakeGrbl {
     if (c == '!') { hold_ = true; return; }
     if (c == '~') { hold_ = false; return; }
     if (c == 0x18) { banner(); return; }
-    if (c >= 0x80) return;
+    if (c >= 0x80) {
+      std::lock_guard<std::mutex> l(mu_);
+      realtime_seen_.push_back(static_cast<char>(c));
+      return;
+    }
     rx_.push_back(static_cast<char>(c));
     if (rx_.size() > 127) overflow_ = true;
     if (rx_.size() > max_rx_) max_rx_ = rx_.size();
@@ -132,4 +140,5 @@ class FakeGrbl {
   int gcode_lines_ = 0;
   std::mutex mu_;
   std::vector<std::string> lines_;
+  std::string realtime_seen_;
 };

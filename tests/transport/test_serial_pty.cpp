@@ -187,3 +187,33 @@ TEST(StreamRunner, MarlinWithChecksumsAndAForcedResend) {
   EXPECT_EQ(fake.bad_checksums(), 1);
   EXPECT_EQ(fake.accepted(), 62);  // G21 G90, 60 moves, M2: each accepted once, in order
 }
+
+TEST(StreamRunner, OverridesReachTheControllerDuringAJob) {
+  FakeGrbl fake;
+  fake.lines_per_step = 1;
+  fake.start();
+  const auto prog = write_program("ov.nc", 300);
+  auto o = options(fake, temp_dir() / "journal5.sqlite");
+  o.journal_path.reset();
+  StreamRunner* runner = nullptr;
+  bool sent = false;
+  std::vector<std::string> warnings;
+  o.on_event = [&](const cncstream::protocol::Event& e) {
+    using cncstream::protocol::EventKind;
+    using cncstream::protocol::Realtime;
+    if (e.kind == EventKind::Warning) warnings.push_back(e.text);
+    if (e.kind == EventKind::LineAnswered && !sent) {
+      sent = true;
+      runner->request_realtime(Realtime::FeedOvPlus10);
+      runner->request_realtime(Realtime::SpindleOvMinus10);
+      runner->request_realtime(Realtime::ToolChangeAck);  // grblHAL only: refused for GRBL 1.1
+    }
+  };
+  StreamRunner r(o);
+  runner = &r;
+  const auto res = r.run(prog);
+  EXPECT_EQ(res.outcome, JobOutcome::Completed) << res.message;
+  EXPECT_EQ(fake.realtime_seen(), "\x91\x9b");
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("tool_change_ack"), std::string::npos);
+}

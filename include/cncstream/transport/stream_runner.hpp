@@ -5,7 +5,9 @@
 #include <atomic>
 #include <filesystem>
 #include <functional>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -52,11 +54,26 @@ class StreamRunner {
   // Safe from a signal-watching thread or handler context: asks for a
   // controlled stop (hold, wait, reset) at the next tick.
   void request_stop() { stop_requested_ = true; }
+  // Thread-safe operator requests, applied at the next tick: pause (feed
+  // hold), resume (cycle start) and real-time bytes such as overrides. A byte
+  // the identified firmware does not have is reported as a warning event.
+  void request_pause() { enqueue(Request{Request::Pause, {}}); }
+  void request_resume() { enqueue(Request{Request::Resume, {}}); }
+  void request_realtime(protocol::Realtime r) { enqueue(Request{Request::RealtimeByte, r}); }
 
  private:
-  struct State;
+  struct Request {
+    enum Kind { Pause, Resume, RealtimeByte } kind;
+    protocol::Realtime realtime;
+  };
+  void enqueue(Request r) {
+    std::lock_guard<std::mutex> l(mu_);
+    requests_.push_back(r);
+  }
   RunnerOptions opt_;
   std::atomic<bool> stop_requested_{false};
+  std::mutex mu_;
+  std::deque<Request> requests_;
 };
 
 }  // namespace cncstream::transport
