@@ -10,6 +10,7 @@
 #include "cncstream/transport/port_discovery.hpp"
 #include "cncstream/transport/stream_runner.hpp"
 #include "commands.hpp"
+#include "keyboard_control.hpp"
 
 namespace cncstream::app {
 
@@ -85,6 +86,8 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
     auto previous = std::signal(SIGINT, on_sigint);
     transport::RunResult r;
     try {
+      KeyboardControl keys(runner);  // restores the terminal when the job ends
+      if (keys.active()) std::cerr << KeyboardControl::help() << "\n";
       r = runner.run(o->file);
     } catch (...) {
       g_runner = nullptr;
