@@ -27,5 +27,7 @@ class CommandRegistry {
 };
 
 void register_info(CLI::App& app, CommandRegistry& registry);
+void register_toolpath(CLI::App& app, CommandRegistry& registry);
+void register_clgrid(CLI::App& app, CommandRegistry& registry);
 
 }  // namespace cncstream::app

@@ -1,0 +1,106 @@
+#include "cncstream/cam/raster.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "cncstream/cam/polyline_simplify.hpp"
+
+namespace cncstream {
+
+XYBounds default_bounds(const Mesh& mesh, const Cutter& cutter) {
+  const Box3 b = mesh.bounds();
+  if (b.empty()) throw std::invalid_argument("mesh has no facets");
+  return {b.lo.x - cutter.radius, b.lo.y - cutter.radius, b.hi.x + cutter.radius, b.hi.y + cutter.radius};
+}
+
+namespace {
+
+// n + 1 evenly spaced values from a to b with spacing at most `max_step`.
+std::size_t intervals(double length, double max_step) {
+  return std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(length / max_step - 1e-9)));
+}
+
+// Simplify a profile sampled at (u_k, z_k) and map the kept samples back to
+// points via `to_point`.
+template <class ToPoint>
+Polyline simplified(const std::vector<double>& u, const std::vector<double>& z, double tol, ToPoint to_point) {
+  Polyline out;
+  for (std::size_t k : simplify_profile_above(u, z, tol)) out.push_back(to_point(u[k], z[k]));
+  return out;
+}
+
+}  // namespace
+
+RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterOptions& o) {
+  if (!(o.stepover > 0)) throw std::invalid_argument("stepover must be positive");
+  if (!(o.tolerance >= 0)) throw std::invalid_argument("tolerance must not be negative");
+  if (o.check_subdivisions < 1) throw std::invalid_argument("check_subdivisions must be at least 1");
+  const double step = o.step > 0 ? o.step : std::min(o.stepover / 4, 0.1);
+  if (!(b.x1 >= b.x0) || !(b.y1 >= b.y0)) throw std::invalid_argument("raster bounds are empty");
+
+  const bool along_x = o.direction == RasterDirection::X;
+  // u runs along the rows, v across them.
+  const double u0 = along_x ? b.x0 : b.y0, u1 = along_x ? b.x1 : b.y1;
+  const double v0 = along_x ? b.y0 : b.x0, v1 = along_x ? b.y1 : b.x1;
+  const std::size_t nrows = intervals(v1 - v0, o.stepover) + 1;
+  const double dv = nrows > 1 ? (v1 - v0) / double(nrows - 1) : 0;
+  const std::size_t nu = intervals(u1 - u0, step) * std::size_t(o.check_subdivisions) + 1;
+  const double du = nu > 1 ? (u1 - u0) / double(nu - 1) : 0;
+
+  GridSpec spec;
+  spec.nx = along_x ? nu : nrows;
+  spec.ny = along_x ? nrows : nu;
+  spec.x0 = b.x0;
+  spec.y0 = b.y0;
+  spec.dx = along_x ? (du > 0 ? du : 1) : (dv > 0 ? dv : 1);
+  spec.dy = along_x ? (dv > 0 ? dv : 1) : (du > 0 ? du : 1);
+  const ClGrid grid = engine.compute(spec);
+
+  RasterPath path;
+  path.bounds = b;
+  path.stepover = dv;
+  path.step = du * o.check_subdivisions;
+  path.samples = grid.z.size();
+
+  auto point = [&](double u, double v, double z) { return along_x ? Vec3{u, v, z} : Vec3{v, u, z}; };
+  std::vector<double> us(nu), zs(nu);
+  for (std::size_t r = 0; r < nrows; ++r) {
+    const double v = v0 + double(r) * dv;
+    const bool forward = r % 2 == 0;
+    for (std::size_t k = 0; k < nu; ++k) {
+      const std::size_t idx = forward ? k : nu - 1 - k;
+      // Cutting order parameter: distance travelled along the row.
+      us[k] = double(k) * du;
+      zs[k] = along_x ? grid.at(idx, r) : grid.at(r, idx);
+    }
+    path.points_before_merge += (nu - 1) / std::size_t(o.check_subdivisions) + 1;
+    path.rows.push_back(simplified(us, zs, o.tolerance, [&](double s, double z) {
+      const double u = forward ? u0 + s : u1 - s;
+      return point(u, v, z);
+    }));
+    path.points_after_merge += path.rows.back().size();
+  }
+
+  // Links between rows run across them at the row ends; they are checked
+  // with point queries at the check step.
+  const double dl = du > 0 ? du : step / o.check_subdivisions;
+  for (std::size_t r = 0; r + 1 < nrows; ++r) {
+    const Vec3 a = path.rows[r].back();
+    const double u = along_x ? a.x : a.y;
+    const std::size_t n = intervals(dv, dl) + 1;
+    std::vector<double> s(n), z(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      s[k] = dv * double(k) / double(n - 1);
+      const Vec3 p = point(u, v0 + double(r) * dv + s[k], 0);
+      z[k] = engine.height_at(p.x, p.y);
+    }
+    path.samples += n;
+    path.links.push_back(simplified(s, z, o.tolerance, [&](double sv, double zz) {
+      return point(u, v0 + double(r) * dv + sv, zz);
+    }));
+  }
+  return path;
+}
+
+}  // namespace cncstream
