@@ -16,7 +16,8 @@ namespace cncstream {
 
 class HeightFieldStock {
  public:
-  // Nodes of `grid` start at height `top`.
+  // Nodes of `grid` start at height `top`. Throws std::invalid_argument for
+  // an empty grid, a non-positive step or a non-finite top.
   HeightFieldStock(const GridSpec& grid, double top);
 
   const GridSpec& grid() const { return grid_; }
@@ -25,18 +26,29 @@ class HeightFieldStock {
   double at(std::size_t i, std::size_t j) const { return z_[j * grid_.nx + i]; }
 
   // Sweep the cutter's tip from a to b in a straight line (any direction,
-  // including plunges and pure Z moves). Returns the volume removed (mm^3),
-  // approximated by the node areas.
+  // including plunges and pure Z moves). Only nodes within the cutter radius
+  // of the path's XY footprint are visited. Returns the volume removed
+  // (mm^3): the sum of height drops times the node area dx*dy. Throws
+  // std::invalid_argument for non-finite points or a bad cutter.
   double cut_segment(const Vec3& a, const Vec3& b, const Cutter& cutter);
 
-  // Nodes whose height changed since the last call (for live views).
+  // Nodes whose height changed in the last cut_segment call (for live views).
   std::size_t nodes_cut() const { return nodes_cut_; }
+
+  // Total volume removed since construction (mm^3).
+  double removed_volume() const { return removed_; }
 
  private:
   GridSpec grid_;
   double top_;
   std::vector<double> z_;
   std::size_t nodes_cut_ = 0;
+  double removed_ = 0;
 };
+
+// The lowest height the cutter's surface reaches above (x, y) while its tip
+// moves straight from a to b; +infinity if it never passes over (x, y). This
+// is the per-node rule cut_segment applies, exposed for checks.
+double swept_lowest_height(const Vec3& a, const Vec3& b, const Cutter& cutter, double x, double y);
 
 }  // namespace cncstream

@@ -1,0 +1,45 @@
+#pragma once
+// Height-field files: raw little-endian float32 values (row-major, x fastest,
+// first row at y0) in `<name>.f32`, and a text sidecar `<name>.f32.txt`
+// giving the grid:
+//     cncstream height field 1
+//     nx 1201
+//     ny 1001
+//     x0 0
+//     y0 0
+//     dx 0.1
+//     dy 0.1
+//     nodata nan
+// NaN marks nodes without a value. Shared by the stock export and the CL
+// grid export.
+#include <filesystem>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
+#include "cncstream/cam/cl_grid.hpp"
+
+namespace cncstream {
+
+struct HeightFieldData {
+  GridSpec grid;
+  std::vector<float> z;  // grid.size() values, NaN = no value
+};
+
+class HeightFieldError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The sidecar's path for a given data path: "<path>.txt".
+std::filesystem::path height_field_sidecar(const std::filesystem::path& data_path);
+
+// Writes both files. Throws HeightFieldError naming the path on failure and
+// std::invalid_argument if z.size() != grid.size().
+void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z);
+
+// Reads both files; errors name the file and the sidecar line, or the data
+// file's expected and actual size.
+HeightFieldData read_height_field(const std::filesystem::path& data_path);
+
+}  // namespace cncstream

@@ -1,0 +1,17 @@
+#pragma once
+// Arc to chord segmentation the way GRBL's mc_arc does it: the number of
+// chords keeps the chord error within the arc tolerance ($12), and a
+// start == end arc in centre format is a full circle.
+#include <vector>
+
+#include "cncstream/gcode/interpreter.hpp"
+
+namespace cncstream::gcode {
+
+// Signed angular travel (radians, negative = clockwise) of an arc.
+double arc_angular_travel(const ArcMove& arc);
+
+// The chord end points, the last one exactly arc.to. Never empty.
+std::vector<Vec3> segment_arc(const ArcMove& arc, double arc_tolerance);
+
+}  // namespace cncstream::gcode

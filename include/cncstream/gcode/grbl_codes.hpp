@@ -1,0 +1,66 @@
+#pragma once
+// GRBL 1.1 status (error:N) and alarm (ALARM:N) codes with the firmware's
+// own descriptions (doc/csv/error_codes_en_US.csv, alarm_codes_en_US.csv).
+#include <string_view>
+
+namespace cncstream::grbl {
+
+enum Status : int {
+  kOk = 0,
+  kExpectedCommandLetter = 1,
+  kBadNumberFormat = 2,
+  kInvalidStatement = 3,
+  kNegativeValue = 4,
+  kSettingDisabled = 5,
+  kSettingStepPulseMin = 6,
+  kSettingReadFail = 7,
+  kIdleError = 8,
+  kSystemGcLock = 9,
+  kSoftLimitError = 10,
+  kOverflow = 11,
+  kMaxStepRateExceeded = 12,
+  kCheckDoor = 13,
+  kLineLengthExceeded = 14,
+  kTravelExceeded = 15,
+  kInvalidJogCommand = 16,
+  kSettingDisabledLaser = 17,
+  kUnsupportedCommand = 20,
+  kModalGroupViolation = 21,
+  kUndefinedFeedRate = 22,
+  kCommandValueNotInteger = 23,
+  kAxisCommandConflict = 24,
+  kWordRepeated = 25,
+  kNoAxisWords = 26,
+  kInvalidLineNumber = 27,
+  kValueWordMissing = 28,
+  kUnsupportedCoordSys = 29,
+  kG53InvalidMotionMode = 30,
+  kAxisWordsExist = 31,
+  kNoAxisWordsInPlane = 32,
+  kInvalidTarget = 33,
+  kArcRadiusError = 34,
+  kNoOffsetsInPlane = 35,
+  kUnusedWords = 36,
+  kG43DynamicAxisError = 37,
+  kMaxValueExceeded = 38,
+};
+
+enum Alarm : int {
+  kAlarmHardLimit = 1,
+  kAlarmSoftLimit = 2,
+  kAlarmAbortCycle = 3,
+  kAlarmProbeFailInitial = 4,
+  kAlarmProbeFailContact = 5,
+  kAlarmHomingFailReset = 6,
+  kAlarmHomingFailDoor = 7,
+  kAlarmHomingFailPulloff = 8,
+  kAlarmHomingFailApproach = 9,
+};
+
+// Description of error:N / ALARM:N; empty for codes GRBL 1.1 does not define.
+std::string_view status_description(int code);
+std::string_view alarm_description(int code);
+bool is_known_status(int code);
+bool is_known_alarm(int code);
+
+}  // namespace cncstream::grbl

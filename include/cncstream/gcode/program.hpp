@@ -1,0 +1,67 @@
+#pragma once
+// Whole-program helpers on top of the interpreter: trace a G-code file into
+// straight path segments (arcs chorded like the firmware), find the modal
+// state before any line (resume from line N), and estimate run time.
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cncstream/gcode/interpreter.hpp"
+#include "cncstream/gcode/motion_planner.hpp"
+
+namespace cncstream::gcode {
+
+struct PathSegment {
+  Vec3 from, to;           // machine coordinates, mm
+  Vec3 wco;                // work offset in force: work = machine - wco
+  bool rapid = false;
+  double feed = 0;         // mm/min (0 for rapids)
+  std::size_t source_line = 0;  // 0-based line index in the program text
+  Vec3 work_from() const { return from - wco; }
+  Vec3 work_to() const { return to - wco; }
+};
+
+struct LineError {
+  std::size_t line = 0;  // 0-based
+  int status = 0;        // GRBL error code
+  std::string text;      // the raw line
+  std::string message() const;  // "line 12: error:22 (Feed rate has not yet been set...): G1 X1"
+};
+
+struct ProgramOptions {
+  ParserState initial;
+  double arc_tolerance = 0.002;  // $12
+  bool stop_at_first_error = false;
+};
+
+struct ProgramTrace {
+  std::vector<PathSegment> segments;
+  std::vector<LineError> errors;
+  double dwell_seconds = 0;
+  std::size_t lines = 0;
+  ParserState final_state;
+};
+
+// Lines that are empty after cleaning, "%" lines and '$' system lines are
+// skipped (they carry no motion); any other line is interpreted.
+ProgramTrace trace_program(std::string_view text, const ProgramOptions& options = {});
+
+// The parser state just before 0-based line `line` runs (after lines [0, line)).
+// Lines with errors are skipped, as the firmware would leave the state.
+ParserState state_before_line(std::string_view text, std::size_t line,
+                              const ParserState& initial = {});
+
+std::vector<MotionBlock> to_motion_blocks(const std::vector<PathSegment>& segments);
+
+struct TimeEstimate {
+  double motion_seconds = 0;
+  double dwell_seconds = 0;
+  double total() const { return motion_seconds + dwell_seconds; }
+};
+TimeEstimate estimate_program_time(const ProgramTrace& trace, const MotionLimits& limits);
+
+// Splits text into lines at '\n' (a trailing '\r' is kept; cleaning drops it).
+std::vector<std::string_view> split_lines(std::string_view text);
+
+}  // namespace cncstream::gcode

@@ -1,0 +1,37 @@
+#pragma once
+// Map of signed deviations (machined - design, mm): gouges (below design by
+// more than the tolerance) in reds, excess material (above by more than the
+// tolerance) in blues, within tolerance in pale green, off-part in grey. The
+// legend names each colour with its values and gives the extremes.
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "cncstream/image/image.hpp"
+#include "cncstream/image/map_grid.hpp"
+
+namespace cncstream {
+
+struct DeviationMapOptions {
+  std::string title;
+  std::string subtitle;
+  double tolerance = 0.05;  // mm, > 0
+  int max_map_pixels = 800;
+};
+
+// The colours, so tests and callers can tell what a pixel means.
+struct DeviationPalette {
+  static constexpr Rgb within{196, 232, 196};
+  static constexpr Rgb off_part{222, 222, 222};
+  // Light at the tolerance, dark at the largest deviation of that sign.
+  static Rgb gouge(double severity);   // severity in [0, 1]
+  static Rgb excess(double severity);  // severity in [0, 1]
+};
+
+// deviation: grid.size() values; off_part: empty or grid.size() flags (1 = no
+// design surface there). Where a pixel covers several nodes it shows the
+// worst one (a gouge first), so a one-node gouge never disappears.
+RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> deviation,
+                              std::span<const std::uint8_t> off_part, const DeviationMapOptions& options);
+
+}  // namespace cncstream

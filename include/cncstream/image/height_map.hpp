@@ -1,0 +1,31 @@
+#pragma once
+// Shaded-relief picture of a height field: hill shading from a light
+// direction multiplied into a viridis colour ramp by height, north (+y) up,
+// with a title, a colour bar labelled in mm, a scale bar and a north arrow.
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "cncstream/image/image.hpp"
+#include "cncstream/image/map_grid.hpp"
+
+namespace cncstream {
+
+struct HeightMapOptions {
+  std::string title;
+  std::string subtitle;                // optional second line (cutter, grid step...)
+  double light_azimuth_deg = 315;      // where the light comes from, clockwise from north
+  double light_elevation_deg = 45;     // above the horizon
+  double vertical_exaggeration = 1;    // steepens the shading only, not the colours
+  int max_map_pixels = 800;            // the map's longer side
+  std::optional<double> z_min, z_max;  // colour range; default: the data's range
+};
+
+// values: grid.size() heights (mm). invalid: empty, or grid.size() flags with
+// 1 = no value there (drawn in a neutral grey). Throws std::invalid_argument
+// on mismatched sizes or an empty grid.
+RgbImage render_height_map(const MapGrid& grid, std::span<const double> values,
+                           std::span<const std::uint8_t> invalid, const HeightMapOptions& options);
+
+}  // namespace cncstream

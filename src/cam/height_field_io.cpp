@@ -1,0 +1,127 @@
+// Height-field files: raw float32 data plus a text sidecar.
+#include "cncstream/cam/height_field_io.hpp"
+
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <string>
+
+namespace cncstream {
+
+namespace {
+
+constexpr const char* kMagic = "cncstream height field 1";
+
+std::uint32_t to_little(std::uint32_t v) {
+  if constexpr (std::endian::native == std::endian::big)
+    return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
+  return v;
+}
+
+std::string num(double v) {
+  std::ostringstream o;
+  o.precision(17);
+  o << v;
+  return o.str();
+}
+
+}  // namespace
+
+std::filesystem::path height_field_sidecar(const std::filesystem::path& data_path) {
+  return std::filesystem::path(data_path.string() + ".txt");
+}
+
+void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z) {
+  if (z.size() != grid.size())
+    throw std::invalid_argument("height field: " + std::to_string(z.size()) + " values for a grid of " +
+                                std::to_string(grid.size()) + " nodes");
+  {
+    std::ofstream f(data_path, std::ios::binary);
+    if (!f) throw HeightFieldError(data_path.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+    std::vector<std::uint32_t> buf(z.size());
+    for (std::size_t k = 0; k < z.size(); ++k)
+      buf[k] = to_little(std::bit_cast<std::uint32_t>(static_cast<float>(z[k])));
+    f.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size() * 4));
+    if (!f) throw HeightFieldError(data_path.string() + ": write error");
+  }
+  const auto side = height_field_sidecar(data_path);
+  std::ofstream t(side);
+  if (!t) throw HeightFieldError(side.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+  t << kMagic << "\n"
+    << "nx " << grid.nx << "\nny " << grid.ny << "\nx0 " << num(grid.x0) << "\ny0 " << num(grid.y0) << "\ndx "
+    << num(grid.dx) << "\ndy " << num(grid.dy) << "\nnodata nan\n";
+  if (!t) throw HeightFieldError(side.string() + ": write error");
+}
+
+HeightFieldData read_height_field(const std::filesystem::path& data_path) {
+  const auto side = height_field_sidecar(data_path);
+  std::ifstream t(side);
+  if (!t) throw HeightFieldError(side.string() + ": cannot open (" + std::strerror(errno) + ")");
+  std::string line;
+  int line_no = 0;
+  auto err = [&](const std::string& why) { return HeightFieldError(side.string() + ":" + std::to_string(line_no) + ": " + why); };
+  ++line_no;
+  if (!std::getline(t, line) || line != kMagic) throw err("expected '" + std::string(kMagic) + "'");
+  std::map<std::string, double> v;
+  while (std::getline(t, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    const auto sp = line.find(' ');
+    if (sp == std::string::npos) throw err("expected 'key value', got '" + line + "'");
+    const std::string key = line.substr(0, sp), val = line.substr(sp + 1);
+    if (key == "nodata") {
+      if (val != "nan") throw err("only 'nodata nan' is supported");
+      continue;
+    }
+    if (key != "nx" && key != "ny" && key != "x0" && key != "y0" && key != "dx" && key != "dy")
+      throw err("unknown key '" + key + "'");
+    double d = 0;
+    const auto [p, ec] = std::from_chars(val.data(), val.data() + val.size(), d);
+    if (ec != std::errc() || p != val.data() + val.size() || !std::isfinite(d))
+      throw err("'" + val + "' is not a number");
+    if (v.count(key)) throw err("'" + key + "' given twice");
+    v[key] = d;
+  }
+  ++line_no;
+  for (const char* key : {"nx", "ny", "x0", "y0", "dx", "dy"})
+    if (!v.count(key)) throw err(std::string("missing '") + key + "'");
+  HeightFieldData out;
+  auto count = [&](const char* key) {
+    const double d = v[key];
+    if (!(d >= 1) || d != std::floor(d) || d > 1e8) throw err(std::string("'") + key + "' must be a positive integer");
+    return static_cast<std::size_t>(d);
+  };
+  out.grid.nx = count("nx");
+  out.grid.ny = count("ny");
+  out.grid.x0 = v["x0"];
+  out.grid.y0 = v["y0"];
+  out.grid.dx = v["dx"];
+  out.grid.dy = v["dy"];
+  if (!(out.grid.dx > 0) || !(out.grid.dy > 0)) throw err("dx and dy must be positive");
+  if (out.grid.size() > (std::size_t{1} << 32)) throw err("grid is too large");
+
+  std::ifstream f(data_path, std::ios::binary);
+  if (!f) throw HeightFieldError(data_path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  const std::uintmax_t want = out.grid.size() * 4;
+  std::error_code ec;
+  const std::uintmax_t have = std::filesystem::file_size(data_path, ec);
+  if (ec || have != want)
+    throw HeightFieldError(data_path.string() + ": expected " + std::to_string(want) + " bytes (" +
+                           std::to_string(out.grid.nx) + " x " + std::to_string(out.grid.ny) + " float32), found " +
+                           (ec ? ec.message() : std::to_string(have)));
+  std::vector<std::uint32_t> buf(out.grid.size());
+  f.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(want));
+  if (!f) throw HeightFieldError(data_path.string() + ": read error");
+  out.z.resize(buf.size());
+  for (std::size_t k = 0; k < buf.size(); ++k) out.z[k] = std::bit_cast<float>(to_little(buf[k]));
+  return out;
+}
+
+}  // namespace cncstream

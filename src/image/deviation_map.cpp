@@ -1,0 +1,133 @@
+// Deviation maps: where the machined surface is below (gouge) or above
+// (excess) the design, and by how much.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "cncstream/image/deviation_map.hpp"
+#include "map_frame.hpp"
+
+namespace cncstream {
+
+namespace mf = map_frame;
+
+namespace {
+
+Rgb mix(Rgb a, Rgb b, double t) {
+  t = std::clamp(t, 0.0, 1.0);
+  auto ch = [&](double x, double y) { return static_cast<std::uint8_t>(std::lround(x + (y - x) * t)); };
+  return {ch(a.r, b.r), ch(a.g, b.g), ch(a.b, b.b)};
+}
+
+}  // namespace
+
+Rgb DeviationPalette::gouge(double severity) { return mix({250, 160, 140}, {150, 0, 20}, severity); }
+Rgb DeviationPalette::excess(double severity) { return mix({160, 195, 240}, {15, 45, 140}, severity); }
+
+RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> dev, std::span<const std::uint8_t> off,
+                              const DeviationMapOptions& options) {
+  if (grid.size() == 0) throw std::invalid_argument("deviation map: the grid is empty");
+  if (dev.size() != grid.size())
+    throw std::invalid_argument("deviation map: " + std::to_string(dev.size()) + " values for a grid of " +
+                                std::to_string(grid.size()) + " nodes");
+  if (!off.empty() && off.size() != grid.size())
+    throw std::invalid_argument("deviation map: off-part mask has " + std::to_string(off.size()) +
+                                " entries for a grid of " + std::to_string(grid.size()) + " nodes");
+  const double tol = options.tolerance;
+  if (!(tol > 0) || !std::isfinite(tol)) throw std::invalid_argument("deviation map: tolerance must be positive");
+
+  auto on_part = [&](std::size_t k) { return (off.empty() || !off[k]) && std::isfinite(dev[k]); };
+  double lo = 0, hi = 0;  // most negative and most positive deviation
+  std::size_t klo = 0, khi = 0, gouged = 0, excess = 0, on = 0;
+  for (std::size_t k = 0; k < dev.size(); ++k) {
+    if (!on_part(k)) continue;
+    ++on;
+    if (dev[k] < lo) lo = dev[k], klo = k;
+    if (dev[k] > hi) hi = dev[k], khi = k;
+    gouged += dev[k] < -tol;
+    excess += dev[k] > tol;
+  }
+  // Severity runs from the tolerance to the worst value of that sign.
+  const double gouge_span = std::max(-lo - tol, 1e-12), excess_span = std::max(hi - tol, 1e-12);
+  auto colour_of = [&](double v) {
+    if (v < -tol) return DeviationPalette::gouge((-v - tol) / gouge_span);
+    if (v > tol) return DeviationPalette::excess((v - tol) / excess_span);
+    return DeviationPalette::within;
+  };
+
+  const int dec = std::max(3, mf::decimals_for(tol) - 1);
+  auto mm = [&](double v) { return mf::fixed(v, dec) + " mm"; };
+  auto at = [&](std::size_t k) {
+    const std::size_t i = k % grid.nx, j = k / grid.nx;
+    return "at x " + mf::fixed(grid.x0 + i * grid.dx, 2) + " y " + mf::fixed(grid.y0 + j * grid.dy, 2);
+  };
+  auto pct = [&](std::size_t n) { return mf::fixed(on ? 100.0 * n / on : 0, 1) + "%"; };
+  std::vector<std::string> lines = {
+      "Machined - design",
+      "gouge: below by > " + mm(tol),
+      "within +/-" + mm(tol),
+      "excess: above by > " + mm(tol),
+      "off part (no design)",
+      "largest gouge " + (lo < 0 ? mm(-lo) : std::string("none")),
+      lo < 0 ? "  " + at(klo) : "",
+      "largest excess " + (hi > 0 ? mm(hi) : std::string("none")),
+      hi > 0 ? "  " + at(khi) : "",
+      "gouged nodes " + std::to_string(gouged) + " (" + pct(gouged) + ")",
+      "excess nodes " + std::to_string(excess) + " (" + pct(excess) + ")",
+  };
+  const int bar_h = 240;
+  const int legend_w = std::max(mf::widest(lines) + 24, 48 + mf::widest({mm(lo), mm(hi)}));
+  const int legend_h = mf::kLineStep * 14 + bar_h + 24;
+  mf::Frame f = mf::make_frame(grid, options.max_map_pixels, options.title, options.subtitle, legend_w, legend_h);
+  RgbImage& img = f.image;
+
+  // Each pixel shows the worst node it covers: the deepest gouge beyond the
+  // tolerance if any, else the largest deviation of either sign.
+  for (int py = 0; py < f.map_h; ++py)
+    for (int px = 0; px < f.map_w; ++px) {
+      const auto r = mf::nodes_under(f, grid, px, py);
+      bool any = false;
+      double worst = 0;
+      for (std::size_t j = r.j0; j <= r.j1; ++j)
+        for (std::size_t i = r.i0; i <= r.i1; ++i) {
+          const std::size_t k = j * grid.nx + i;
+          if (!on_part(k)) continue;
+          const double v = dev[k];
+          const bool v_gouge = v < -tol, w_gouge = worst < -tol;
+          if (!any || (v_gouge && (!w_gouge || v < worst)) || (!w_gouge && !v_gouge && std::fabs(v) > std::fabs(worst)))
+            worst = v;
+          any = true;
+        }
+      f.image.set(f.map_x + px, f.map_y + py, any ? colour_of(worst) : DeviationPalette::off_part);
+    }
+
+  int y = f.legend_y;
+  const int x = f.legend_x;
+  img.draw_text(x, y, lines[0], mf::kInk, mf::kTextScale);
+  y += mf::kLineStep + 4;
+  mf::draw_swatch(img, x, y, DeviationPalette::gouge(0.6), lines[1]);
+  y += mf::kLineStep;
+  mf::draw_swatch(img, x, y, DeviationPalette::within, lines[2]);
+  y += mf::kLineStep;
+  mf::draw_swatch(img, x, y, DeviationPalette::excess(0.6), lines[3]);
+  y += mf::kLineStep;
+  mf::draw_swatch(img, x, y, DeviationPalette::off_part, lines[4]);
+  y += mf::kLineStep + 12;
+
+  // The colour bar spans the data's range (at least the tolerance band).
+  const double blo = std::min(lo, -2 * tol), bhi = std::max(hi, 2 * tol);
+  auto t_of = [&](double v) { return (v - blo) / (bhi - blo); };
+  std::vector<std::pair<double, std::string>> labels = {{1.0, mm(bhi)}, {t_of(tol), "+" + mm(tol)},
+                                                        {t_of(-tol), mm(-tol)}, {0.0, mm(blo)}};
+  mf::draw_colour_bar(img, x, y, 24, bar_h, [&](double t) { return colour_of(blo + t * (bhi - blo)); }, labels);
+  y += bar_h + 16;
+  for (std::size_t q = 5; q < lines.size(); ++q) {
+    if (lines[q].empty()) continue;
+    img.draw_text(x, y, lines[q], q >= 9 ? mf::kFaint : mf::kInk, mf::kTextScale);
+    y += mf::kLineStep;
+  }
+  return std::move(f.image);
+}
+
+}  // namespace cncstream

@@ -1,0 +1,57 @@
+// PNG files through libpng's simplified API (no setjmp in our code).
+#include <png.h>
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cncstream/image/image.hpp"
+
+namespace cncstream {
+
+void write_png(const std::filesystem::path& path, const RgbImage& image) {
+  if (image.width() <= 0 || image.height() <= 0)
+    throw std::runtime_error(path.string() + ": cannot write an empty image as PNG");
+  png_image info;
+  std::memset(&info, 0, sizeof info);
+  info.version = PNG_IMAGE_VERSION;
+  info.width = static_cast<png_uint_32>(image.width());
+  info.height = static_cast<png_uint_32>(image.height());
+  info.format = PNG_FORMAT_RGB;
+  const int ok = png_image_write_to_file(&info, path.string().c_str(), 0, image.pixels().data(),
+                                         image.width() * 3, nullptr);
+  if (!ok) {
+    const std::string why = info.message;
+    png_image_free(&info);
+    throw std::runtime_error(path.string() + ": cannot write PNG (" + why + ")");
+  }
+}
+
+RgbImage read_png(const std::filesystem::path& path) {
+  png_image info;
+  std::memset(&info, 0, sizeof info);
+  info.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&info, path.string().c_str())) {
+    const std::string why = info.message;
+    png_image_free(&info);
+    throw std::runtime_error(path.string() + ": cannot read PNG (" + why + ")");
+  }
+  info.format = PNG_FORMAT_RGB;  // libpng converts grey/alpha/palette/16-bit for us
+  const int w = static_cast<int>(info.width), h = static_cast<int>(info.height);
+  std::vector<std::uint8_t> buf(PNG_IMAGE_SIZE(info));
+  if (!png_image_finish_read(&info, nullptr, buf.data(), 0, nullptr)) {
+    const std::string why = info.message;
+    png_image_free(&info);
+    throw std::runtime_error(path.string() + ": cannot decode PNG (" + why + ")");
+  }
+  RgbImage out(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t k = (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)) * 3;
+      out.set(x, y, {buf[k], buf[k + 1], buf[k + 2]});
+    }
+  return out;
+}
+
+}  // namespace cncstream
