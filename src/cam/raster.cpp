@@ -1,8 +1,10 @@
 #include "cncstream/cam/raster.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
+#include <thread>
 
 #include "cncstream/cam/polyline_simplify.hpp"
 
@@ -29,6 +31,38 @@ Polyline simplified(const std::vector<double>& u, const std::vector<double>& z, 
   for (std::size_t k : simplify_profile_above(u, z, tol)) out.push_back(to_point(u[k], z[k]));
   return out;
 }
+
+// Between two exact CL samples the CL surface can rise above the chord only
+// where it bends down: by at most L^2 / (8 rk) for a chord of length L (the
+// offsets of a cutter with corner radius rk curve no tighter than rk), and
+// without bound at the vertical steps of a flat cutter's CL surface. Such
+// intervals get exact point queries at their midpoints until the bound holds
+// or they are narrower than `min_width`.
+struct StepRefiner {
+  const ClEngine& engine;
+  double rk;
+  double eps = 1e-4;        // mm of possible chord sag accepted
+  double min_width = 1e-3;  // mm; narrower steps are left (sub-micron side nick)
+
+  bool needs_split(double du, double dz) const {
+    if (std::fabs(dz) > du) return true;  // steeper than 45 degrees
+    return rk > 0 && (du * du + dz * dz) / (8 * rk) > eps;
+  }
+
+  // Appends refined samples strictly inside (ua, ub) to out, in order.
+  template <class At>
+  void refine(double ua, double za, double ub, double zb, At at, std::vector<std::pair<double, double>>& out,
+              std::size_t& queries) const {
+    const double du = ub - ua;
+    if (du < min_width || !needs_split(du, zb - za)) return;
+    const double um = 0.5 * (ua + ub);
+    const double zm = at(um);
+    ++queries;
+    refine(ua, za, um, zm, at, out, queries);
+    out.emplace_back(um, zm);
+    refine(um, zm, ub, zb, at, out, queries);
+  }
+};
 
 }  // namespace
 
@@ -64,22 +98,55 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   path.samples = grid.z.size();
 
   auto point = [&](double u, double v, double z) { return along_x ? Vec3{u, v, z} : Vec3{v, u, z}; };
-  std::vector<double> us(nu), zs(nu);
-  for (std::size_t r = 0; r < nrows; ++r) {
+  const StepRefiner refiner{engine, engine.cutter().corner_radius};
+  path.rows.resize(nrows);
+  std::vector<std::size_t> row_queries(nrows, 0);
+  // Rows are independent: refine and merge them in parallel.
+  auto do_row = [&](std::size_t r) {
     const double v = v0 + double(r) * dv;
     const bool forward = r % 2 == 0;
+    std::vector<double> us, zs;
+    us.reserve(nu + 16);
+    zs.reserve(nu + 16);
+    std::vector<std::pair<double, double>> extra;
+    auto at = [&](double s) {
+      const Vec3 p = point(forward ? u0 + s : u1 - s, v, 0);
+      return engine.height_at(p.x, p.y);
+    };
     for (std::size_t k = 0; k < nu; ++k) {
       const std::size_t idx = forward ? k : nu - 1 - k;
       // Cutting order parameter: distance travelled along the row.
-      us[k] = double(k) * du;
-      zs[k] = along_x ? grid.at(idx, r) : grid.at(r, idx);
+      const double s = double(k) * du;
+      const double z = along_x ? grid.at(idx, r) : grid.at(r, idx);
+      if (k > 0) {
+        extra.clear();
+        refiner.refine(us.back(), zs.back(), s, z, at, extra, row_queries[r]);
+        for (const auto& [es, ez] : extra) {
+          us.push_back(es);
+          zs.push_back(ez);
+        }
+      }
+      us.push_back(s);
+      zs.push_back(z);
     }
-    path.points_before_merge += (nu - 1) / std::size_t(o.check_subdivisions) + 1;
-    path.rows.push_back(simplified(us, zs, o.tolerance, [&](double s, double z) {
+    path.rows[r] = simplified(us, zs, o.tolerance, [&](double s, double z) {
       const double u = forward ? u0 + s : u1 - s;
       return point(u, v, z);
-    }));
-    path.points_after_merge += path.rows.back().size();
+    });
+  };
+  const unsigned nthreads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), 8));
+  std::atomic<std::size_t> next{0};
+  std::vector<std::thread> pool;
+  for (unsigned t = 0; t + 1 < nthreads; ++t)
+    pool.emplace_back([&] {
+      for (std::size_t r; (r = next++) < nrows;) do_row(r);
+    });
+  for (std::size_t r; (r = next++) < nrows;) do_row(r);
+  for (auto& th : pool) th.join();
+  for (std::size_t r = 0; r < nrows; ++r) {
+    path.points_before_merge += (nu - 1) / std::size_t(o.check_subdivisions) + 1;
+    path.points_after_merge += path.rows[r].size();
+    path.refinement_queries += row_queries[r];
   }
 
   // Links between rows run across them at the row ends; they are checked

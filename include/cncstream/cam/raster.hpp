@@ -38,6 +38,7 @@ struct RasterPath {
   std::size_t samples = 0;      // CL points computed (including check points)
   std::size_t points_before_merge = 0;
   std::size_t points_after_merge = 0;
+  std::size_t refinement_queries = 0;  // point queries spent on steep intervals
 };
 
 XYBounds default_bounds(const Mesh& mesh, const Cutter& cutter);

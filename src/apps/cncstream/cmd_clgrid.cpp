@@ -8,7 +8,9 @@
 
 #include "cli_common.hpp"
 #include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/height_field_io.hpp"
 #include "cncstream/cam/raster.hpp"
+#include "cncstream/image/height_map.hpp"
 #include "commands.hpp"
 
 namespace cncstream::app {
@@ -30,6 +32,24 @@ void write_csv(const ClEngine& engine, const GridSpec& spec, const std::string& 
       }
   });
   if (!f) throw std::runtime_error(out + ": write failed");
+}
+
+// Raw float32 + sidecar, streamed by tile.
+void write_f32(const ClEngine& engine, const GridSpec& spec, const std::string& out) {
+  HeightFieldWriter w(out, spec);
+  engine.compute_tiles(spec, [&](const ClTile& tile) { w.append(tile.grid.z); });
+  w.finish();
+}
+
+// A shaded height map a person can look at (the whole grid in memory).
+void write_png_map(const ClEngine& engine, const GridSpec& spec, const std::string& out, const std::string& title) {
+  const ClGrid g = engine.compute(spec);
+  MapGrid mg{spec.nx, spec.ny, spec.dx, spec.dy, spec.x0, spec.y0};
+  HeightMapOptions ho;
+  ho.title = title;
+  ho.subtitle = engine.cutter().description() + ", grid " + std::to_string(spec.nx) + " x " + std::to_string(spec.ny);
+  ho.max_map_pixels = 1000;
+  write_png(out, render_height_map(mg, g.z, {}, ho));
 }
 
 }  // namespace
@@ -56,8 +76,8 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
     const auto t0 = std::chrono::steady_clock::now();
     const Cutter cutter = parse_cutter_spec(o->tool);
     const std::string ext = std::filesystem::path(o->out).extension().string();
-    if (ext != ".csv")
-      throw std::invalid_argument(o->out + ": unsupported output type '" + ext + "' (use .csv)");
+    if (ext != ".csv" && ext != ".png" && ext != ".f32")
+      throw std::invalid_argument(o->out + ": unsupported output type '" + ext + "' (use .csv, .png or .f32)");
     const auto part = load_part(o->part);
     XYBounds b = default_bounds(part.mesh, cutter);
     if (!o->bounds.empty()) {
@@ -69,7 +89,9 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
     clo.floor = o->floor;
     clo.threads = o->threads;
     const ClEngine engine(part.mesh, cutter, clo);
-    write_csv(engine, spec, o->out);
+    if (ext == ".csv") write_csv(engine, spec, o->out);
+    else if (ext == ".f32") write_f32(engine, spec, o->out);
+    else write_png_map(engine, spec, o->out, "CL surface (tool tip) of " + std::filesystem::path(o->part.stl).filename().string());
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::cout << "grid " << spec.nx << " x " << spec.ny << " = " << spec.size() << " nodes, step " << o->grid
               << " mm, floor " << engine.floor() << "; wrote " << o->out << " in " << s << " s\n";
