@@ -15,6 +15,9 @@ int main(int argc, char** argv) {
   cncstream::app::register_info(app, registry);
   cncstream::app::register_clgrid(app, registry);
   cncstream::app::register_toolpath(app, registry);
+  cncstream::app::register_ports(app, registry);
+  cncstream::app::register_jobs(app, registry);
+  cncstream::app::register_stream(app, registry);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

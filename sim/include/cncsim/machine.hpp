@@ -1,0 +1,172 @@
+#pragma once
+// The simulated GRBL 1.1h router as an in-process object: bytes in, bytes
+// out, and a virtual clock the caller advances. Deterministic: the same bytes
+// and the same advance() calls give the same output. The pty front end and
+// tests drive the same object.
+//
+//   cncsim::Machine m;                 // prints the banner
+//   m.receive("G1 X10 F600\n");        // host -> firmware (real-time bytes act at once)
+//   m.advance(0.5);                    // run 0.5 s of virtual time
+//   std::string out = m.take_output(); // firmware -> host: "ok\r\n", "<Run|...>\r\n"
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "cncsim/settings.hpp"
+#include "cncstream/gcode/interpreter.hpp"
+#include "cncstream/gcode/line_lexer.hpp"
+#include "cncstream/gcode/motion_planner.hpp"
+
+namespace cncsim {
+
+inline constexpr std::size_t kRxBufferSize = 128;  // GRBL RX_BUFFER_SIZE (127 usable)
+inline constexpr std::size_t kPlannerBlocks = 15;
+inline constexpr const char* kBanner = "Grbl 1.1h ['$' for help]";
+
+enum class MachineState { Idle, Run, Hold, Jog, Alarm, Door, Check, Home, Sleep };
+
+// Faults on demand. Line numbers count the lines the firmware has received
+// (1-based, every line including empty ones).
+struct Faults {
+  std::size_t drop_every = 0;     // drop every Nth received byte (0 = never)
+  std::size_t corrupt_every = 0;  // flip a bit in every Nth received byte
+  std::map<std::size_t, int> error_at;     // line -> answer error:E instead of running it
+  std::map<std::size_t, int> alarm_at;     // line -> raise ALARM:A when it arrives
+  std::map<std::size_t, double> stall_at;  // line -> stop answering for S seconds
+  std::size_t vanish_after = 0;   // go silent (pty closes) after N answers (0 = never)
+  int homing_failure = 0;         // $H fails with this ALARM (6..9), 0 = homing works
+};
+
+struct MachineOptions {
+  std::optional<std::filesystem::path> store_path;  // settings file ($$, G10, $N ...)
+  Faults faults;
+  bool strict = false;  // an RX overflow throws RxOverflowError
+  // --speed max: whenever the firmware waits for planner room, a buffer sync
+  // or a dwell, the virtual clock jumps ahead instead of waiting for advance().
+  bool instant_waits = false;
+  std::optional<double> probe_surface_z;  // G38.x touches this Z plane (machine coords)
+};
+
+class RxOverflowError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Called for every straight piece of tool motion (machine coordinates).
+using MotionObserver = std::function<void(const cncstream::Vec3& from, const cncstream::Vec3& to, bool rapid)>;
+
+class Machine {
+ public:
+  explicit Machine(MachineOptions options = {});
+
+  // Host -> firmware. Bytes arriving while the 128-byte RX buffer is full are
+  // dropped and counted (strict: RxOverflowError).
+  void receive(std::string_view bytes);
+  // Firmware -> host: everything printed since the last call.
+  std::string take_output();
+  // Runs the virtual clock forward.
+  void advance(double seconds);
+  // Advances until no motion, wait or line is pending (or max_seconds pass).
+  void run_until_idle(double max_seconds = 3600);
+  double now() const { return now_; }
+
+  // Inspection.
+  MachineState state() const { return state_; }
+  std::string state_name() const;  // "Idle", "Hold:0", "Door:0", ...
+  std::string status_report();     // the '?' answer (advances the report counters)
+  cncstream::Vec3 machine_position() const { return queue_.position(); }
+  cncstream::Vec3 work_position() const { return queue_.position() - parser_.wco(); }
+  const cncstream::gcode::ParserState& parser() const { return parser_; }
+  const Settings& settings() const { return store_.settings; }
+  const PersistentStore& store() const { return store_; }
+  std::size_t rx_bytes_dropped() const { return rx_dropped_; }
+  std::size_t rx_used() const { return rx_.size(); }
+  std::size_t planner_blocks() const { return queue_.size(); }
+  std::size_t lines_received() const { return lines_received_; }
+  std::size_t lines_answered() const { return lines_answered_; }
+  bool vanished() const { return vanished_; }
+  bool busy() const;  // motion, a pending line or unread RX bytes
+
+  void set_motion_observer(MotionObserver observer) { observer_ = std::move(observer); }
+  // A limit switch closes: ALARM:1, motion stops dead, locked until reset.
+  void inject_hard_limit();
+
+ private:
+  struct Step {
+    enum Kind { Block, Sync, Delay, Pause, Emit, Apply, Homing, ProbeEnd } kind = Emit;
+    cncstream::gcode::MotionBlock block;
+    double seconds = 0;
+    std::string text;
+    std::function<void()> apply;
+    bool started = false;
+    double until = 0;
+    bool jog = false;  // a $J= block: the machine enters Jog, not Run
+  };
+
+  void boot(bool power_on);
+  void soft_reset();
+  void emit(std::string_view line);
+  void answer(int status);
+  void receive_byte(unsigned char c);
+  void realtime(unsigned char c);
+  void pump();
+  bool run_front_step();
+  bool run_and_pop(Step& s);
+  void process_line(const cncstream::gcode::CleanLine& line);
+  void process_system(const std::string& line);
+  void process_gcode(const std::string& line);
+  void queue_actions(const cncstream::gcode::BlockResult& result);
+  bool soft_limit_violated(const cncstream::Vec3& target) const;
+  void raise_critical_alarm(int code);
+  void raise_alarm(int code);
+  void after_motion();
+  void advance_motion(double dt, bool stop_after_block);
+  bool motion_can_run() const;
+  std::optional<double> next_timer() const;
+  void wait_instantly();
+  void apply_overrides();
+  void persist();
+  void run_startup_lines();
+  std::string format_vec(const cncstream::Vec3& v) const;
+  void start_homing();
+  void feed_hold();
+  void cycle_start();
+
+  MachineOptions options_;
+  PersistentStore store_;
+  cncstream::gcode::ParserState parser_;
+  cncstream::gcode::MotionQueue queue_;
+  cncstream::gcode::LineAssembler assembler_;
+  std::deque<char> rx_;
+  std::deque<Step> steps_;
+  std::string out_;
+  MotionObserver observer_;
+
+  MachineState state_ = MachineState::Idle;
+  double now_ = 0;
+  bool critical_lock_ = false;  // ALARM 1/2: nothing but '?' and reset until 0x18
+  bool jog_cancel_ = false;
+  bool paused_ = false;         // M0 waiting for cycle start
+  bool spindle_stop_ = false;   // 0x9E in hold
+  int feed_ovr_ = 100, rapid_ovr_ = 100, spindle_ovr_ = 100;
+  int wco_counter_ = 0, ovr_counter_ = 0;
+  cncstream::Vec3 probe_position_{};
+  bool probe_succeeded_ = false;
+  bool probe_contact_ = false;
+
+  std::size_t bytes_received_ = 0;
+  std::size_t rx_dropped_ = 0;
+  std::size_t lines_received_ = 0;
+  std::size_t lines_answered_ = 0;
+  bool vanished_ = false;
+  bool popped_ = false;
+};
+
+}  // namespace cncsim
