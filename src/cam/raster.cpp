@@ -34,19 +34,23 @@ Polyline simplified(const std::vector<double>& u, const std::vector<double>& z, 
 
 // Between two exact CL samples the CL surface can rise above the chord only
 // where it bends down: by at most L^2 / (8 rk) for a chord of length L (the
-// offsets of a cutter with corner radius rk curve no tighter than rk), and
-// without bound at the vertical steps of a flat cutter's CL surface. Such
-// intervals get exact point queries at their midpoints until the bound holds
-// or they are narrower than `min_width`.
+// offsets of a cutter with corner radius rk curve no tighter than rk), except
+// at vertical steps beside walls; a flat end's surface has no bound. Such
+// suspicious intervals get an exact point query at their midpoint; where the
+// surface is off the chord there by more than eps (measured across the
+// chord), the midpoint is kept and both halves are examined the same way.
 struct StepRefiner {
   const ClEngine& engine;
   double rk;
   double eps = 1e-4;        // mm of possible chord sag accepted
-  double min_width = 1e-3;  // mm; narrower steps are left (sub-micron side nick)
+  double min_width = 1e-4;  // mm; narrower intervals are left (a sub-micron side nick at most)
 
-  bool needs_split(double du, double dz) const {
-    if (std::fabs(dz) > du) return true;  // steeper than 45 degrees
-    return rk > 0 && (du * du + dz * dz) / (8 * rk) > eps;
+  bool suspicious(double du, double dz) const {
+    if (rk > 0) return (du * du + dz * dz) / (8 * rk) > eps;
+    // A flat end's CL surface is not curvature-bounded: where an edge's
+    // contact meets the plateau of its end vertex it bends sharply even on a
+    // gentle slope. Only level intervals (plateaus) are certainly straight.
+    return std::fabs(dz) > 1e-9;
   }
 
   // Appends refined samples strictly inside (ua, ub) to out, in order.
@@ -54,15 +58,44 @@ struct StepRefiner {
   void refine(double ua, double za, double ub, double zb, At at, std::vector<std::pair<double, double>>& out,
               std::size_t& queries) const {
     const double du = ub - ua;
-    if (du < min_width || !needs_split(du, zb - za)) return;
+    if (du < min_width || !suspicious(du, zb - za)) return;
     const double um = 0.5 * (ua + ub);
     const double zm = at(um);
     ++queries;
+    // Distance from the surface point to the chord, measured across the chord
+    // (how deep the cutter would cut): a vertical error on a near-vertical
+    // part of the CL surface is a sideways nick of a fraction of it.
+    const double slope = (zb - za) / du;
+    if (std::fabs(zm - 0.5 * (za + zb)) / std::sqrt(1 + slope * slope) <= eps) return;
     refine(ua, za, um, zm, at, out, queries);
     out.emplace_back(um, zm);
     refine(um, zm, ub, zb, at, out, queries);
   }
 };
+
+// Exact CL samples along a straight pass (u = distance along it) -> the
+// refined and merged polyline, mapped to points by `to_point`.
+template <class At, class ToPoint>
+Polyline pass_polyline(const std::vector<double>& us_in, const std::vector<double>& zs_in, const StepRefiner& refiner,
+                       double tolerance, At at, ToPoint to_point, std::size_t& queries) {
+  std::vector<double> us, zs;
+  us.reserve(us_in.size() + 16);
+  zs.reserve(zs_in.size() + 16);
+  std::vector<std::pair<double, double>> extra;
+  for (std::size_t k = 0; k < us_in.size(); ++k) {
+    if (k > 0) {
+      extra.clear();
+      refiner.refine(us.back(), zs.back(), us_in[k], zs_in[k], at, extra, queries);
+      for (const auto& [eu, ez] : extra) {
+        us.push_back(eu);
+        zs.push_back(ez);
+      }
+    }
+    us.push_back(us_in[k]);
+    zs.push_back(zs_in[k]);
+  }
+  return simplified(us, zs, tolerance, to_point);
+}
 
 }  // namespace
 
@@ -105,34 +138,20 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   auto do_row = [&](std::size_t r) {
     const double v = v0 + double(r) * dv;
     const bool forward = r % 2 == 0;
-    std::vector<double> us, zs;
-    us.reserve(nu + 16);
-    zs.reserve(nu + 16);
-    std::vector<std::pair<double, double>> extra;
-    auto at = [&](double s) {
-      const Vec3 p = point(forward ? u0 + s : u1 - s, v, 0);
-      return engine.height_at(p.x, p.y);
-    };
+    std::vector<double> us(nu), zs(nu);
     for (std::size_t k = 0; k < nu; ++k) {
       const std::size_t idx = forward ? k : nu - 1 - k;
-      // Cutting order parameter: distance travelled along the row.
-      const double s = double(k) * du;
-      const double z = along_x ? grid.at(idx, r) : grid.at(r, idx);
-      if (k > 0) {
-        extra.clear();
-        refiner.refine(us.back(), zs.back(), s, z, at, extra, row_queries[r]);
-        for (const auto& [es, ez] : extra) {
-          us.push_back(es);
-          zs.push_back(ez);
-        }
-      }
-      us.push_back(s);
-      zs.push_back(z);
+      us[k] = double(k) * du;  // distance travelled along the row
+      zs[k] = along_x ? grid.at(idx, r) : grid.at(r, idx);
     }
-    path.rows[r] = simplified(us, zs, o.tolerance, [&](double s, double z) {
-      const double u = forward ? u0 + s : u1 - s;
-      return point(u, v, z);
-    });
+    auto along = [&](double s) { return forward ? u0 + s : u1 - s; };
+    path.rows[r] = pass_polyline(
+        us, zs, refiner, o.tolerance,
+        [&](double s) {
+          const Vec3 p = point(along(s), v, 0);
+          return engine.height_at(p.x, p.y);
+        },
+        [&](double s, double z) { return point(along(s), v, z); }, row_queries[r]);
   };
   const unsigned nthreads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), 8));
   std::atomic<std::size_t> next{0};
@@ -149,23 +168,27 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
     path.refinement_queries += row_queries[r];
   }
 
-  // Links between rows run across them at the row ends; they are checked
-  // with point queries at the check step.
+  // Links between rows run across them at the row ends, sampled with point
+  // queries at the check step and refined like the rows.
   const double dl = du > 0 ? du : step / o.check_subdivisions;
   for (std::size_t r = 0; r + 1 < nrows; ++r) {
     const Vec3 a = path.rows[r].back();
     const double u = along_x ? a.x : a.y;
+    const double va = v0 + double(r) * dv;
     const std::size_t n = intervals(dv, dl) + 1;
+    auto at = [&](double s) {
+      const Vec3 p = point(u, va + s, 0);
+      return engine.height_at(p.x, p.y);
+    };
     std::vector<double> s(n), z(n);
     for (std::size_t k = 0; k < n; ++k) {
       s[k] = dv * double(k) / double(n - 1);
-      const Vec3 p = point(u, v0 + double(r) * dv + s[k], 0);
-      z[k] = engine.height_at(p.x, p.y);
+      z[k] = at(s[k]);
     }
     path.samples += n;
-    path.links.push_back(simplified(s, z, o.tolerance, [&](double sv, double zz) {
-      return point(u, v0 + double(r) * dv + sv, zz);
-    }));
+    path.links.push_back(pass_polyline(
+        s, z, refiner, o.tolerance, at, [&](double sv, double zz) { return point(u, va + sv, zz); },
+        path.refinement_queries));
   }
   return path;
 }
