@@ -38,26 +38,44 @@ std::filesystem::path height_field_sidecar(const std::filesystem::path& data_pat
   return std::filesystem::path(data_path.string() + ".txt");
 }
 
+HeightFieldWriter::HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid)
+    : path_(data_path), grid_(grid), out_(data_path, std::ios::binary) {
+  if (!out_) throw HeightFieldError(data_path.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+}
+
+void HeightFieldWriter::append(std::span<const double> z) {
+  if (written_ + z.size() > grid_.size())
+    throw std::invalid_argument("height field: more values than the grid's " + std::to_string(grid_.size()) + " nodes");
+  std::vector<std::uint32_t> buf(z.size());
+  for (std::size_t k = 0; k < z.size(); ++k)
+    buf[k] = to_little(std::bit_cast<std::uint32_t>(static_cast<float>(z[k])));
+  out_.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size() * 4));
+  if (!out_) throw HeightFieldError(path_.string() + ": write error");
+  written_ += z.size();
+}
+
+void HeightFieldWriter::finish() {
+  if (written_ != grid_.size())
+    throw std::invalid_argument("height field: " + std::to_string(written_) + " values for a grid of " +
+                                std::to_string(grid_.size()) + " nodes");
+  out_.close();
+  if (!out_) throw HeightFieldError(path_.string() + ": write error");
+  const auto side = height_field_sidecar(path_);
+  std::ofstream t(side);
+  if (!t) throw HeightFieldError(side.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+  t << kMagic << "\n"
+    << "nx " << grid_.nx << "\nny " << grid_.ny << "\nx0 " << num(grid_.x0) << "\ny0 " << num(grid_.y0) << "\ndx "
+    << num(grid_.dx) << "\ndy " << num(grid_.dy) << "\nnodata nan\n";
+  if (!t) throw HeightFieldError(side.string() + ": write error");
+}
+
 void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z) {
   if (z.size() != grid.size())
     throw std::invalid_argument("height field: " + std::to_string(z.size()) + " values for a grid of " +
                                 std::to_string(grid.size()) + " nodes");
-  {
-    std::ofstream f(data_path, std::ios::binary);
-    if (!f) throw HeightFieldError(data_path.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
-    std::vector<std::uint32_t> buf(z.size());
-    for (std::size_t k = 0; k < z.size(); ++k)
-      buf[k] = to_little(std::bit_cast<std::uint32_t>(static_cast<float>(z[k])));
-    f.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size() * 4));
-    if (!f) throw HeightFieldError(data_path.string() + ": write error");
-  }
-  const auto side = height_field_sidecar(data_path);
-  std::ofstream t(side);
-  if (!t) throw HeightFieldError(side.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
-  t << kMagic << "\n"
-    << "nx " << grid.nx << "\nny " << grid.ny << "\nx0 " << num(grid.x0) << "\ny0 " << num(grid.y0) << "\ndx "
-    << num(grid.dx) << "\ndy " << num(grid.dy) << "\nnodata nan\n";
-  if (!t) throw HeightFieldError(side.string() + ": write error");
+  HeightFieldWriter w(data_path, grid);
+  w.append(z);
+  w.finish();
 }
 
 HeightFieldData read_height_field(const std::filesystem::path& data_path) {

@@ -21,6 +21,20 @@ struct ClOptions {
   unsigned threads = 0;
   // Upper bound on the bytes of grid held at once by compute_tiles().
   std::size_t max_tile_bytes = std::size_t{256} << 20;
+  // Leave out manifold edges where the surface is a valley or flat: for a
+  // convex cutter they never raise the envelope (the adjacent facets' own
+  // contacts cover them). Off draws every unique edge; tests compare both.
+  bool skip_concave_edges = true;
+};
+
+// What the engine draws for a mesh (for benchmarks and diagnostics).
+struct ClEngineStats {
+  std::size_t facets = 0;
+  std::size_t face_offsets = 0;   // non-vertical facets with an interior contact
+  std::size_t edges = 0;          // unique edges of the mesh
+  std::size_t edges_drawn = 0;    // after leaving out valley / coplanar ones
+  std::size_t vertices = 0;       // vertices used by some facet
+  std::size_t vertices_drawn = 0; // those not covered by a drawn edge
 };
 
 // A rectangular block of a grid: rows [j0, j0 + spec.ny) of the full grid.
@@ -29,23 +43,34 @@ struct ClTile {
   ClGrid grid;  // grid.spec covers only this tile's rows
 };
 
+// The engine keeps a reference to the mesh, which must outlive it (a
+// temporary mesh is rejected at compile time). Construction is O(mesh); every
+// query is const and may run concurrently.
 class ClEngine {
  public:
   ClEngine(const Mesh& mesh, const Cutter& cutter, ClOptions options = {});
+  ClEngine(Mesh&& mesh, const Cutter& cutter, ClOptions options = {}) = delete;
   ~ClEngine();
   ClEngine(ClEngine&&) noexcept;
   ClEngine& operator=(ClEngine&&) noexcept;
 
   const Cutter& cutter() const;
   double floor() const;
+  const ClEngineStats& stats() const;
 
-  // Whole grid in memory.
+  // Whole grid in memory. Throws std::invalid_argument for a bad spec
+  // (non-positive or non-finite step, non-finite origin).
   ClGrid compute(const GridSpec& spec) const;
   // Grid in row tiles of at most options.max_tile_bytes each, handed to sink
-  // in order, so a grid larger than memory can be streamed to a file.
+  // in order, so a grid larger than memory can be streamed to a file. Node
+  // heights are identical to compute()'s (nodes are placed from the full
+  // spec); a tile's own spec.y0 is spec.y(j0).
   void compute_tiles(const GridSpec& spec, const std::function<void(const ClTile&)>& sink) const;
-  // One point (drop-cutter query), same result as a grid node at (x, y).
+  // One point (drop-cutter query), same result as a grid node at (x, y);
+  // the floor where nothing is touched. Builds a bucket index on first use.
   double height_at(double x, double y) const;
+  // As height_at, but reports whether any facet was touched.
+  double height_at(double x, double y, bool& on_floor) const;
 
  private:
   struct Impl;

@@ -13,6 +13,7 @@
 // NaN marks nodes without a value. Shared by the stock export and the CL
 // grid export.
 #include <filesystem>
+#include <fstream>
 #include <span>
 #include <stdexcept>
 #include <vector>
@@ -33,6 +34,22 @@ class HeightFieldError : public std::runtime_error {
 
 // The sidecar's path for a given data path: "<path>.txt".
 std::filesystem::path height_field_sidecar(const std::filesystem::path& data_path);
+
+// Writes a grid in row order, a block of values at a time (a grid larger
+// than memory can be streamed); finish() checks the count and writes the
+// sidecar.
+class HeightFieldWriter {
+ public:
+  HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid);
+  void append(std::span<const double> z);
+  void finish();
+
+ private:
+  std::filesystem::path path_;
+  GridSpec grid_;
+  std::ofstream out_;
+  std::size_t written_ = 0;
+};
 
 // Writes both files. Throws HeightFieldError naming the path on failure and
 // std::invalid_argument if z.size() != grid.size().

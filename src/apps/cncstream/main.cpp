@@ -13,6 +13,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   cncstream::app::CommandRegistry registry;
   cncstream::app::register_info(app, registry);
+  cncstream::app::register_clgrid(app, registry);
+  cncstream::app::register_toolpath(app, registry);
   cncstream::app::register_ports(app, registry);
   cncstream::app::register_jobs(app, registry);
   cncstream::app::register_stream(app, registry);

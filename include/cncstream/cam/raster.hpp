@@ -1,0 +1,48 @@
+#pragma once
+// Zig-zag raster finishing: rows `stepover` apart, the CL surface sampled
+// along each row, every straight link checked against the exact CL surface,
+// collinear points merged within a one-sided tolerance.
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/geometry/vec3.hpp"
+
+namespace cncstream {
+
+enum class RasterDirection { X, Y };
+
+struct XYBounds {
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
+struct RasterOptions {
+  double stepover = 0.4;        // distance between rows (upper bound; rows are spread evenly)
+  double step = 0;              // sampling step along a row; 0 = min(stepover / 4, 0.1)
+  int check_subdivisions = 2;   // each step is checked at step / check_subdivisions
+  RasterDirection direction = RasterDirection::X;
+  double tolerance = 0.002;     // merged chords stay within this above the CL surface
+  std::optional<XYBounds> bounds;  // default: mesh XY box grown by the cutter radius
+};
+
+// One pass of the path: a polyline of tool-tip points, cut in order.
+using Polyline = std::vector<Vec3>;
+
+struct RasterPath {
+  std::vector<Polyline> rows;   // in cutting order, alternating direction
+  std::vector<Polyline> links;  // links[k] joins rows[k] to rows[k+1] (checked against the CL)
+  XYBounds bounds;
+  double stepover = 0;          // actual distances used
+  double step = 0;
+  std::size_t samples = 0;      // CL points computed (including check points)
+  std::size_t points_before_merge = 0;
+  std::size_t points_after_merge = 0;
+  std::size_t refinement_queries = 0;  // point queries spent on steep intervals
+};
+
+XYBounds default_bounds(const Mesh& mesh, const Cutter& cutter);
+
+RasterPath build_raster(const ClEngine& engine, const XYBounds& bounds, const RasterOptions& options);
+
+}  // namespace cncstream

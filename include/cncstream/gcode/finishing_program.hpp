@@ -1,0 +1,43 @@
+#pragma once
+// Turns a raster finishing path into a complete G-code program: header
+// (units, absolute mode, plane, spindle on with a dwell), safe retracts,
+// the cut, spindle off and program end. Coordinates are placed in the work
+// coordinate system chosen by the operator.
+#include <string>
+#include <vector>
+
+#include "cncstream/cam/raster.hpp"
+#include "cncstream/geometry/vec3.hpp"
+
+namespace cncstream {
+
+enum class XYOrigin { PartMin, PartCenter, Model };  // work X0 Y0 at ...
+enum class ZZero { PartTop, PartBottom, Model };      // work Z0 at ...
+
+// Offset added to model coordinates to get work coordinates.
+Vec3 work_offset(const Box3& part, XYOrigin xy, ZZero z);
+
+struct MachiningParams {
+  double feed = 1000;        // mm/min
+  double plunge_feed = 300;  // mm/min
+  double rpm = 18000;
+  double dwell_s = 2;        // spindle spin-up
+  double safe_z = 5;         // work coordinates
+  int decimals = 3;
+  std::vector<std::string> header_comments;
+};
+
+struct ProgramStats {
+  std::size_t lines = 0;
+  std::size_t motion_lines = 0;
+  double cut_length = 0;      // mm at feed
+  double rapid_length = 0;    // mm at rapid
+  double feed_time_s = 0;     // cut length / feed (no acceleration)
+  Box3 work_bounds;           // of the tool tip over the cut, in work coordinates
+};
+
+// Throws std::invalid_argument if safe_z is not above the whole path.
+std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& params,
+                              ProgramStats* stats = nullptr);
+
+}  // namespace cncstream

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Installs what cncstream needs to build and test on Debian bookworm.
+# Idempotent: asks apt only for what is missing.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libboost-dev libserialport-dev libusb-1.0-0-dev
+  libglfw3-dev libgl-dev libegl-dev xvfb
+  libsqlite3-dev libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
+  libspdlog-dev libfmt-dev libtbb-dev libpng-dev
+  libgtest-dev libgmock-dev googletest libbenchmark-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "setup: all packages present"
+fi

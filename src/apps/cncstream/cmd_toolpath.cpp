@@ -1,0 +1,37 @@
+// `cncstream toolpath PART.stl --tool SPEC --stepover S ... -o part.nc`
+#include <chrono>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "toolpath_job.hpp"
+
+namespace cncstream::app {
+
+void register_toolpath(CLI::App& app, CommandRegistry& registry) {
+  struct Opts {
+    ToolpathOptions tp;
+    std::string out;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* sub = app.add_subcommand("toolpath", "Generate a raster finishing tool path (G-code) from an STL");
+  sub->add_option("stl", o->tp.part.stl, "STL file")->required();
+  add_toolpath_options(sub, o->tp);
+  sub->add_option("-o,--output", o->out, "G-code file to write")->required();
+  registry.add(sub, [o] {
+    const auto t0 = std::chrono::steady_clock::now();
+    const ToolpathResult r = generate_toolpath(o->tp);
+    std::ofstream f(o->out, std::ios::binary);
+    if (!f) throw std::runtime_error(o->out + ": cannot open for writing");
+    f << r.gcode;
+    f.close();
+    if (!f) throw std::runtime_error(o->out + ": write failed");
+    std::cout << r.report();
+    std::cout << "wrote " << o->out << " in "
+              << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s total\n";
+    return 0;
+  });
+}
+
+}  // namespace cncstream::app

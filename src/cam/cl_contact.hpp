@@ -1,0 +1,112 @@
+#pragma once
+// Exact drop heights of a generalized APT cutter (tool axis +Z, tip = lowest
+// point) against one facet interior, one edge and one vertex. Internal to
+// the CL engine; the grid rasterizer and the point query share these so a
+// grid node and height_at() at the same (x, y) agree bit for bit.
+//
+// The drop height against a point set S at node c is
+//   max over p in S with rho = |p_xy - c| <= R of  p.z - h(rho),
+// h the cutter's profile height. h(|q - c|) is convex in q, so the function
+// is concave over any convex piece of S: a facet's maximum is the tangent
+// point of its plane (if inside the facet) or lies on its boundary, an edge
+// is a 1-D concave maximisation.
+#include <cmath>
+#include <limits>
+
+#include "cncstream/cam/cutter.hpp"
+#include "cncstream/geometry/vec3.hpp"
+
+namespace cncstream::cl_detail {
+
+inline constexpr double kNoContact = -std::numeric_limits<double>::infinity();
+
+struct CutterShape {
+  double R = 0;   // radius
+  double rk = 0;  // corner radius
+  double rc = 0;  // core radius, R - rk
+
+  explicit CutterShape(const Cutter& c)
+      : R(c.radius),
+        rk(c.type == CutterType::Flat ? 0.0
+           : c.type == CutterType::Ball ? c.radius
+                                         : std::fmin(std::fmax(c.corner_radius, 0.0), c.radius)),
+        rc(R - rk) {}
+
+  // Profile height above the tip at radius rho, 0 <= rho <= R (clamped).
+  double h(double rho) const {
+    if (rho <= rc) return 0.0;
+    const double u = std::fmin(rho - rc, rk);
+    return rk - std::sqrt(std::fmax(0.0, (rk - u) * (rk + u)));
+  }
+};
+
+// Facet interior contact ("face offset"). For nodes c with c - shift inside
+// the facet's xy triangle (within tol), the facet's drop height is linear in
+// c: value(c) = z0 + gx * (c.x - ox) + gy * (c.y - oy).
+struct FaceOffset {
+  bool active = false;       // false: (near-)vertical or degenerate facet
+  bool horizontal = false;   // treated as exactly horizontal (no shift)
+  double qx[3] = {}, qy[3] = {};  // shifted triangle, counter-clockwise
+  double inx[3] = {}, iny[3] = {};  // unit inward normals of its sides
+  double ox = 0, oy = 0, z0 = 0, gx = 0, gy = 0;
+  double tol = 0;            // inclusion tolerance, mm
+  double nz = 0;             // upward unit normal's z
+
+  bool contains(double x, double y) const {
+    for (int k = 0; k < 3; ++k)
+      if ((x - qx[k]) * inx[k] + (y - qy[k]) * iny[k] < -tol) return false;
+    return true;
+  }
+  double value(double x, double y) const { return z0 + gx * (x - ox) + gy * (y - oy); }
+  double xmin() const { return std::fmin(qx[0], std::fmin(qx[1], qx[2])) - tol; }
+  double xmax() const { return std::fmax(qx[0], std::fmax(qx[1], qx[2])) + tol; }
+  double ymin() const { return std::fmin(qy[0], std::fmin(qy[1], qy[2])) - tol; }
+  double ymax() const { return std::fmax(qy[0], std::fmax(qy[1], qy[2])) + tol; }
+};
+
+// Facets whose upward unit normal has n_z below this are treated as vertical:
+// their interior contact differs from their boundary's by O(R * n_z), and
+// their plane height is too ill-conditioned to evaluate.
+inline constexpr double kVerticalNz = 1e-8;
+// XY triangles with twice their area below this times their longest side
+// squared are too thin to orient reliably: drawn through their edges only.
+inline constexpr double kThinXy = 1e-9;
+// Facets steeper than this (n_z below it) never let an adjacent edge be
+// skipped, and get no inclusion tolerance (slope would amplify it).
+inline constexpr double kSteepNz = 0.01;
+// |n_xy| below this: the facet counts as horizontal, so a flat or bull-nose
+// cutter's contact direction (n_xy / |n_xy|, ill-defined there) is not used.
+inline constexpr double kHorizontalNxy = 1e-9;
+
+FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const CutterShape& cutter);
+
+// Upward unit normal (n_z >= 0) of a triangle; zero vector if degenerate.
+Vec3 upward_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2);
+
+// A mesh edge prepared for repeated drop queries.
+struct EdgeGeom {
+  double ax = 0, ay = 0, az = 0;  // start point
+  double dz = 0;                  // b.z - a.z
+  double ux = 0, uy = 0;          // unit xy direction a -> b
+  double L = 0;                   // xy length (0: vertical edge)
+  double zmax = 0;                // max(a.z, b.z)
+  double xmin = 0, xmax = 0, ymin = 0, ymax = 0;  // xy bounds of the segment
+};
+EdgeGeom make_edge(const Vec3& a, const Vec3& b);
+
+// Drop height of the cutter at (x, y) against the closed segment; kNoContact
+// if no point of it lies within R.
+double edge_drop(const EdgeGeom& e, const CutterShape& cutter, double x, double y);
+
+inline double vertex_drop(const Vec3& v, const CutterShape& cutter, double x, double y) {
+  const double ddx = v.x - x, ddy = v.y - y;
+  const double rho2 = ddx * ddx + ddy * ddy;
+  if (rho2 > cutter.R * cutter.R) return kNoContact;
+  return v.z - cutter.h(std::sqrt(rho2));
+}
+
+// Lower bound on the xy distance from any point of the rectangle to the
+// segment (used to cull whole blocks of nodes).
+double rect_segment_distance(const EdgeGeom& e, double x0, double y0, double x1, double y1);
+
+}  // namespace cncstream::cl_detail

@@ -1,0 +1,156 @@
+#include "cl_point_index.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cncstream::cl_detail {
+
+namespace {
+
+struct Box2 {
+  double x0, y0, x1, y1;
+};
+
+}  // namespace
+
+double PointIndex::top(std::uint32_t item) const {
+  const std::uint32_t id = item & kIdMask;
+  switch (item & ~kIdMask) {
+    case kFace: {
+      const auto& t = mesh_.triangles[prims_.faces[id]];
+      const double z = std::fmax(mesh_.vertices[t[0]].z, std::fmax(mesh_.vertices[t[1]].z, mesh_.vertices[t[2]].z));
+      return z + 1e-6;  // the inclusive test may evaluate the plane a hair outside
+    }
+    case kEdge: {
+      const auto& e = prims_.edges[id];
+      return std::fmax(mesh_.vertices[e[0]].z, mesh_.vertices[e[1]].z) + 1e-9 * (1 + std::fabs(mesh_.vertices[e[0]].z));
+    }
+    default:
+      return mesh_.vertices[prims_.vertices[id]].z;
+  }
+}
+
+double PointIndex::evaluate(std::uint32_t item, double x, double y) const {
+  const std::uint32_t id = item & kIdMask;
+  switch (item & ~kIdMask) {
+    case kFace: {
+      const auto& t = mesh_.triangles[prims_.faces[id]];
+      const FaceOffset f = face_offset(mesh_.vertices[t[0]], mesh_.vertices[t[1]], mesh_.vertices[t[2]], cutter_);
+      return f.active && f.contains(x, y) ? f.value(x, y) : kNoContact;
+    }
+    case kEdge: {
+      const auto& e = prims_.edges[id];
+      return edge_drop(make_edge(mesh_.vertices[e[0]], mesh_.vertices[e[1]]), cutter_, x, y);
+    }
+    default:
+      return vertex_drop(mesh_.vertices[prims_.vertices[id]], cutter_, x, y);
+  }
+}
+
+PointIndex::PointIndex(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter)
+    : mesh_(mesh), prims_(prims), cutter_(cutter) {
+  const double R = cutter.R;
+  // Footprint of each item: the XY box outside which it cannot touch.
+  auto footprint = [&](std::uint32_t item, Box2& b) {
+    const std::uint32_t id = item & kIdMask;
+    switch (item & ~kIdMask) {
+      case kFace: {
+        const auto& t = mesh.triangles[prims.faces[id]];
+        const FaceOffset f = face_offset(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], cutter);
+        if (!f.active) return false;
+        b = {f.xmin(), f.ymin(), f.xmax(), f.ymax()};
+        break;
+      }
+      case kEdge: {
+        const Vec3 p = mesh.vertices[prims.edges[id][0]], q = mesh.vertices[prims.edges[id][1]];
+        b = {std::fmin(p.x, q.x) - R, std::fmin(p.y, q.y) - R, std::fmax(p.x, q.x) + R, std::fmax(p.y, q.y) + R};
+        break;
+      }
+      default: {
+        const Vec3 v = mesh.vertices[prims.vertices[id]];
+        b = {v.x - R, v.y - R, v.x + R, v.y + R};
+      }
+    }
+    const double margin = 1e-9 * (1 + std::fmax(std::fabs(b.x0), std::fabs(b.x1)) + std::fmax(std::fabs(b.y0), std::fabs(b.y1)));
+    b.x0 -= margin;
+    b.y0 -= margin;
+    b.x1 += margin;
+    b.y1 += margin;
+    return true;
+  };
+  std::vector<std::uint32_t> all;
+  all.reserve(prims.faces.size() + prims.edges.size() + prims.vertices.size());
+  for (std::size_t k = 0; k < prims.faces.size(); ++k) all.push_back(kFace | static_cast<std::uint32_t>(k));
+  for (std::size_t k = 0; k < prims.edges.size(); ++k) all.push_back(kEdge | static_cast<std::uint32_t>(k));
+  for (std::size_t k = 0; k < prims.vertices.size(); ++k) all.push_back(kVertex | static_cast<std::uint32_t>(k));
+
+  Box2 ext{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  Box2 b{};
+  for (auto item : all) {
+    if (!footprint(item, b)) continue;
+    ext = {std::fmin(ext.x0, b.x0), std::fmin(ext.y0, b.y0), std::fmax(ext.x1, b.x1), std::fmax(ext.y1, b.y1)};
+  }
+  if (!(ext.x0 <= ext.x1)) return;  // nothing to index
+  x0_ = ext.x0;
+  y0_ = ext.y0;
+  const double w = ext.x1 - ext.x0, h = ext.y1 - ext.y0;
+  const double n = static_cast<double>(all.size());
+  // Cells about as small as the footprints allow, grown until the lists stay
+  // linear in the number of primitives.
+  cell_ = std::fmax(std::fmax(R, std::sqrt(w * h / n)), 1e-9 * (1 + w + h));
+  auto cell_of = [&](double v, double origin, std::size_t cells) {
+    const double k = std::floor((v - origin) / cell_);
+    return static_cast<std::size_t>(std::clamp(k, 0.0, static_cast<double>(cells - 1)));
+  };
+  for (;;) {
+    nx_ = static_cast<std::size_t>(std::floor(w / cell_)) + 1;
+    ny_ = static_cast<std::size_t>(std::floor(h / cell_)) + 1;
+    double entries = 0;
+    if (static_cast<double>(nx_) * static_cast<double>(ny_) <= 4 * n + 1024) {
+      for (auto item : all) {
+        if (!footprint(item, b)) continue;
+        entries += static_cast<double>(cell_of(b.x1, x0_, nx_) - cell_of(b.x0, x0_, nx_) + 1) *
+                   static_cast<double>(cell_of(b.y1, y0_, ny_) - cell_of(b.y0, y0_, ny_) + 1);
+      }
+      if (entries <= 8 * n + 4096) break;
+    }
+    cell_ *= 1.5;
+  }
+  offset_.assign(nx_ * ny_ + 1, 0);
+  auto visit = [&](auto&& emit) {
+    for (auto item : all) {
+      if (!footprint(item, b)) continue;
+      const std::size_t cx0 = cell_of(b.x0, x0_, nx_), cx1 = cell_of(b.x1, x0_, nx_);
+      const std::size_t cy0 = cell_of(b.y0, y0_, ny_), cy1 = cell_of(b.y1, y0_, ny_);
+      for (std::size_t cy = cy0; cy <= cy1; ++cy)
+        for (std::size_t cx = cx0; cx <= cx1; ++cx) emit(cy * nx_ + cx, item);
+    }
+  };
+  visit([&](std::size_t cell, std::uint32_t) { ++offset_[cell + 1]; });
+  for (std::size_t k = 0; k + 1 < offset_.size(); ++k) offset_[k + 1] += offset_[k];
+  items_.resize(offset_.back());
+  std::vector<std::uint32_t> fill(offset_.begin(), offset_.end() - 1);
+  visit([&](std::size_t cell, std::uint32_t item) { items_[fill[cell]++] = item; });
+  for (std::size_t k = 0; k + 1 < offset_.size(); ++k)
+    std::sort(items_.begin() + offset_[k], items_.begin() + offset_[k + 1],
+              [&](std::uint32_t p, std::uint32_t q) {
+                const double tp = top(p), tq = top(q);
+                return tp != tq ? tp > tq : p < q;
+              });
+}
+
+double PointIndex::drop(double x, double y) const {
+  if (items_.empty()) return kNoContact;
+  const double kx = std::floor((x - x0_) / cell_), ky = std::floor((y - y0_) / cell_);
+  if (!(kx >= 0 && ky >= 0 && kx < static_cast<double>(nx_) && ky < static_cast<double>(ny_))) return kNoContact;
+  const std::size_t cell = static_cast<std::size_t>(ky) * nx_ + static_cast<std::size_t>(kx);
+  double best = kNoContact;
+  for (std::uint32_t k = offset_[cell]; k < offset_[cell + 1]; ++k) {
+    const std::uint32_t item = items_[k];
+    if (top(item) <= best) break;  // listed highest first: nothing below can win
+    best = std::fmax(best, evaluate(item, x, y));
+  }
+  return best;
+}
+
+}  // namespace cncstream::cl_detail

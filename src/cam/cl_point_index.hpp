@@ -1,0 +1,38 @@
+#pragma once
+// Single-point drop queries (height_at): a uniform XY bucket grid in which
+// every drawn primitive is listed in each cell its footprint touches, highest
+// first, so a query reads one cell and stops at the first primitive whose top
+// is not above the best height found.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "cl_contact.hpp"
+#include "cl_primitives.hpp"
+#include "cncstream/geometry/mesh.hpp"
+
+namespace cncstream::cl_detail {
+
+class PointIndex {
+ public:
+  PointIndex(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter);
+  // Max drop height at (x, y), or kNoContact.
+  double drop(double x, double y) const;
+  std::size_t entries() const { return items_.size(); }
+
+ private:
+  enum Kind : std::uint32_t { kFace = 0, kEdge = 1u << 30, kVertex = 2u << 30 };
+  static constexpr std::uint32_t kIdMask = (1u << 30) - 1;
+  double top(std::uint32_t item) const;
+  double evaluate(std::uint32_t item, double x, double y) const;
+
+  const Mesh& mesh_;
+  const ClPrimitives& prims_;
+  CutterShape cutter_;
+  double x0_ = 0, y0_ = 0, cell_ = 1;
+  std::size_t nx_ = 0, ny_ = 0;
+  std::vector<std::uint32_t> offset_;
+  std::vector<std::uint32_t> items_;
+};
+
+}  // namespace cncstream::cl_detail

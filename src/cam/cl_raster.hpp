@@ -1,0 +1,19 @@
+#pragma once
+// The depth-buffer part of the CL engine: rows of a grid in cache-sized
+// tiles; primitives are binned to the tiles their footprint touches, and each
+// tile keeps the max of every primitive's drop height at its nodes.
+#include <cstddef>
+
+#include "cl_contact.hpp"
+#include "cl_primitives.hpp"
+#include "cncstream/cam/cl_grid.hpp"
+#include "cncstream/geometry/mesh.hpp"
+
+namespace cncstream::cl_detail {
+
+// Rows [j0, j1) of `spec` into z (row-major, (j1 - j0) * spec.nx values).
+// A node no primitive touches gets kNoContact. threads >= 1.
+void rasterize_rows(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter, const GridSpec& spec,
+                    std::size_t j0, std::size_t j1, unsigned threads, double* z);
+
+}  // namespace cncstream::cl_detail

@@ -1,0 +1,92 @@
+#include "cncstream/gcode/finishing_program.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "cncstream/gcode/gcode_writer.hpp"
+
+namespace cncstream {
+
+Vec3 work_offset(const Box3& part, XYOrigin xy, ZZero z) {
+  Vec3 o;
+  switch (xy) {
+    case XYOrigin::PartMin: o.x = -part.lo.x; o.y = -part.lo.y; break;
+    case XYOrigin::PartCenter: o.x = -(part.lo.x + part.hi.x) / 2; o.y = -(part.lo.y + part.hi.y) / 2; break;
+    case XYOrigin::Model: break;
+  }
+  switch (z) {
+    case ZZero::PartTop: o.z = -part.hi.z; break;
+    case ZZero::PartBottom: o.z = -part.lo.z; break;
+    case ZZero::Model: break;
+  }
+  return o;
+}
+
+std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& p,
+                              ProgramStats* stats) {
+  if (!(p.feed > 0) || !(p.plunge_feed > 0)) throw std::invalid_argument("feed rates must be positive");
+  if (!(p.rpm >= 0)) throw std::invalid_argument("spindle speed must not be negative");
+
+  // Z is rounded up to the output resolution so rounding never gouges.
+  const double q = std::pow(10.0, p.decimals);
+  auto place = [&](const Vec3& v) {
+    Vec3 w = v + offset;
+    w.z = std::ceil(w.z * q - 1e-6) / q;
+    return w;
+  };
+
+  ProgramStats st;
+  for (const auto* set : {&path.rows, &path.links})
+    for (const auto& pl : *set)
+      for (const auto& v : pl) st.work_bounds.add(place(v));
+  if (st.work_bounds.empty()) throw std::invalid_argument("tool path is empty");
+  if (!(p.safe_z > st.work_bounds.hi.z + 0.5))
+    throw std::invalid_argument("safe Z " + format_gcode_number(p.safe_z) + " is not at least 0.5 mm above the highest cut point Z" +
+                                format_gcode_number(st.work_bounds.hi.z) + " (work coordinates)");
+
+  GcodeWriter w(p.decimals);
+  for (const auto& c : p.header_comments) w.comment(c);
+  w.line("G21 G90 G17 G94");  // mm, absolute, XY plane, units/min feed
+  if (p.rpm > 0) {
+    w.line("M3 S" + format_gcode_number(p.rpm, 0));
+    if (p.dwell_s > 0) w.line("G4 P" + format_gcode_number(p.dwell_s, 2));
+  }
+  Vec3 at;
+  bool have_at = false;
+  auto rapid_to = [&](std::optional<double> x, std::optional<double> y, std::optional<double> z) {
+    const Vec3 to{x.value_or(at.x), y.value_or(at.y), z.value_or(at.z)};
+    if (have_at) st.rapid_length += norm(to - at);
+    w.rapid(x, y, z);
+    at = to;
+  };
+  auto feed_to = [&](const Vec3& to, double f) {
+    if (w.feed(to.x, to.y, to.z, f)) {
+      const double len = norm(to - at);
+      st.cut_length += len;
+      st.feed_time_s += len / f * 60.0;
+    }
+    at = to;
+  };
+
+  w.rapid(std::nullopt, std::nullopt, p.safe_z);
+  at.z = p.safe_z;
+  const Vec3 first = place(path.rows.front().front());
+  rapid_to(first.x, first.y, std::nullopt);
+  have_at = true;
+  feed_to(first, p.plunge_feed);
+  for (std::size_t r = 0; r < path.rows.size(); ++r) {
+    for (const auto& v : path.rows[r]) feed_to(place(v), p.feed);
+    if (r < path.links.size())
+      for (const auto& v : path.links[r]) feed_to(place(v), p.feed);
+  }
+  rapid_to(std::nullopt, std::nullopt, p.safe_z);
+  if (p.rpm > 0) w.line("M5");
+  w.line("M2");
+
+  st.lines = w.lines().size();
+  st.motion_lines = w.motion_lines();
+  if (stats) *stats = st;
+  return w.text();
+}
+
+}  // namespace cncstream
