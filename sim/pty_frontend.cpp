@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -93,7 +94,18 @@ PtyFrontEnd::Exit PtyFrontEnd::run(const std::atomic<bool>& stop) {
     const double scale = max_speed ? (machine_.stalled() ? 1.0 : 1000.0) : options_.speed;
     machine_.advance(wall * scale);
     if (machine_.vanished()) {
-      flush_output();
+      // Let the host read the last answers before the port disappears: a
+      // hangup discards what is still queued on the slave side.
+      // Written bytes reach the slave's queue asynchronously, so the queue
+      // must be seen empty twice, 10 ms apart (up to 1 s in all).
+      int quiet = 0;
+      for (int i = 0; i < 100 && quiet < 2; ++i) {
+        usleep(10000);
+        flush_output();
+        int unread = 0;
+        const bool empty = pending_out_.empty() && (ioctl(slave_keepalive_, FIONREAD, &unread) != 0 || unread == 0);
+        quiet = empty ? quiet + 1 : 0;
+      }
       close_all();
       return Exit::Vanished;
     }
