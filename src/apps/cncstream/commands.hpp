@@ -27,5 +27,8 @@ class CommandRegistry {
 };
 
 void register_info(CLI::App& app, CommandRegistry& registry);
+void register_ports(CLI::App& app, CommandRegistry& registry);
+void register_jobs(CLI::App& app, CommandRegistry& registry);
+void register_stream(CLI::App& app, CommandRegistry& registry);
 
 }  // namespace cncstream::app

@@ -13,6 +13,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   cncstream::app::CommandRegistry registry;
   cncstream::app::register_info(app, registry);
+  cncstream::app::register_ports(app, registry);
+  cncstream::app::register_jobs(app, registry);
+  cncstream::app::register_stream(app, registry);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

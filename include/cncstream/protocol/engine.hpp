@@ -1,0 +1,91 @@
+#pragma once
+// What a protocol engine reports, and the interface the runner drives. Engines
+// are pure state machines: bytes in (on_bytes), time passed in (tick), bytes
+// out (take_output) and events out (take_events). No I/O, no threads, no clocks.
+#include <optional>
+#include <utility>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/protocol/line_cleaner.hpp"
+#include "cncstream/protocol/status_report.hpp"
+
+namespace cncstream::protocol {
+
+enum class EventKind {
+  Warning,       // something odd but handled (stale ok, unparsable line)
+  Info,          // controller messages worth showing ([MSG:..], echo:)
+  LineAnswered,  // a file line got `ok`
+  LineError,     // a file line got `error:N` / was rejected
+  Alarm,         // ALARM:N
+  Status,        // a parsed status report
+  Reset,         // the controller restarted (banner seen)
+  JobState,      // the job changed state (text says to what)
+  JobFinished,   // the job ended (text: outcome)
+  CommandAnswered,  // an operator command got ok / error
+};
+const char* to_string(EventKind k);
+
+struct Event {
+  Event() = default;
+  Event(EventKind k, std::string t) : kind(k), text(std::move(t)) {}
+  EventKind kind = EventKind::Info;
+  std::string text;         // human-readable summary
+  long source_line = 0;     // file line (1-based) when the event is about one
+  std::string line_text;    // the cleaned line sent
+  int code = 0;             // error / alarm code
+  std::optional<CodeInfo> info;  // meaning and advice for error / alarm
+  std::optional<StatusReport> status;
+};
+
+enum class JobMode { Run, Check };
+enum class JobState { None, Running, Paused, HeldOnError, Stopping, Finished };
+const char* to_string(JobState s);
+
+enum class JobOutcome { None, Completed, Stopped, Error, Alarm, Disconnected, CheckPassed, CheckFailed };
+const char* to_string(JobOutcome o);
+
+struct JobProgress {
+  JobState state = JobState::None;
+  JobOutcome outcome = JobOutcome::None;
+  JobMode mode = JobMode::Run;
+  std::size_t total_lines = 0;       // file lines
+  std::size_t lines_sent = 0;        // file lines handed to the controller (blank ones count when passed)
+  std::size_t lines_answered = 0;    // file lines answered ok (or skipped as blank) in order
+  long last_answered_line = 0;       // 1-based file line of the last answered one, 0 = none
+  std::vector<Event> check_errors;   // check mode: every error with its line
+};
+
+class ProtocolEngine {
+ public:
+  virtual ~ProtocolEngine() = default;
+  virtual void on_bytes(std::string_view bytes, double now) = 0;
+  virtual void tick(double now) = 0;
+  std::string take_output() { return std::exchange(output_, {}); }
+  std::vector<Event> take_events() { return std::exchange(events_, {}); }
+
+  // Starts streaming a prepared program. Throws std::logic_error if a job is
+  // already active or the program has errors.
+  virtual void start_job(PreparedProgram program, JobMode mode, double now) = 0;
+  virtual void pause() = 0;
+  virtual void resume() = 0;
+  virtual void stop() = 0;  // controlled stop: hold, wait for motion to stop, reset
+  // An operator command line (e.g. "$X", "$H", "G0 X0"); queued behind the job.
+  virtual void send_command(const std::string& line) = 0;
+  // The controller went away (EOF/EIO): ends any job as Disconnected.
+  virtual void disconnected() = 0;
+
+  virtual const FirmwareProfile& profile() const = 0;
+  virtual const JobProgress& progress() const = 0;
+  virtual bool busy() const = 0;  // lines or commands still in flight or queued
+
+ protected:
+  void emit(Event e) { events_.push_back(std::move(e)); }
+  void write(std::string_view bytes) { output_.append(bytes); }
+  std::string output_;
+  std::vector<Event> events_;
+};
+
+}  // namespace cncstream::protocol

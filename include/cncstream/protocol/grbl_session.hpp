@@ -1,0 +1,100 @@
+#pragma once
+// The GRBL-family engine (GRBL 1.1, grblHAL, FluidNC) for an identified
+// controller: character counting, status polling, job policy (error -> hold
+// and report; alarm -> stop and explain; controlled stop = hold, wait for
+// Hold:0, soft reset), overrides, jogging and $C check passes.
+#include <deque>
+#include <optional>
+
+#include "cncstream/protocol/character_counting.hpp"
+#include "cncstream/protocol/engine.hpp"
+#include "cncstream/protocol/jog.hpp"
+#include "cncstream/protocol/modal_state.hpp"
+#include "cncstream/protocol/response.hpp"
+
+namespace cncstream::protocol {
+
+struct GrblSessionOptions {
+  std::optional<std::size_t> rx_margin;  // overrides the profile's margin
+  double jog_segment_s = 0.1;            // continuous-jog segment duration
+  int jog_max_in_flight = 2;
+  bool poll_status = true;
+};
+
+class GrblSession final : public ProtocolEngine {
+ public:
+  explicit GrblSession(FirmwareProfile profile, GrblSessionOptions opt = {});
+
+  void on_bytes(std::string_view bytes, double now) override;
+  void tick(double now) override;
+
+  void start_job(PreparedProgram program, JobMode mode, double now) override;
+  void pause() override;
+  void resume() override;
+  void stop() override;
+  void send_command(const std::string& line) override;
+  void disconnected() override;
+
+  // Sends a real-time byte if the profile has it; false if unsupported.
+  bool realtime(Realtime r);
+  // Continuous jog until jog_release(); only while no job is running.
+  void jog_start(const JogDirection& dir, double feed_mm_min);
+  void jog_release();
+  bool jogging() const { return jog_dir_.has_value(); }
+
+  const FirmwareProfile& profile() const override { return profile_; }
+  const JobProgress& progress() const override { return progress_; }
+  bool busy() const override;
+  const StatusTracker& status() const { return tracker_; }
+  // Modal state after the last answered file line.
+  const ModalState& modal() const { return modal_; }
+  const CharacterCountingStream& counter() const { return counter_; }
+  bool waiting_for_reset() const { return expect_reset_; }
+
+  // Line handling, public so tests can feed single lines.
+  void on_line(std::string_view line, double now);
+
+ private:
+  enum class CheckPhase { None, Entering, Streaming, Leaving };
+  enum class Origin { File, Command, Jog, CheckToggle };
+
+  void pump();
+  void on_answer(bool ok, int code, double now);
+  void on_banner();
+  void on_status(const StatusReport& r);
+  void finish_job(JobOutcome o, const std::string& text);
+  void set_job_state(JobState s, const std::string& why);
+  void soft_reset();
+  void maybe_complete();
+  std::size_t in_flight_of(Origin o) const;
+
+  FirmwareProfile profile_;
+  GrblSessionOptions opt_;
+  CharacterCountingStream counter_;
+  LineSplitter splitter_;
+  StatusTracker tracker_;
+  ModalState modal_;
+  double next_poll_ = 0;
+
+  PreparedProgram program_;
+  std::size_t next_index_ = 0;
+  JobProgress progress_;
+  CheckPhase check_phase_ = CheckPhase::None;
+  bool error_seen_ = false;
+
+  std::deque<std::pair<PreparedLine, Origin>> commands_;
+  std::deque<Origin> in_flight_origin_;  // parallel to counter_.in_flight()
+  bool expect_reset_ = false;
+  double reset_deadline_ = 0;
+  double now_ = 0;
+  bool tool_state_reported_ = false;
+  bool stop_requested_ = false;
+  bool hold_sent_ = false;
+  bool mpg_owned_ = false;
+  std::optional<Axes> last_mpos_;
+
+  std::optional<JogDirection> jog_dir_;
+  double jog_feed_ = 0;
+};
+
+}  // namespace cncstream::protocol

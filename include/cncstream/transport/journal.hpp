@@ -1,0 +1,77 @@
+#pragma once
+// The job journal: an SQLite database (WAL, synchronous=FULL) that records each
+// job and its progress so that, after a crash, a disconnect or a kill, the
+// operator knows exactly which lines the controller answered and the modal
+// state at that line. Every write is its own committed transaction.
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cncstream/protocol/modal_state.hpp"
+
+struct sqlite3;
+
+namespace cncstream::transport {
+
+class JournalError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct JobRecord {
+  std::int64_t id = 0;
+  std::string file;
+  std::string file_sha256;
+  std::string profile;
+  std::string port;
+  std::string mode;  // "run" | "check"
+  std::int64_t total_lines = 0;
+  std::string started_at;  // ISO 8601 UTC
+  std::optional<std::string> ended_at;
+  std::optional<std::string> outcome;  // nullopt: never ended (killed, crashed)
+  std::string message;
+};
+
+struct ProgressRecord {
+  std::int64_t job_id = 0;
+  std::string at;
+  std::int64_t lines_ok = 0;   // file lines answered ok (blank lines count once passed)
+  std::int64_t last_line = 0;  // 1-based file line of the last answer
+  std::string reason;          // "periodic", "error", "alarm", "stop", "end", ...
+  protocol::ModalState modal;
+};
+
+class Journal {
+ public:
+  // Opens or creates the database (and its folder).
+  explicit Journal(const std::filesystem::path& path);
+  ~Journal();
+  Journal(const Journal&) = delete;
+  Journal& operator=(const Journal&) = delete;
+
+  // $XDG_STATE_HOME/cncstream/journal.sqlite, else ~/.local/state/cncstream/journal.sqlite.
+  static std::filesystem::path default_path();
+  const std::filesystem::path& path() const { return path_; }
+
+  std::int64_t begin_job(const std::string& file, const std::string& sha256, const std::string& profile,
+                         const std::string& port, const std::string& mode, std::int64_t total_lines);
+  void record_progress(const ProgressRecord& p);
+  void end_job(std::int64_t job_id, const std::string& outcome, const std::string& message);
+
+  std::vector<JobRecord> jobs(int limit = 50) const;  // newest first
+  std::optional<JobRecord> job(std::int64_t id) const;
+  std::optional<ProgressRecord> last_progress(std::int64_t job_id) const;
+  std::int64_t progress_count(std::int64_t job_id) const;
+
+  static std::string now_iso8601();
+
+ private:
+  void exec(const char* sql);
+  std::filesystem::path path_;
+  sqlite3* db_ = nullptr;
+};
+
+}  // namespace cncstream::transport

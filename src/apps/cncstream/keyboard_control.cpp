@@ -1,0 +1,64 @@
+#include "keyboard_control.hpp"
+
+#include <poll.h>
+#include <termios.h>
+#include <unistd.h>
+
+namespace cncstream::app {
+
+namespace {
+termios g_saved{};
+}
+
+const char* KeyboardControl::help() {
+  return "keys: space pause/resume, s stop, +/- feed 10%, ]/[ feed 1%, 0 feed 100%, >/< spindle 10%, "
+         "1/2/3 rapid 100/50/25%, Ctrl-C stop";
+}
+
+KeyboardControl::KeyboardControl(transport::StreamRunner& runner) : runner_(runner) {
+  if (!::isatty(STDIN_FILENO) || ::tcgetattr(STDIN_FILENO, &g_saved) != 0) return;
+  termios raw = g_saved;
+  raw.c_lflag &= static_cast<tcflag_t>(~(ICANON | ECHO));  // keep ISIG: Ctrl-C still stops
+  raw.c_cc[VMIN] = 0;
+  raw.c_cc[VTIME] = 0;
+  if (::tcsetattr(STDIN_FILENO, TCSANOW, &raw) != 0) return;
+  active_ = true;
+  thread_ = std::thread([this] { loop(); });
+}
+
+KeyboardControl::~KeyboardControl() {
+  running_ = false;
+  if (thread_.joinable()) thread_.join();
+  if (active_) ::tcsetattr(STDIN_FILENO, TCSANOW, &g_saved);
+}
+
+void KeyboardControl::loop() {
+  using protocol::Realtime;
+  while (running_) {
+    pollfd p{STDIN_FILENO, POLLIN, 0};
+    if (::poll(&p, 1, 100) <= 0 || !(p.revents & POLLIN)) continue;
+    char c = 0;
+    if (::read(STDIN_FILENO, &c, 1) != 1) continue;
+    switch (c) {
+      case ' ':
+        if (paused_) runner_.request_resume();
+        else runner_.request_pause();
+        paused_ = !paused_;
+        break;
+      case 's': case 'S': runner_.request_stop(); break;
+      case '+': runner_.request_realtime(Realtime::FeedOvPlus10); break;
+      case '-': runner_.request_realtime(Realtime::FeedOvMinus10); break;
+      case ']': runner_.request_realtime(Realtime::FeedOvPlus1); break;
+      case '[': runner_.request_realtime(Realtime::FeedOvMinus1); break;
+      case '0': runner_.request_realtime(Realtime::FeedOvReset); break;
+      case '>': runner_.request_realtime(Realtime::SpindleOvPlus10); break;
+      case '<': runner_.request_realtime(Realtime::SpindleOvMinus10); break;
+      case '1': runner_.request_realtime(Realtime::RapidOvReset); break;
+      case '2': runner_.request_realtime(Realtime::RapidOvMedium); break;
+      case '3': runner_.request_realtime(Realtime::RapidOvLow); break;
+      default: break;
+    }
+  }
+}
+
+}  // namespace cncstream::app

@@ -1,0 +1,30 @@
+#pragma once
+// Single-key operator control while a job streams (only when stdin is a
+// terminal): space pause/resume, s stop, + / - feed ±10 %, ] / [ feed ±1 %,
+// 0 feed 100 %, > / < spindle ±10 %, 1 2 3 rapid 100/50/25 %.
+#include <atomic>
+#include <thread>
+
+#include "cncstream/transport/stream_runner.hpp"
+
+namespace cncstream::app {
+
+class KeyboardControl {
+ public:
+  explicit KeyboardControl(transport::StreamRunner& runner);
+  ~KeyboardControl();  // restores the terminal
+  KeyboardControl(const KeyboardControl&) = delete;
+  KeyboardControl& operator=(const KeyboardControl&) = delete;
+  bool active() const { return active_; }
+  static const char* help();
+
+ private:
+  void loop();
+  transport::StreamRunner& runner_;
+  std::atomic<bool> running_{true};
+  bool active_ = false;
+  bool paused_ = false;
+  std::thread thread_;
+};
+
+}  // namespace cncstream::app

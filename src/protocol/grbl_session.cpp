@@ -1,0 +1,452 @@
+#include "cncstream/protocol/grbl_session.hpp"
+
+#include <algorithm>
+#include <regex>
+#include <stdexcept>
+
+namespace cncstream::protocol {
+
+namespace {
+
+constexpr double kResetTimeout = 3.0;  // banner expected within this after 0x18
+
+bool is_active(JobState s) {
+  return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping;
+}
+
+std::string describe(const CodeInfo& c, const char* kind) {
+  return std::string(kind) + std::to_string(c.code) + " (" + c.name + "): " + c.text + " What to do: " + c.action;
+}
+
+}  // namespace
+
+GrblSession::GrblSession(FirmwareProfile profile, GrblSessionOptions opt)
+    : profile_(std::move(profile)),
+      opt_(opt),
+      counter_(profile_.rx_buffer_size, opt.rx_margin.value_or(profile_.rx_margin)) {
+  if (profile_.flow != FlowControl::CharacterCounting)
+    throw std::invalid_argument("GrblSession needs a character-counting profile, not '" + profile_.id + "'");
+  for (const auto& l : profile_.startup_lines) {
+    PreparedLine p;
+    p.text = l;
+    p.sync = true;
+    commands_.emplace_back(std::move(p), Origin::Command);
+  }
+}
+
+bool GrblSession::busy() const {
+  return counter_.in_flight_count() > 0 || !commands_.empty() || is_active(progress_.state) || expect_reset_;
+}
+
+std::size_t GrblSession::in_flight_of(Origin o) const {
+  return static_cast<std::size_t>(std::count(in_flight_origin_.begin(), in_flight_origin_.end(), o));
+}
+
+void GrblSession::on_bytes(std::string_view bytes, double now) {
+  now_ = now;
+  splitter_.feed(bytes, [&](std::string_view line) { on_line(line, now); });
+  pump();
+}
+
+void GrblSession::tick(double now) {
+  now_ = now;
+  if (opt_.poll_status && now >= next_poll_) {
+    const auto q = profile_.realtime_byte(Realtime::StatusReport).value_or('?');
+    write(std::string(1, static_cast<char>(q)));
+    next_poll_ = now + profile_.status_poll_interval_s;
+  }
+  if (expect_reset_ && now >= reset_deadline_) {
+    emit({EventKind::Warning, "no banner within 3 s after the soft reset; assuming the controller restarted"});
+    on_banner();
+  }
+  pump();
+}
+
+void GrblSession::on_line(std::string_view line, double now) {
+  now_ = now;
+  const Response r = parse_response(line);
+  if (!r.parse_error.empty()) emit({EventKind::Warning, r.parse_error});
+  switch (r.kind) {
+    case ResponseKind::Empty: return;
+    case ResponseKind::Ok: on_answer(true, 0, now); return;
+    case ResponseKind::Error: on_answer(false, r.code, now); return;
+    case ResponseKind::Status:
+      if (r.status) on_status(*r.status);
+      return;
+    case ResponseKind::Alarm: {
+      const CodeInfo info = profile_.alarm_info(r.code);
+      Event e{EventKind::Alarm, describe(info, "ALARM:")};
+      e.code = r.code;
+      e.info = info;
+      e.source_line = progress_.last_answered_line;
+      emit(e);
+      jog_dir_.reset();
+      if (is_active(progress_.state))
+        finish_job(JobOutcome::Alarm, "job stopped by ALARM:" + std::to_string(r.code) + " after file line " +
+                                          std::to_string(progress_.last_answered_line) + " was answered. " +
+                                          info.action);
+      if (info.reset_required && !expect_reset_) soft_reset();
+      return;
+    }
+    case ResponseKind::Message:
+    case ResponseKind::ParserState:
+    case ResponseKind::Feedback:
+    case ResponseKind::Version:
+    case ResponseKind::Options:
+      emit({EventKind::Info, r.line});
+      return;
+    case ResponseKind::StartupEcho:
+      emit({r.body.find("error") != std::string::npos ? EventKind::Warning : EventKind::Info,
+            "startup line executed: " + r.line});
+      return;
+    default: break;
+  }
+  const bool banner =
+      std::any_of(profile_.banner_patterns.begin(), profile_.banner_patterns.end(),
+                  [&](const std::string& p) { return std::regex_search(r.body, std::regex(p)); }) ||
+      r.body.rfind("Grbl ", 0) == 0 || r.body.rfind("GrblHAL ", 0) == 0;
+  if (banner) {
+    on_banner();
+    return;
+  }
+  emit({EventKind::Info, r.line});
+}
+
+void GrblSession::on_answer(bool ok, int code, double) {
+  auto line = counter_.answer();
+  if (!line) {
+    emit({EventKind::Warning, std::string("'") + (ok ? "ok" : "error:" + std::to_string(code)) +
+                                  "' arrived with no line in flight (stale answer around a reset); ignored"});
+    return;
+  }
+  const Origin origin = in_flight_origin_.front();
+  in_flight_origin_.pop_front();
+  switch (origin) {
+    case Origin::File: {
+      progress_.last_answered_line = line->source_line;
+      if (ok) {
+        ++progress_.lines_answered;
+        modal_.apply(line->text);
+        modal_.wco = tracker_.wco();
+        Event e{EventKind::LineAnswered, "ok"};
+        e.source_line = line->source_line;
+        e.line_text = line->text;
+        emit(std::move(e));
+        break;
+      }
+      const CodeInfo info = profile_.error_info(code);
+      Event e{EventKind::LineError, "line " + std::to_string(line->source_line) + " '" + line->text +
+                                        "': " + describe(info, "error:")};
+      e.source_line = line->source_line;
+      e.line_text = line->text;
+      e.code = code;
+      e.info = info;
+      if (progress_.mode == JobMode::Check) {
+        progress_.check_errors.push_back(e);
+        error_seen_ = true;
+        emit(std::move(e));
+        break;
+      }
+      emit(e);
+      if (progress_.state == JobState::Running || progress_.state == JobState::Paused) {
+        // Lines already in the controller's buffer keep running: hold the
+        // motion now so the operator decides with the machine stopped.
+        error_seen_ = true;
+        write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::FeedHold).value_or('!'))));
+        hold_sent_ = true;
+        set_job_state(JobState::HeldOnError, "held after error on line " + std::to_string(line->source_line) +
+                                                 "; resume to continue after it, or stop");
+      }
+      break;
+    }
+    case Origin::Command: {
+      Event e{EventKind::CommandAnswered, line->text + ": ok"};
+      e.line_text = line->text;
+      if (!ok) {
+        e.info = profile_.error_info(code);
+        e.code = code;
+        e.text = line->text + ": " + describe(*e.info, "error:");
+      }
+      emit(std::move(e));
+      break;
+    }
+    case Origin::Jog:
+      if (!ok) {
+        const CodeInfo info = profile_.error_info(code);
+        emit({EventKind::Warning, "jog refused: " + describe(info, "error:")});
+        jog_dir_.reset();
+      }
+      break;
+    case Origin::CheckToggle:
+      if (check_phase_ == CheckPhase::Entering) {
+        if (ok) {
+          check_phase_ = CheckPhase::Streaming;
+        } else {
+          const CodeInfo info = profile_.error_info(code);
+          finish_job(JobOutcome::CheckFailed, "could not enter check mode ($C): " + describe(info, "error:"));
+        }
+      }
+      break;
+  }
+  maybe_complete();
+}
+
+void GrblSession::maybe_complete() {
+  if (progress_.state != JobState::Running && progress_.state != JobState::HeldOnError) return;
+  if (next_index_ < program_.lines.size() || in_flight_of(Origin::File) > 0) return;
+  if (progress_.state == JobState::HeldOnError) return;  // the operator decides
+  if (progress_.mode == JobMode::Run) {
+    finish_job(JobOutcome::Completed, "all " + std::to_string(progress_.total_lines) + " lines answered");
+  } else if (check_phase_ == CheckPhase::Streaming) {
+    // Leaving $C soft-resets the controller: expect a banner.
+    check_phase_ = CheckPhase::Leaving;
+    PreparedLine l;
+    l.text = "$C";
+    l.sync = true;
+    commands_.emplace_front(std::move(l), Origin::CheckToggle);
+  }
+}
+
+void GrblSession::on_banner() {
+  counter_.clear();
+  in_flight_origin_.clear();
+  jog_dir_.reset();
+  const bool expected = expect_reset_;
+  expect_reset_ = false;
+  hold_sent_ = false;
+  emit({EventKind::Reset, expected ? "controller restarted after our soft reset"
+                                   : "controller restarted unexpectedly (reset button, power or a crash)"});
+  if (check_phase_ == CheckPhase::Leaving) {
+    check_phase_ = CheckPhase::None;
+    const auto n = progress_.check_errors.size();
+    finish_job(n == 0 ? JobOutcome::CheckPassed : JobOutcome::CheckFailed,
+               n == 0 ? "check pass found no errors" : "check pass found " + std::to_string(n) + " error(s)");
+    return;
+  }
+  if (!is_active(progress_.state)) return;
+  if (stop_requested_) {
+    finish_job(error_seen_ ? JobOutcome::Error : JobOutcome::Stopped,
+               "stopped after file line " + std::to_string(progress_.last_answered_line) + " was answered");
+  } else {
+    finish_job(JobOutcome::Error, "controller reset during the job after file line " +
+                                      std::to_string(progress_.last_answered_line) +
+                                      " was answered; machine position may be lost, re-home before restarting");
+  }
+}
+
+void GrblSession::on_status(const StatusReport& raw) {
+  const StatusReport r = tracker_.update(raw);
+  Event e{EventKind::Status, r.state_text};
+  e.status = r;
+  emit(std::move(e));
+  if (r.mpg) {
+    if (*r.mpg && !mpg_owned_) emit({EventKind::Warning, "a pendant (MPG) owns the controller; sending paused"});
+    if (!*r.mpg && mpg_owned_) emit({EventKind::Info, "MPG released; sending continues"});
+    mpg_owned_ = *r.mpg;
+  }
+  if (r.state == MachineState::Tool && !tool_state_reported_) {
+    tool_state_reported_ = true;
+    emit({EventKind::Info, "tool change requested: change the tool, then acknowledge it (cycle start)"});
+  } else if (r.state != MachineState::Tool) {
+    tool_state_reported_ = false;
+  }
+  // A "Hold" without a sub-state (some forks) counts as stopped once two
+  // reports in a row give the same machine position.
+  const bool hold_unmoved = r.state == MachineState::Hold && r.substate < 0 && r.mpos && last_mpos_ &&
+                            *r.mpos == *last_mpos_;
+  last_mpos_ = r.mpos;
+  if (stop_requested_ && !expect_reset_ && progress_.state == JobState::Stopping) {
+    // Door:0 ready to resume, Door:1 stopped with the door ajar; 2 and 3 still move.
+    const bool still = (r.state == MachineState::Hold && r.substate == 0) || hold_unmoved ||
+                       r.state == MachineState::Idle || r.state == MachineState::Alarm ||
+                       r.state == MachineState::Check || r.state == MachineState::Sleep ||
+                       (r.state == MachineState::Door && (r.substate == 0 || r.substate == 1));
+    // Reset only once motion has stopped: a reset in motion raises ALARM:3
+    // and loses the position; after Hold:0 it is clean.
+    if (still) soft_reset();
+  }
+}
+
+void GrblSession::soft_reset() {
+  write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::SoftReset).value_or(0x18))));
+  expect_reset_ = true;
+  reset_deadline_ = now_ + kResetTimeout;
+}
+
+void GrblSession::pump() {
+  if (expect_reset_ || mpg_owned_) return;
+  for (;;) {
+    if (!commands_.empty()) {
+      auto& [line, origin] = commands_.front();
+      const bool may = origin == Origin::CheckToggle ||
+                       (progress_.state != JobState::Running && progress_.state != JobState::Stopping);
+      if (may) {
+        if (!counter_.can_send(line)) return;
+        write(counter_.send(line));
+        in_flight_origin_.push_back(origin);
+        commands_.pop_front();
+        continue;
+      }
+    }
+    if (progress_.state == JobState::Running &&
+        (check_phase_ == CheckPhase::None || check_phase_ == CheckPhase::Streaming) &&
+        next_index_ < program_.lines.size()) {
+      const auto& line = program_.lines[next_index_];
+      if (line.text.empty()) {
+        ++next_index_;
+        ++progress_.lines_sent;
+        ++progress_.lines_answered;  // nothing to answer: done once reached
+        continue;
+      }
+      if (!counter_.can_send(line)) return;
+      write(counter_.send(line));
+      in_flight_origin_.push_back(Origin::File);
+      ++next_index_;
+      ++progress_.lines_sent;
+      continue;
+    }
+    if (jog_dir_ && !is_active(progress_.state) &&
+        in_flight_of(Origin::Jog) < static_cast<std::size_t>(opt_.jog_max_in_flight)) {
+      PreparedLine l;
+      l.text = jog_segment_line(*jog_dir_, jog_feed_, opt_.jog_segment_s);
+      if (!counter_.can_send(l)) return;
+      write(counter_.send(l));
+      in_flight_origin_.push_back(Origin::Jog);
+      continue;
+    }
+    break;
+  }
+  maybe_complete();
+}
+
+void GrblSession::start_job(PreparedProgram program, JobMode mode, double now) {
+  now_ = now;
+  if (is_active(progress_.state)) throw std::logic_error("a job is already running");
+  if (!program.errors.empty()) {
+    std::string all = "the program cannot be sent:";
+    for (const auto& e : program.errors) all += "\n  " + e;
+    throw std::invalid_argument(all);
+  }
+  for (const auto& l : program.lines)
+    if (!l.text.empty() && CharacterCountingStream::cost(l) > counter_.capacity())
+      throw std::invalid_argument("file line " + std::to_string(l.source_line) + " needs " +
+                                  std::to_string(CharacterCountingStream::cost(l)) + " bytes but the controller's " +
+                                  "receive buffer holds " + std::to_string(counter_.capacity()));
+  jog_release();
+  program_ = std::move(program);
+  next_index_ = 0;
+  progress_ = JobProgress{};
+  progress_.mode = mode;
+  progress_.total_lines = program_.lines.size();
+  error_seen_ = false;
+  stop_requested_ = false;
+  modal_ = ModalState{};
+  check_phase_ = CheckPhase::None;
+  if (mode == JobMode::Check) {
+    check_phase_ = CheckPhase::Entering;
+    PreparedLine l;
+    l.text = "$C";
+    l.sync = true;
+    commands_.emplace_front(std::move(l), Origin::CheckToggle);
+  }
+  set_job_state(JobState::Running, mode == JobMode::Check ? "check pass started" : "job started");
+  pump();
+}
+
+void GrblSession::set_job_state(JobState s, const std::string& why) {
+  progress_.state = s;
+  emit({EventKind::JobState, std::string(to_string(s)) + ": " + why});
+}
+
+void GrblSession::finish_job(JobOutcome o, const std::string& text) {
+  progress_.outcome = o;
+  if (o == JobOutcome::Completed) progress_.lines_answered = progress_.total_lines;
+  stop_requested_ = false;
+  progress_.state = JobState::Finished;
+  Event e{EventKind::JobFinished, std::string(to_string(o)) + ": " + text};
+  e.source_line = progress_.last_answered_line;
+  emit(std::move(e));
+}
+
+void GrblSession::pause() {
+  if (progress_.state != JobState::Running) return;
+  write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::FeedHold).value_or('!'))));
+  hold_sent_ = true;
+  set_job_state(JobState::Paused, "feed hold");
+}
+
+void GrblSession::resume() {
+  if (progress_.state != JobState::Paused && progress_.state != JobState::HeldOnError) return;
+  write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::CycleStart).value_or('~'))));
+  hold_sent_ = false;
+  set_job_state(JobState::Running, "resumed");
+  pump();
+}
+
+void GrblSession::stop() {
+  if (!is_active(progress_.state) || progress_.state == JobState::Stopping) return;
+  stop_requested_ = true;
+  set_job_state(JobState::Stopping, "holding, then resetting once motion has stopped");
+  if (progress_.mode == JobMode::Check) {
+    check_phase_ = CheckPhase::None;
+    soft_reset();  // nothing moves in check mode
+    return;
+  }
+  if (!hold_sent_) {
+    write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::FeedHold).value_or('!'))));
+    hold_sent_ = true;
+  }
+  write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::StatusReport).value_or('?'))));
+}
+
+void GrblSession::send_command(const std::string& line) {
+  std::string err;
+  auto cleaned = clean_gcode_line(line, {}, &err);
+  if (!cleaned) throw std::invalid_argument("command '" + line + "': " + err);
+  if (cleaned->empty()) return;
+  if (cleaned->size() > profile_.line_length_limit)
+    throw std::invalid_argument("command '" + line + "' is longer than " +
+                                std::to_string(profile_.line_length_limit) + " characters");
+  PreparedLine l;
+  l.text = *cleaned;
+  l.sync = is_persistent_write(l.text) || l.text.front() == '$';
+  commands_.emplace_back(std::move(l), Origin::Command);
+  pump();
+}
+
+void GrblSession::disconnected() {
+  counter_.clear();
+  in_flight_origin_.clear();
+  commands_.clear();
+  jog_dir_.reset();
+  expect_reset_ = false;
+  if (is_active(progress_.state))
+    finish_job(JobOutcome::Disconnected, "controller disconnected; the last line it answered is file line " +
+                                             std::to_string(progress_.last_answered_line) +
+                                             ". Do not resume blindly: re-home and restart from a line.");
+}
+
+bool GrblSession::realtime(Realtime r) {
+  const auto b = profile_.realtime_byte(r);
+  if (!b) return false;
+  write(std::string(1, static_cast<char>(*b)));
+  return true;
+}
+
+void GrblSession::jog_start(const JogDirection& dir, double feed_mm_min) {
+  if (is_active(progress_.state)) throw std::logic_error("cannot jog while a job is running");
+  (void)jog_segment_line(dir, feed_mm_min, opt_.jog_segment_s);  // validates
+  jog_dir_ = dir;
+  jog_feed_ = feed_mm_min;
+  pump();
+}
+
+void GrblSession::jog_release() {
+  if (!jog_dir_) return;
+  jog_dir_.reset();
+  // 0x85 cancels the jog and flushes the jog blocks; `!` would hold instead.
+  if (!realtime(Realtime::JogCancel))
+    emit({EventKind::Warning, "this controller has no jog-cancel byte; the queued jog segments will finish"});
+}
+
+}  // namespace cncstream::protocol

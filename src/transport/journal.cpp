@@ -1,0 +1,233 @@
+#include "cncstream/transport/journal.hpp"
+
+#include <sqlite3.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <ctime>
+
+namespace cncstream::transport {
+
+namespace {
+
+// RAII statement with bind helpers; errors name the database file.
+class Stmt {
+ public:
+  Stmt(sqlite3* db, const std::filesystem::path& path, const char* sql) : db_(db), path_(path) {
+    if (sqlite3_prepare_v2(db, sql, -1, &s_, nullptr) != SQLITE_OK) fail("prepare");
+  }
+  ~Stmt() { sqlite3_finalize(s_); }
+  Stmt(const Stmt&) = delete;
+  Stmt& operator=(const Stmt&) = delete;
+  Stmt& bind(int i, const std::string& v) {
+    sqlite3_bind_text(s_, i, v.c_str(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Stmt& bind(int i, std::int64_t v) {
+    sqlite3_bind_int64(s_, i, v);
+    return *this;
+  }
+  Stmt& bind(int i, double v) {
+    sqlite3_bind_double(s_, i, v);
+    return *this;
+  }
+  Stmt& bind_null(int i) {
+    sqlite3_bind_null(s_, i);
+    return *this;
+  }
+  bool step() {
+    const int rc = sqlite3_step(s_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    fail("step");
+  }
+  std::string text(int c) const {
+    const auto* p = sqlite3_column_text(s_, c);
+    return p ? reinterpret_cast<const char*>(p) : "";
+  }
+  std::optional<std::string> opt_text(int c) const {
+    if (sqlite3_column_type(s_, c) == SQLITE_NULL) return std::nullopt;
+    return text(c);
+  }
+  std::int64_t i64(int c) const { return sqlite3_column_int64(s_, c); }
+  double f64(int c) const { return sqlite3_column_double(s_, c); }
+  bool is_null(int c) const { return sqlite3_column_type(s_, c) == SQLITE_NULL; }
+
+ private:
+  [[noreturn]] void fail(const char* what) {
+    throw JournalError(path_.string() + ": SQLite " + what + " failed: " + sqlite3_errmsg(db_));
+  }
+  sqlite3* db_;
+  const std::filesystem::path& path_;
+  sqlite3_stmt* s_ = nullptr;
+};
+
+JobRecord read_job(const Stmt& s) {
+  JobRecord j;
+  j.id = s.i64(0);
+  j.file = s.text(1);
+  j.file_sha256 = s.text(2);
+  j.profile = s.text(3);
+  j.port = s.text(4);
+  j.mode = s.text(5);
+  j.total_lines = s.i64(6);
+  j.started_at = s.text(7);
+  j.ended_at = s.opt_text(8);
+  j.outcome = s.opt_text(9);
+  j.message = s.text(10);
+  return j;
+}
+
+constexpr const char* kJobColumns =
+    "id, file, file_sha256, profile, port, mode, total_lines, started_at, ended_at, outcome, message";
+
+}  // namespace
+
+Journal::Journal(const std::filesystem::path& path) : path_(path) {
+  std::error_code ec;
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
+  if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+                      nullptr) != SQLITE_OK) {
+    const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw JournalError(path.string() + ": cannot open journal: " + msg);
+  }
+  sqlite3_busy_timeout(db_, 2000);
+  try {
+    // WAL: a commit is one append to the log; FULL: it is fsynced before the
+    // commit returns, so a kill (or power loss) loses nothing committed.
+    exec("PRAGMA journal_mode=WAL");
+    exec("PRAGMA synchronous=FULL");
+    exec("PRAGMA foreign_keys=ON");
+    exec("CREATE TABLE IF NOT EXISTS jobs ("
+         " id INTEGER PRIMARY KEY AUTOINCREMENT, file TEXT NOT NULL, file_sha256 TEXT NOT NULL,"
+         " profile TEXT NOT NULL, port TEXT NOT NULL, mode TEXT NOT NULL, total_lines INTEGER NOT NULL,"
+         " started_at TEXT NOT NULL, ended_at TEXT, outcome TEXT, message TEXT NOT NULL DEFAULT '')");
+    exec("CREATE TABLE IF NOT EXISTS progress ("
+         " id INTEGER PRIMARY KEY AUTOINCREMENT, job_id INTEGER NOT NULL REFERENCES jobs(id),"
+         " at TEXT NOT NULL, lines_ok INTEGER NOT NULL, last_line INTEGER NOT NULL, reason TEXT NOT NULL,"
+         " units TEXT, distance TEXT, plane TEXT, wcs TEXT, motion TEXT, feed REAL, spindle_speed REAL,"
+         " spindle TEXT, coolant TEXT, tool INTEGER, wco_x REAL, wco_y REAL, wco_z REAL)");
+    exec("CREATE INDEX IF NOT EXISTS progress_job ON progress(job_id, id)");
+  } catch (...) {
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw;
+  }
+}
+
+Journal::~Journal() { sqlite3_close(db_); }
+
+void Journal::exec(const char* sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    const std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    throw JournalError(path_.string() + ": " + msg + " (in: " + sql + ")");
+  }
+}
+
+std::filesystem::path Journal::default_path() {
+  if (const char* s = std::getenv("XDG_STATE_HOME"); s && *s)
+    return std::filesystem::path(s) / "cncstream" / "journal.sqlite";
+  if (const char* h = std::getenv("HOME"); h && *h)
+    return std::filesystem::path(h) / ".local" / "state" / "cncstream" / "journal.sqlite";
+  return std::filesystem::path("cncstream-journal.sqlite");
+}
+
+std::string Journal::now_iso8601() {
+  const auto now = std::chrono::system_clock::now();
+  const auto t = std::chrono::system_clock::to_time_t(now);
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[40];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+  char out[48];
+  std::snprintf(out, sizeof out, "%s.%03dZ", buf, static_cast<int>(ms));
+  return out;
+}
+
+std::int64_t Journal::begin_job(const std::string& file, const std::string& sha256, const std::string& profile,
+                                const std::string& port, const std::string& mode, std::int64_t total_lines) {
+  Stmt s(db_, path_,
+         "INSERT INTO jobs(file, file_sha256, profile, port, mode, total_lines, started_at) VALUES(?,?,?,?,?,?,?)");
+  s.bind(1, file).bind(2, sha256).bind(3, profile).bind(4, port).bind(5, mode).bind(6, total_lines).bind(7, now_iso8601());
+  s.step();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+void Journal::record_progress(const ProgressRecord& p) {
+  Stmt s(db_, path_,
+         "INSERT INTO progress(job_id, at, lines_ok, last_line, reason, units, distance, plane, wcs, motion, feed,"
+         " spindle_speed, spindle, coolant, tool, wco_x, wco_y, wco_z) VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+  const auto& m = p.modal;
+  s.bind(1, p.job_id).bind(2, p.at.empty() ? now_iso8601() : p.at).bind(3, p.lines_ok).bind(4, p.last_line);
+  s.bind(5, p.reason).bind(6, m.units).bind(7, m.distance).bind(8, m.plane).bind(9, m.wcs).bind(10, m.motion);
+  s.bind(11, m.feed).bind(12, m.spindle_speed).bind(13, m.spindle).bind(14, m.coolant());
+  s.bind(15, static_cast<std::int64_t>(m.tool));
+  if (m.wco) s.bind(16, (*m.wco)[0]).bind(17, (*m.wco)[1]).bind(18, (*m.wco)[2]);
+  else s.bind_null(16).bind_null(17).bind_null(18);
+  s.step();
+}
+
+void Journal::end_job(std::int64_t job_id, const std::string& outcome, const std::string& message) {
+  Stmt s(db_, path_, "UPDATE jobs SET ended_at=?, outcome=?, message=? WHERE id=?");
+  s.bind(1, now_iso8601()).bind(2, outcome).bind(3, message).bind(4, job_id);
+  s.step();
+  if (sqlite3_changes(db_) != 1) throw JournalError(path_.string() + ": no job " + std::to_string(job_id) + " to end");
+}
+
+std::vector<JobRecord> Journal::jobs(int limit) const {
+  Stmt s(db_, path_, (std::string("SELECT ") + kJobColumns + " FROM jobs ORDER BY id DESC LIMIT ?").c_str());
+  s.bind(1, static_cast<std::int64_t>(limit));
+  std::vector<JobRecord> out;
+  while (s.step()) out.push_back(read_job(s));
+  return out;
+}
+
+std::optional<JobRecord> Journal::job(std::int64_t id) const {
+  Stmt s(db_, path_, (std::string("SELECT ") + kJobColumns + " FROM jobs WHERE id=?").c_str());
+  s.bind(1, id);
+  if (!s.step()) return std::nullopt;
+  return read_job(s);
+}
+
+std::optional<ProgressRecord> Journal::last_progress(std::int64_t job_id) const {
+  Stmt s(db_, path_,
+         "SELECT job_id, at, lines_ok, last_line, reason, units, distance, plane, wcs, motion, feed, spindle_speed,"
+         " spindle, coolant, tool, wco_x, wco_y, wco_z FROM progress WHERE job_id=? ORDER BY id DESC LIMIT 1");
+  s.bind(1, job_id);
+  if (!s.step()) return std::nullopt;
+  ProgressRecord p;
+  p.job_id = s.i64(0);
+  p.at = s.text(1);
+  p.lines_ok = s.i64(2);
+  p.last_line = s.i64(3);
+  p.reason = s.text(4);
+  auto& m = p.modal;
+  m.units = s.text(5);
+  m.distance = s.text(6);
+  m.plane = s.text(7);
+  m.wcs = s.text(8);
+  m.motion = s.text(9);
+  m.feed = s.f64(10);
+  m.spindle_speed = s.f64(11);
+  m.spindle = s.text(12);
+  const std::string coolant = s.text(13);
+  m.mist = coolant.find("M7") != std::string::npos;
+  m.flood = coolant.find("M8") != std::string::npos;
+  m.tool = static_cast<int>(s.i64(14));
+  if (!s.is_null(15)) m.wco = protocol::Axes{s.f64(15), s.f64(16), s.f64(17), 0, 0, 0};
+  return p;
+}
+
+std::int64_t Journal::progress_count(std::int64_t job_id) const {
+  Stmt s(db_, path_, "SELECT COUNT(*) FROM progress WHERE job_id=?");
+  s.bind(1, job_id);
+  s.step();
+  return s.i64(0);
+}
+
+}  // namespace cncstream::transport

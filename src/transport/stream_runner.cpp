@@ -1,0 +1,246 @@
+#include "cncstream/transport/stream_runner.hpp"
+
+#include <boost/asio/steady_timer.hpp>
+
+#include <chrono>
+#include <stdexcept>
+
+#include "cncstream/protocol/grbl_session.hpp"
+#include "cncstream/protocol/marlin_session.hpp"
+#include "cncstream/protocol/response.hpp"
+#include "cncstream/transport/journal.hpp"
+#include "cncstream/transport/sha256.hpp"
+
+namespace cncstream::transport {
+
+using namespace protocol;
+
+StreamRunner::StreamRunner(RunnerOptions opt) : opt_(std::move(opt)) {}
+StreamRunner::~StreamRunner() = default;
+
+namespace {
+
+std::string reason_for(const Event& e) {
+  switch (e.kind) {
+    case EventKind::LineError: return "error";
+    case EventKind::Alarm: return "alarm";
+    case EventKind::JobState: return "state";
+    case EventKind::JobFinished: return "end";
+    case EventKind::Reset: return "reset";
+    default: return "periodic";
+  }
+}
+
+}  // namespace
+
+RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
+  auto log = [&](const std::string& s) {
+    if (opt_.on_log) opt_.on_log(s);
+  };
+  const auto file_lines = read_gcode_lines(gcode_path.string());
+  const std::string file_hash = sha256_file(gcode_path);
+  auto profiles = load_firmware_profiles(opt_.profiles_dir);
+
+  boost::asio::io_context io;
+  SerialTransport port(io, opt_.serial);
+  port.open(opt_.port);
+  log("opened " + opt_.port + " at " + std::to_string(opt_.serial.baud) + " baud");
+  if (opt_.on_port_opened) opt_.on_port_opened();
+
+  const auto t0 = std::chrono::steady_clock::now();
+  auto now = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+
+  FirmwareIdentifier identifier(profiles, opt_.identify);
+  identifier.start(now());
+  LineSplitter id_splitter;
+  std::unique_ptr<ProtocolEngine> engine;
+  std::unique_ptr<Journal> journal;
+  std::int64_t job_id = 0;
+  RunResult result;
+  bool done = false;
+  bool dirty = false;
+  double last_row = -1;
+  std::string pending_after_id;  // bytes that arrived after the identification answer
+
+  auto record = [&](const std::string& reason) {
+    if (!journal || !engine) return;
+    ProgressRecord p;
+    p.job_id = job_id;
+    p.lines_ok = static_cast<std::int64_t>(engine->progress().lines_answered);
+    p.last_line = engine->progress().last_answered_line;
+    p.reason = reason;
+    if (auto* g = dynamic_cast<GrblSession*>(engine.get())) p.modal = g->modal();
+    else if (auto* m = dynamic_cast<MarlinSession*>(engine.get())) p.modal = m->modal();
+    journal->record_progress(p);
+    last_row = now();
+    dirty = false;
+  };
+
+  std::function<void()> timer_cancel = [] {};
+  auto finish = [&](JobOutcome o, const std::string& msg) {
+    if (done) return;
+    done = true;
+    result.outcome = o;
+    result.message = msg;
+    if (engine) {
+      result.lines_answered = engine->progress().lines_answered;
+      result.last_answered_line = engine->progress().last_answered_line;
+    }
+    if (journal && job_id) {
+      record("end");
+      journal->end_job(job_id, to_string(o), msg);
+    }
+    timer_cancel();
+    port.close_when_flushed();  // the loop ends when the last byte is out
+  };
+
+  auto drain = [&] {
+    if (!engine) return;
+    port.write(engine->take_output());
+    for (auto& e : engine->take_events()) {
+      if (e.kind == EventKind::LineAnswered) dirty = true;
+      else if (e.kind != EventKind::Status && e.kind != EventKind::Info && e.kind != EventKind::Warning &&
+               e.kind != EventKind::CommandAnswered)
+        record(reason_for(e));
+      if (opt_.on_event) opt_.on_event(e);
+      if (e.kind == EventKind::JobFinished) finish(engine->progress().outcome, e.text);
+    }
+    if (!done && dirty && now() - last_row >= opt_.progress_interval_s) record("periodic");
+  };
+
+  auto start_engine = [&] {
+    const auto& id = identifier.result();
+    for (const auto& w : id.warnings) log("warning: " + w);
+    FirmwareProfile profile = id.profile;
+    if (opt_.force_profile) {
+      bool found = false;
+      for (const auto& p : profiles)
+        if (p.id == *opt_.force_profile) {
+          profile = p;
+          found = true;
+        }
+      if (!found) throw std::invalid_argument("no firmware profile named '" + *opt_.force_profile + "'");
+    }
+    result.profile = profile.id;
+    log("controller: " + profile.id + (id.banner.empty() ? "" : " ('" + id.banner + "')") + ", RX " +
+        std::to_string(profile.rx_buffer_size) + " bytes, lines up to " + std::to_string(profile.line_length_limit));
+    CleanOptions clean;
+    if (profile.flow == FlowControl::SendResponse) {
+      clean.strip_whitespace = false;
+      clean.reject_realtime_chars = false;
+    }
+    auto program = prepare_program(file_lines, gcode_path.string(), profile.line_length_limit, clean);
+    if (!program.errors.empty()) {
+      std::string all = gcode_path.string() + " cannot be sent to " + profile.id + ":";
+      for (const auto& e : program.errors) all += "\n  " + e;
+      throw std::invalid_argument(all);
+    }
+    if (profile.flow == FlowControl::SendResponse) engine = std::make_unique<MarlinSession>(profile);
+    else engine = std::make_unique<GrblSession>(profile);
+    if (opt_.journal_path) {
+      journal = std::make_unique<Journal>(*opt_.journal_path);
+      job_id = journal->begin_job(std::filesystem::absolute(gcode_path).string(), file_hash, profile.id, opt_.port,
+                                  opt_.mode == JobMode::Check ? "check" : "run",
+                                  static_cast<std::int64_t>(file_lines.size()));
+      result.job_id = job_id;
+    }
+    engine->start_job(std::move(program), opt_.mode, now());
+    if (!pending_after_id.empty()) engine->on_bytes(std::exchange(pending_after_id, {}), now());
+    drain();
+  };
+
+  std::exception_ptr failure;
+  auto guarded = [&](auto&& f) {
+    try {
+      f();
+    } catch (...) {
+      if (!failure) failure = std::current_exception();
+      port.close();
+      io.stop();
+    }
+  };
+
+  port.start(
+      [&](std::string_view bytes) {
+        guarded([&] {
+          if (engine) {
+            engine->on_bytes(bytes, now());
+            drain();
+            return;
+          }
+          id_splitter.feed(bytes, [&](std::string_view line) {
+            if (!identifier.done()) identifier.on_line(line, now());
+            else pending_after_id.append(line).push_back('\n');
+          });
+          port.write(identifier.take_output());
+          if (identifier.done()) start_engine();
+        });
+      },
+      [&](const std::string& reason) {
+        guarded([&] {
+          log("port closed: " + reason);
+          if (engine) {
+            engine->disconnected();
+            drain();
+          }
+          finish(JobOutcome::Disconnected,
+                 "controller disconnected (" + reason + "); last answered file line " +
+                     std::to_string(engine ? engine->progress().last_answered_line : 0));
+        });
+      });
+
+  boost::asio::steady_timer timer(io);
+  timer_cancel = [&] { timer.cancel(); };
+  std::function<void()> schedule = [&] {
+    timer.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(opt_.tick_s)));
+    timer.async_wait([&](const boost::system::error_code& ec) {
+      if (ec || done) return;
+      guarded([&] {
+        const double t = now();
+        if (!engine) {
+          identifier.tick(t);
+          port.write(identifier.take_output());
+          if (identifier.done()) start_engine();
+        } else {
+          if (stop_requested_.exchange(false)) {
+            log("stop requested: holding, then resetting once motion has stopped");
+            engine->stop();
+          }
+          std::deque<Request> reqs;
+          {
+            std::lock_guard<std::mutex> l(mu_);
+            reqs.swap(requests_);
+          }
+          for (const auto& q : reqs) {
+            if (q.kind == Request::Pause) engine->pause();
+            else if (q.kind == Request::Resume) engine->resume();
+            else if (auto* g = dynamic_cast<GrblSession*>(engine.get()); !g || !g->realtime(q.realtime)) {
+              Event w{EventKind::Warning, std::string("real-time command '") + realtime_key(q.realtime) +
+                                              "' is not available on " + engine->profile().id};
+              if (opt_.on_event) opt_.on_event(w);
+            }
+          }
+          engine->tick(t);
+          drain();
+        }
+        if (opt_.max_run_s > 0 && t > opt_.max_run_s && !done) {
+          if (engine) engine->disconnected();
+          finish(JobOutcome::Error, "gave up after " + std::to_string(opt_.max_run_s) + " s");
+        }
+      });
+      if (!done) schedule();
+    });
+  };
+  schedule();
+  io.run();
+  result.bytes_written = port.bytes_written();
+  result.seconds = now();
+  if (failure) {
+    if (journal && job_id && !done) journal->end_job(job_id, "error", "runner failure");
+    std::rethrow_exception(failure);
+  }
+  return result;
+}
+
+}  // namespace cncstream::transport

@@ -1,0 +1,150 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/protocol/identifier.hpp"
+
+using namespace cncstream::protocol;
+
+namespace {
+const std::vector<FirmwareProfile>& profiles() {
+  static const auto p = load_firmware_profiles(CNCSTREAM_SOURCE_DIR "/firmware-profiles");
+  return p;
+}
+const FirmwareProfile& by_id(const std::string& id) {
+  for (const auto& p : profiles())
+    if (p.id == id) return p;
+  throw std::runtime_error("no profile " + id);
+}
+}  // namespace
+
+TEST(Profiles, Grbl11HasFullTables) {
+  const auto& g = by_id("grbl-1.1");
+  EXPECT_EQ(g.rx_buffer_size, 128u);
+  EXPECT_EQ(g.line_length_limit, 80u);
+  for (int c : {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17}) EXPECT_TRUE(g.errors.count(c)) << c;
+  for (int c = 20; c <= 38; ++c) EXPECT_TRUE(g.errors.count(c)) << c;
+  for (int c = 1; c <= 9; ++c) EXPECT_TRUE(g.alarms.count(c)) << c;
+  EXPECT_EQ(g.error_info(22).name, "Undefined feed rate");
+  EXPECT_TRUE(g.alarm_info(2).reset_required);
+  EXPECT_TRUE(g.alarm_info(1).position_lost);
+  EXPECT_EQ(*g.realtime_byte(Realtime::FeedOvPlus10), 0x91);
+  EXPECT_EQ(*g.realtime_byte(Realtime::JogCancel), 0x85);
+  EXPECT_FALSE(g.realtime_byte(Realtime::ToolChangeAck));
+  EXPECT_EQ(g.error_info(99).name, "Unknown error");
+}
+
+TEST(Profiles, InheritanceMergesTables) {
+  const auto& h = by_id("grblhal");
+  EXPECT_EQ(h.rx_buffer_size, 1024u);
+  EXPECT_TRUE(h.errors.count(22));  // inherited
+  EXPECT_TRUE(h.errors.count(84));  // own
+  EXPECT_TRUE(h.alarms.count(18));
+  EXPECT_EQ(*h.realtime_byte(Realtime::ToolChangeAck), 0xA3);
+  EXPECT_EQ(*h.realtime_byte(Realtime::FeedHold), '!');
+  const auto& f = by_id("fluidnc");
+  EXPECT_EQ(f.line_length_limit, 255u);
+  EXPECT_TRUE(f.errors.count(152));
+  EXPECT_FALSE(f.realtime_byte(Realtime::FullStatusReport));  // 0x87 is a macro on FluidNC
+  const auto& m = by_id("marlin");
+  EXPECT_EQ(m.flow, FlowControl::SendResponse);
+  EXPECT_FALSE(m.realtime_byte(Realtime::FeedHold));
+}
+
+TEST(Profiles, ErrorsNameFileAndLine) {
+  const auto dir = std::filesystem::temp_directory_path() / "cncstream_profile_test";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream(dir / "bad.toml") << "family = \"grbl\"\nbanner_patterns = ['x']\nrx_buffer_size = \"big\"\n";
+  }
+  try {
+    load_firmware_profile(dir / "bad.toml");
+    FAIL();
+  } catch (const ProfileError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.toml:3"), std::string::npos) << e.what();
+  }
+  { std::ofstream(dir / "bad2.toml") << "family = \"grbl\"\nbanner_patterns = ['(']\n"; }
+  EXPECT_THROW(load_firmware_profile(dir / "bad2.toml"), ProfileError);
+  { std::ofstream(dir / "bad3.toml") << "family = \"grbl\"\nbanner_patterns = ['x']\n[realtime]\nwarp = 3\n"; }
+  EXPECT_THROW(load_firmware_profile(dir / "bad3.toml"), ProfileError);
+  std::filesystem::remove_all(dir);
+}
+
+namespace {
+Identification identify(const std::vector<std::string>& before, const std::vector<std::string>& answer,
+                        std::string* sent = nullptr) {
+  FirmwareIdentifier id(profiles());
+  id.start(0);
+  for (const auto& l : before) id.on_line(l, 0.1);
+  const auto q = id.take_output();
+  if (sent) *sent = q;
+  for (const auto& l : answer) id.on_line(l, 0.2);
+  id.tick(10);  // timeouts if the answer did not finish it
+  id.tick(20);
+  return id.result();
+}
+}  // namespace
+
+TEST(Identify, Grbl11ByBannerAndOpt) {
+  std::string q;
+  auto r = identify({"Grbl 1.1h ['$' for help]"}, {"[VER:1.1h.20190830:]", "[OPT:V,15,128]", "ok"}, &q);
+  EXPECT_EQ(q, "$I\n");
+  EXPECT_EQ(r.profile.id, "grbl-1.1");
+  EXPECT_TRUE(r.recognised);
+  EXPECT_EQ(r.profile.rx_buffer_size, 128u);
+}
+
+TEST(Identify, GrblHalRefinedByFirmwareLineAndRxFromOpt) {
+  auto r = identify({"Grbl 1.1f ['$' for help]"},
+                    {"[VER:1.1f.20230129:]", "[OPT:VNMSL,35,1024,3,0]", "[FIRMWARE:grblHAL]", "ok"});
+  EXPECT_EQ(r.profile.id, "grblhal");
+  EXPECT_EQ(r.profile.planner_blocks, 35);
+  r = identify({"GrblHAL 1.1f ['$' or '$HELP' for help]"}, {"[VER:1.1f.20230129:]", "[OPT:VNMSL,35,4096,3]", "ok"});
+  EXPECT_EQ(r.profile.id, "grblhal");
+  EXPECT_EQ(r.profile.rx_buffer_size, 4096u);
+}
+
+TEST(Identify, FluidNc) {
+  auto r = identify({"Grbl 3.7 [FluidNC v3.7.8 (wifi) '$' for help]"}, {"[VER:3.7 FluidNC v3.7.8:]", "[OPT:PHS]", "ok"});
+  EXPECT_EQ(r.profile.id, "fluidnc");
+}
+
+TEST(Identify, MarlinUsesM115) {
+  FirmwareIdentifier id(profiles());
+  id.start(0);
+  id.on_line("start", 0.1);
+  id.on_line("echo:Marlin 2.1.2.1", 0.1);
+  EXPECT_EQ(id.take_output(), "M115\n");
+  id.on_line("FIRMWARE_NAME:Marlin 2.1.2.1 (Jun 1 2023) SOURCE_CODE_URL:github.com/MarlinFirmware/Marlin", 0.2);
+  id.on_line("Cap:SERIAL_XON_XOFF:0", 0.2);
+  id.on_line("ok", 0.3);
+  EXPECT_EQ(id.take_output(), "");  // exactly one query: the answer is not mistaken for a new banner
+  ASSERT_TRUE(id.done());
+  EXPECT_EQ(id.result().profile.id, "marlin");
+  EXPECT_EQ(id.result().query_lines.size(), 2u);
+}
+
+TEST(Identify, UnknownFallsBackToConservativeSubsetWithWarning) {
+  auto r = identify({"SuperCNC 2.0 ready"}, {});
+  EXPECT_FALSE(r.recognised);
+  EXPECT_FALSE(r.profile.extended_realtime);
+  EXPECT_EQ(r.profile.rx_buffer_size, 128u);
+  EXPECT_FALSE(r.profile.realtime_byte(Realtime::FeedOvPlus10));  // no extended byte
+  EXPECT_EQ(*r.profile.realtime_byte(Realtime::FeedHold), '!');
+  EXPECT_FALSE(r.warnings.empty());
+}
+
+TEST(Identify, NoBannerAsksWithDollarIAfterTimeout) {
+  FirmwareIdentifier id(profiles());
+  id.start(0);
+  id.tick(1.0);
+  EXPECT_EQ(id.take_output(), "");
+  id.tick(3.5);
+  EXPECT_EQ(id.take_output(), "$I\n");
+  id.on_line("[VER:1.1h.20190830:]", 3.6);
+  id.on_line("ok", 3.7);
+  ASSERT_TRUE(id.done());
+  EXPECT_EQ(id.result().profile.id, "grbl-1.1");
+  EXPECT_FALSE(id.result().warnings.empty());
+}

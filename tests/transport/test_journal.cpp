@@ -1,0 +1,152 @@
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <filesystem>
+
+#include "cncstream/transport/journal.hpp"
+#include "cncstream/transport/sha256.hpp"
+
+using namespace cncstream::transport;
+namespace fs = std::filesystem;
+
+namespace {
+fs::path temp_db(const char* name) {
+  const auto dir = fs::temp_directory_path() / ("cncstream_journal_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto p = dir / name;
+  for (const char* ext : {"", "-wal", "-shm"}) fs::remove(p.string() + ext);
+  return p;
+}
+struct JournalCleanup : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(fs::temp_directory_path() / ("cncstream_journal_" + std::to_string(::getpid())), ec);
+  }
+};
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new JournalCleanup);
+}  // namespace
+
+TEST(Sha256, KnownVectors) {
+  EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_hex(std::string(1000000, 'a')), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  EXPECT_EQ(sha256_hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+}
+
+TEST(Journal, RoundTrip) {
+  const auto path = temp_db("round.sqlite");
+  std::int64_t id = 0;
+  {
+    Journal j(path);
+    id = j.begin_job("/parts/plate.nc", sha256_hex("G0X0\n"), "grbl-1.1", "/dev/ttyUSB0", "run", 1200);
+    cncstream::protocol::ModalState m;
+    m.apply("G20G91G18G55F250S12000M3M8T2");
+    m.wco = cncstream::protocol::Axes{1.5, -2.0, 3.25, 0, 0, 0};
+    ProgressRecord p;
+    p.job_id = id;
+    p.lines_ok = 10;
+    p.last_line = 10;
+    p.reason = "periodic";
+    j.record_progress(p);
+    p.lines_ok = 517;
+    p.last_line = 518;
+    p.reason = "error";
+    p.modal = m;
+    j.record_progress(p);
+    j.end_job(id, "error", "error:22 on line 519");
+    EXPECT_THROW(j.end_job(id + 100, "x", "y"), JournalError);
+  }
+  Journal j(path);
+  const auto jobs = j.jobs();
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(jobs[0].file, "/parts/plate.nc");
+  EXPECT_EQ(jobs[0].total_lines, 1200);
+  EXPECT_EQ(*jobs[0].outcome, "error");
+  EXPECT_TRUE(jobs[0].ended_at);
+  EXPECT_EQ(j.progress_count(id), 2);
+  const auto last = j.last_progress(id);
+  ASSERT_TRUE(last);
+  EXPECT_EQ(last->lines_ok, 517);
+  EXPECT_EQ(last->last_line, 518);
+  EXPECT_EQ(last->reason, "error");
+  EXPECT_EQ(last->modal.units, "G20");
+  EXPECT_EQ(last->modal.distance, "G91");
+  EXPECT_EQ(last->modal.plane, "G18");
+  EXPECT_EQ(last->modal.wcs, "G55");
+  EXPECT_DOUBLE_EQ(last->modal.feed, 250);
+  EXPECT_DOUBLE_EQ(last->modal.spindle_speed, 12000);
+  EXPECT_EQ(last->modal.spindle, "M3");
+  EXPECT_EQ(last->modal.coolant(), "M8");
+  EXPECT_EQ(last->modal.tool, 2);
+  ASSERT_TRUE(last->modal.wco);
+  EXPECT_DOUBLE_EQ((*last->modal.wco)[2], 3.25);
+  EXPECT_FALSE(j.last_progress(id + 1));
+}
+
+TEST(Journal, UnwritablePathNamesIt) {
+  try {
+    Journal j("/proc/cncstream/nope/journal.sqlite");
+    FAIL();
+  } catch (const JournalError& e) {
+    EXPECT_NE(std::string(e.what()).find("/proc/cncstream/nope"), std::string::npos);
+  }
+}
+
+TEST(Journal, SurvivesSigkillAtAnyMoment) {
+  const auto path = temp_db("kill.sqlite");
+  { Journal j(path); }  // create the schema before forking
+  int pipefd[2];
+  ASSERT_EQ(::pipe(pipefd), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::close(pipefd[0]);
+    try {
+      Journal j(path);
+      const auto id = j.begin_job("kill.nc", sha256_hex("x"), "grbl-1.1", "pty", "run", 1000000);
+      ProgressRecord p;
+      p.job_id = id;
+      p.reason = "periodic";
+      for (std::int64_t i = 1;; ++i) {
+        p.lines_ok = i;
+        p.last_line = i;
+        j.record_progress(p);
+        // Report only what has been committed.
+        if (::write(pipefd[1], &i, sizeof i) != sizeof i) ::_exit(3);
+      }
+    } catch (...) {
+      ::_exit(2);
+    }
+  }
+  ::close(pipefd[1]);
+  std::int64_t committed = 0, v = 0;
+  while (committed < 40 && ::read(pipefd[0], &v, sizeof v) == sizeof v) committed = v;
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  while (::read(pipefd[0], &v, sizeof v) == sizeof v) committed = v;  // drain what was reported before the kill
+  ::close(pipefd[0]);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  ASSERT_GE(committed, 40);
+
+  Journal j(path);
+  const auto jobs = j.jobs();
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_FALSE(jobs[0].outcome);  // never ended: shows as interrupted
+  const auto last = j.last_progress(jobs[0].id);
+  ASSERT_TRUE(last);
+  EXPECT_GE(last->lines_ok, committed);  // every reported commit is there
+  EXPECT_GE(j.progress_count(jobs[0].id), committed);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(db, "PRAGMA integrity_check", -1, &st, nullptr);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(st, 0)), "ok");
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+}
