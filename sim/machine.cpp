@@ -266,6 +266,8 @@ void Machine::cycle_start() {
 
 // ---- main loop ------------------------------------------------------------------
 
+bool Machine::stalled() const { return !steps_.empty() && steps_.front().stall; }
+
 bool Machine::busy() const {
   return !queue_.empty() || !steps_.empty() || !rx_.empty();
 }
@@ -367,6 +369,7 @@ void Machine::wait_instantly() {
   // Let virtual time pass until the front step can go on.
   for (int guard = 0; guard < 1000000 && !steps_.empty() && !critical_lock_; ++guard) {
     Step& s = steps_.front();
+    if (s.stall) return;
     if ((s.kind == Step::Delay || s.kind == Step::Homing) && s.started) {
       // Motion may still run during a delay (never in GRBL, which syncs first).
       if (s.until > now_) advance_motion(s.until - now_, false);
@@ -388,6 +391,7 @@ void Machine::process_line(const gc::CleanLine& line) {
     Step s;
     s.kind = Step::Delay;
     s.seconds = it->second;
+    s.stall = true;  // a fault: never skipped, even at --speed max
     steps_.push_back(s);
   }
   if (auto it = f.alarm_at.find(lines_received_); it != f.alarm_at.end()) {

@@ -93,6 +93,7 @@ class Machine {
   std::size_t lines_answered() const { return lines_answered_; }
   bool vanished() const { return vanished_; }
   bool busy() const;  // motion, a pending line or unread RX bytes
+  bool stalled() const;  // inside a --stall-at fault (time must pass for real)
 
   void set_motion_observer(MotionObserver observer) { observer_ = std::move(observer); }
   // A limit switch closes: ALARM:1, motion stops dead, locked until reset.
@@ -108,6 +109,7 @@ class Machine {
     bool started = false;
     double until = 0;
     bool jog = false;  // a $J= block: the machine enters Jog, not Run
+    bool stall = false;  // a --stall-at fault delay
   };
 
   void boot(bool power_on);

@@ -1,0 +1,52 @@
+#pragma once
+// Material removal for the simulator: a height-field stock block (machine
+// coordinates) cut by every piece of tool motion with the exact swept cutter.
+#include <cstddef>
+#include <filesystem>
+#include <string>
+
+#include "cncsim/machine.hpp"
+#include "cncstream/cam/cutter.hpp"
+#include "cncstream/cam/stock.hpp"
+#include "cncstream/geometry/mesh.hpp"
+
+namespace cncsim {
+
+struct StockBox {
+  cncstream::Vec3 lo, hi;  // machine coordinates; the top is hi.z
+  double resolution = 0.1;  // grid step, mm
+};
+
+// "X0,Y0,Z0:X1,Y1,Z1" (corners in any order). Throws std::invalid_argument
+// naming the text.
+StockBox parse_stock_box(const std::string& text, double resolution);
+// The XY bounding box of a design with its top at the design's highest point.
+StockBox stock_box_for(const cncstream::Mesh& design, double resolution);
+
+class MaterialRemoval {
+ public:
+  MaterialRemoval(const StockBox& box, const cncstream::Cutter& cutter);
+
+  // Routes the machine's motion into the stock (replaces its observer).
+  void attach(Machine& machine);
+  void cut(const cncstream::Vec3& from, const cncstream::Vec3& to);
+
+  const cncstream::HeightFieldStock& stock() const { return stock_; }
+  const cncstream::Cutter& cutter() const { return cutter_; }
+  std::size_t segments() const { return segments_; }
+
+  // Writes the machined surface as a height field (<path> + <path>.txt).
+  void write_result(const std::filesystem::path& path) const;
+
+ private:
+  cncstream::HeightFieldStock stock_;
+  cncstream::Cutter cutter_;
+  double bottom_;
+  std::size_t segments_ = 0;
+};
+
+// Rebuilds a stock whose surface equals `heights` (a result file read back):
+// each node is lowered by a plunge of a flat cutter narrower than the grid.
+cncstream::HeightFieldStock stock_from_heights(const cncstream::GridSpec& grid, const std::vector<float>& heights);
+
+}  // namespace cncsim

@@ -1,0 +1,151 @@
+// cncsim: a GRBL 1.1h router on a pseudo-terminal.
+//   cncsim [--link PATH] [--speed K|max] [--settings FILE] [--strict] [faults] [stock]
+//   cncsim verify --design part.stl --result RESULT.f32 [--tolerance T] [--png MAP.png]
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "cncsim/machine.hpp"
+#include "cncsim/pty_frontend.hpp"
+#include "cncsim/removal.hpp"
+#include "cncstream/cam/deviation.hpp"
+#include "cncstream/cam/height_field_io.hpp"
+#include "cncstream/geometry/stl.hpp"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop.store(true); }
+
+// "LINE:VALUE" for the per-line faults.
+template <typename T>
+void parse_line_faults(const std::vector<std::string>& specs, const char* flag, std::map<std::size_t, T>& out) {
+  for (const std::string& s : specs) {
+    const auto colon = s.find(':');
+    std::size_t line = 0;
+    double value = 0;
+    char tail = 0;
+    if (colon == std::string::npos ||
+        std::sscanf(s.c_str(), "%zu:%lf%c", &line, &value, &tail) != 2 || line == 0)
+      throw std::invalid_argument(std::string(flag) + " '" + s + "': expected LINE:VALUE with LINE >= 1");
+    out[line] = static_cast<T>(value);
+  }
+}
+
+int run_verify(const std::string& design_path, const std::string& result_path, double tolerance,
+               const std::string& png) {
+  const auto design = cncstream::load_stl(design_path).mesh;
+  const auto field = cncstream::read_height_field(result_path);
+  const auto stock = cncsim::stock_from_heights(field.grid, field.z);
+  const auto heights = cncstream::design_heights(design, field.grid);
+  const auto result = cncstream::compare_to_design(stock, heights, tolerance);
+  std::cout << result.stats.summary() << "\n";
+  if (!png.empty()) cncstream::write_deviation_png(png, result, "cncsim verify", design_path);
+  return result.stats.gouged == 0 ? 0 : 3;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"cncsim: a simulated GRBL 1.1h 3-axis router on a pseudo-terminal"};
+  std::string link, speed_text = "1", settings_path, stock_text, design_path, tool_spec = "flat:6", result_path;
+  bool strict = false;
+  std::size_t drop_every = 0, corrupt_every = 0, vanish_after = 0;
+  int homing_fail = 0;
+  double resolution = 0.1;
+  std::optional<double> probe_z;
+  std::vector<std::string> error_at, alarm_at, stall_at;
+  app.add_option("--link", link, "make PATH a symlink to the pty slave");
+  app.add_option("--speed", speed_text, "time scale: K (1 = real time) or 'max'");
+  app.add_option("--settings", settings_path, "settings file ($$, G10/G28.1/G30.1 data, $N lines) kept across runs");
+  app.add_flag("--strict", strict, "any RX buffer overflow is fatal (exit 2)");
+  app.add_option("--drop-every", drop_every, "drop every Nth byte received");
+  app.add_option("--corrupt-every", corrupt_every, "flip a bit in every Nth byte received");
+  app.add_option("--error-at", error_at, "LINE:E answer line LINE with error:E (repeatable)");
+  app.add_option("--alarm-at", alarm_at, "LINE:A raise ALARM:A when line LINE arrives (repeatable)");
+  app.add_option("--stall-at", stall_at, "LINE:S stop answering for S seconds at line LINE (repeatable)");
+  app.add_option("--vanish-after", vanish_after, "close the pty after N answered lines");
+  app.add_option("--homing-fail", homing_fail, "make $H fail with ALARM:A (6-9)")->check(CLI::Range(6, 9));
+  app.add_option("--probe-z", probe_z, "G38.x touches the plane Z (machine coordinates)");
+  app.add_option("--stock", stock_text, "stock block X0,Y0,Z0:X1,Y1,Z1 in machine coordinates (material removal)");
+  app.add_option("--design", design_path, "design STL: the stock is its bounding box");
+  app.add_option("--resolution", resolution, "stock grid step, mm")->check(CLI::PositiveNumber);
+  app.add_option("--tool", tool_spec, "cutter spec, e.g. ball:3.175, flat:6, bull:6:1");
+  app.add_option("--result", result_path, "write the machined height field here on exit (.f32 + .f32.txt)");
+
+  auto* verify = app.add_subcommand("verify", "compare a machined result with the design");
+  std::string v_design, v_result, v_png;
+  double v_tol = 0.05;
+  verify->add_option("--design", v_design, "design STL")->required();
+  verify->add_option("--result", v_result, "height field written by --result")->required();
+  verify->add_option("--tolerance", v_tol, "mm")->check(CLI::PositiveNumber);
+  verify->add_option("--png", v_png, "write a deviation map");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    if (*verify) return run_verify(v_design, v_result, v_tol, v_png);
+
+    cncsim::MachineOptions options;
+    if (!settings_path.empty()) options.store_path = settings_path;
+    options.strict = strict;
+    options.faults.drop_every = drop_every;
+    options.faults.corrupt_every = corrupt_every;
+    options.faults.vanish_after = vanish_after;
+    options.faults.homing_failure = homing_fail;
+    options.probe_surface_z = probe_z;
+    parse_line_faults(error_at, "--error-at", options.faults.error_at);
+    parse_line_faults(alarm_at, "--alarm-at", options.faults.alarm_at);
+    parse_line_faults(stall_at, "--stall-at", options.faults.stall_at);
+    cncsim::PtyOptions pty;
+    if (!link.empty()) pty.link = link;
+    if (speed_text == "max") {
+      pty.speed = 0;
+      options.instant_waits = true;
+    } else {
+      std::size_t used = 0;
+      pty.speed = std::stod(speed_text, &used);
+      if (used != speed_text.size() || !(pty.speed > 0))
+        throw std::invalid_argument("--speed '" + speed_text + "': expected a positive number or 'max'");
+    }
+
+    cncsim::Machine machine(options);
+    std::unique_ptr<cncsim::MaterialRemoval> removal;
+    if (!stock_text.empty() || !design_path.empty()) {
+      const cncstream::Cutter cutter = cncstream::parse_cutter_spec(tool_spec);
+      const cncsim::StockBox box = !stock_text.empty()
+                                       ? cncsim::parse_stock_box(stock_text, resolution)
+                                       : cncsim::stock_box_for(cncstream::load_stl(design_path).mesh, resolution);
+      removal = std::make_unique<cncsim::MaterialRemoval>(box, cutter);
+      removal->attach(machine);
+    } else if (!result_path.empty()) {
+      throw std::invalid_argument("--result needs a stock (--stock or --design)");
+    }
+
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    cncsim::PtyFrontEnd front(machine, pty);
+    std::cout << front.slave_path() << std::endl;
+
+    int code = 0;
+    try {
+      if (front.run(g_stop) == cncsim::PtyFrontEnd::Exit::Vanished)
+        std::cerr << "cncsim: vanished after " << machine.lines_answered() << " answered lines (--vanish-after)\n";
+    } catch (const cncsim::RxOverflowError& e) {
+      std::cerr << "cncsim: fatal (--strict): " << e.what() << "\n";
+      code = 2;
+    }
+    if (removal && !result_path.empty()) removal->write_result(result_path);
+    std::cerr << "cncsim: " << machine.lines_received() << " lines received, " << machine.lines_answered()
+              << " answered, " << machine.rx_bytes_dropped() << " RX bytes dropped";
+    if (removal) std::cerr << ", " << removal->stock().removed_volume() << " mm^3 removed";
+    std::cerr << "\n";
+    return code;
+  } catch (const std::exception& e) {
+    std::cerr << "cncsim: error: " << e.what() << "\n";
+    return 1;
+  }
+}
