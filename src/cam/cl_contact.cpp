@@ -101,6 +101,8 @@ EdgeGeom make_edge(const Vec3& a, const Vec3& b) {
     e.ux = dx / e.L;
     e.uy = dy / e.L;
     e.dz = b.z - a.z;
+    e.inv_L = 1.0 / e.L;
+    e.sin_slope = e.dz / std::hypot(e.L, e.dz);
   } else {
     // A vertical edge touches the cutter first at its top end.
     e.az = e.zmax;
@@ -110,113 +112,111 @@ EdgeGeom make_edge(const Vec3& a, const Vec3& b) {
 
 namespace {
 
-// Slope of the bull-nose profile, h'(rho), for rho > rc.
-inline double profile_slope(const CutterShape& c, double rho) {
-  const double u = rho - c.rc;
-  if (u <= 0) return 0.0;
-  const double q = (c.rk - u) * (c.rk + u);
-  if (q <= 0) return HUGE_VAL;
-  return u / std::sqrt(q);
-}
-
-inline double profile_curvature(const CutterShape& c, double rho) {
-  const double u = rho - c.rc;
-  if (u <= 0) return 0.0;
-  const double q = (c.rk - u) * (c.rk + u);
-  if (q <= 0) return HUGE_VAL;
-  return c.rk * c.rk / (q * std::sqrt(q));
-}
-
-// Maximiser over v in [a, b] of  G(v) = m v - h(sqrt(d2 + v^2)), m >= 0:
-// a concave function, so its derivative is monotone; safeguarded Newton on
-// the derivative, bracketed by bisection, converges to rounding level.
-double bull_argmax(const CutterShape& c, double m, double d2, double a, double b) {
-  if (b <= 0) return b;  // G' >= m >= 0 for v <= 0
-  if (m == 0) return std::clamp(0.0, a, b);
-  double lo = std::fmax(a, 0.0);
-  if (d2 < c.rc * c.rc) lo = std::fmax(lo, std::sqrt(c.rc * c.rc - d2));  // flat bottom: G' = m > 0
-  if (lo >= b) return b;
-  auto dG = [&](double v) {
-    const double rho = std::sqrt(d2 + v * v);
-    if (rho <= 0) return m;
-    return m - profile_slope(c, rho) * v / rho;
-  };
-  if (dG(lo) <= 0) return lo;
-  double hi = b;
-  if (dG(hi) >= 0) return hi;
-  double v = 0.5 * (lo + hi);
-  const double eps = 1e-15 * (c.R + std::fabs(lo) + std::fabs(hi));
-  for (int iter = 0; iter < 200; ++iter) {
-    const double rho = std::sqrt(d2 + v * v);
-    const double H = profile_slope(c, rho);
-    const double g = m - H * v / rho;
-    if (g > 0) lo = v; else hi = v;
-    if (g == 0 || hi - lo <= eps) break;
-    const double dg = -(profile_curvature(c, rho) * v * v / (rho * rho) + H * d2 / (rho * rho * rho));
-    double vn = v - g / dg;
-    if (!(vn > lo && vn < hi)) vn = 0.5 * (lo + hi);
-    if (std::fabs(vn - v) <= eps) {
-      v = vn;
-      break;
-    }
-    v = vn;
+// Bull-nose against the infinite line through an edge: how far uphill of the
+// node (along the edge's XY direction) the torus touches it. The contact
+// normal N is perpendicular to the edge; with u the sine of N's tilt out of
+// the edge's vertical plane and k the sine of the edge's slope, the contact
+// point's XY distance from the line through the node is
+//   g(u) = u (rk + rc / sqrt(u^2 + k^2 (1 - u^2))),
+// which rises monotonically from 0 to R, so |d| = g(u) has one root: Newton
+// safeguarded by bisection. The contact then lies k cos(theta) (rk + rc/|N_xy|)
+// uphill. (This is the offset-ellipse problem, reduced to one monotone
+// equation.)
+double bull_line_contact_offset(const CutterShape& c, double k, double ad) {
+  if (k <= 0) return 0.0;  // horizontal edge: the nearest point is best
+  const double k2 = k * k;
+  double lo = 0, hi = 1, u = std::min(1.0, ad / c.R);
+  for (int iter = 0; iter < 100; ++iter) {
+    const double q = u * u + k2 * (1 - u * u);
+    const double sq = std::sqrt(q);
+    const double gval = u * (c.rk + c.rc / sq) - ad;
+    if (gval > 0) hi = u; else lo = u;
+    if (gval == 0) break;
+    double un = u - gval / (c.rk + c.rc * k2 / (q * sq));
+    if (!(un > lo && un < hi)) un = 0.5 * (lo + hi);
+    const bool done = std::fabs(un - u) <= 4e-16 || hi - lo <= 4e-16;
+    u = un;
+    if (done) break;
   }
-  return v;
+  const double cos_t = std::sqrt(std::max(0.0, (1 - u) * (1 + u)));
+  const double nxy = std::sqrt(u * u + k2 * (1 - u * u));
+  return k * cos_t * (c.rk + c.rc / nxy);
 }
 
 }  // namespace
 
-double edge_drop(const EdgeGeom& e, const CutterShape& c, double x, double y) {
+double edge_drop(const EdgeGeom& e, const CutterShape& c, double x, double y, double current) {
   const double px = x - e.ax, py = y - e.ay;
+  const double R2 = c.R * c.R;
   if (e.L == 0) {
     const double rho2 = px * px + py * py;
-    if (rho2 > c.R * c.R) return kNoContact;
+    if (rho2 > R2) return kNoContact;
     return e.az - c.h(std::sqrt(rho2));
   }
-  const double s0 = px * e.ux + py * e.uy;
   const double d = px * e.uy - py * e.ux;
   const double d2 = d * d;
-  const double R2 = c.R * c.R;
   if (d2 > R2) return kNoContact;
+  const double s0 = px * e.ux + py * e.uy;
   const double w = std::sqrt(R2 - d2);
-  const double lo = std::fmax(0.0, s0 - w), hi = std::fmin(e.L, s0 + w);
+  const double lo = std::max(0.0, s0 - w), hi = std::min(e.L, s0 + w);
   if (lo > hi) return kNoContact;
 
-  // Height along the clipped segment, evaluated from s in [0, L] so steep
+  // Heights along the clipped segment are taken from s in [0, L], so steep
   // edges lose nothing to cancellation.
-  auto value = [&](double s) {
-    const double v = s - s0;
-    return e.az + e.dz * (s / e.L) - c.h(std::sqrt(d2 + v * v));
-  };
-  if (c.rk == 0) return value(e.dz > 0 ? hi : lo);  // flat: h = 0 on the disc
-  const double vlo = lo - s0, vhi = hi - s0;
+  if (c.rk == 0) return e.az + e.dz * ((e.dz > 0 ? hi : lo) * e.inv_L);  // flat: h = 0 on the disc
   if (c.rc == 0) {
-    // Ball: the cylinder's maximiser in closed form.
-    const double vstar = e.dz * w / std::hypot(e.L, e.dz);
-    return value(std::clamp(s0 + std::clamp(vstar, vlo, vhi), lo, hi));
+    // Ball: the cylinder's maximiser in closed form, v = w sin(slope).
+    const double s = std::clamp(s0 + w * e.sin_slope, lo, hi);
+    const double v = s - s0;
+    return e.az + e.dz * (s * e.inv_L) - c.R + std::sqrt(std::max(0.0, (w - v) * (w + v)));
   }
-  const double m = e.dz / e.L;
-  double v;
-  if (m >= 0) {
-    v = bull_argmax(c, m, d2, vlo, vhi);
-  } else {
-    v = -bull_argmax(c, -m, d2, -vhi, -vlo);
-  }
-  return value(std::clamp(s0 + v, lo, hi));
+  const double vlo = lo - s0, vhi = hi - s0;
+  // Before the iterative solve: the highest point of the clipped segment
+  // minus the profile height at its nearest point bounds the result.
+  const double top = e.az + e.dz * ((e.dz > 0 ? hi : lo) * e.inv_L);
+  const double v_near = std::clamp(0.0, vlo, vhi);
+  if (!profile_below(c, d2 + v_near * v_near, top - current)) return kNoContact;
+  const double offset = bull_line_contact_offset(c, std::fabs(e.sin_slope), std::fabs(d));
+  // The maximiser on the clipped segment: the line's contact clamped to it
+  // (the function is concave along the segment).
+  const double s = std::clamp(e.dz >= 0 ? s0 + offset : s0 - offset, lo, hi);
+  const double vs = s - s0;
+  return e.az + e.dz * (s * e.inv_L) - c.h(std::sqrt(d2 + vs * vs));
 }
 
 double rect_segment_distance(const EdgeGeom& e, double x0, double y0, double x1, double y1) {
-  const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
-  const double half_diag = 0.5 * std::hypot(x1 - x0, y1 - y0);
-  const double px = cx - e.ax, py = cy - e.ay;
-  double dist;
-  if (e.L == 0) {
-    dist = std::hypot(px, py);
-  } else {
+  // Exact distance between the rectangle and the segment: zero if they
+  // meet, else attained at a segment end point or a rectangle corner.
+  const double bx = e.ax + e.ux * e.L, by = e.ay + e.uy * e.L;
+  auto point_rect2 = [&](double px, double py) {
+    const double dx = std::max(0.0, std::max(x0 - px, px - x1)), dy = std::max(0.0, std::max(y0 - py, py - y1));
+    return dx * dx + dy * dy;
+  };
+  double best = std::min(point_rect2(e.ax, e.ay), point_rect2(bx, by));
+  if (best == 0 || e.L == 0) return std::sqrt(best);
+  // Corners against the segment; sign changes of the corners' side of the
+  // line with the segment's projection overlapping mean they intersect.
+  const double cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
+  int pos = 0, neg = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double px = cx[k] - e.ax, py = cy[k] - e.ay;
+    const double side = px * e.uy - py * e.ux;
+    pos += side > 0;
+    neg += side < 0;
     const double s = std::clamp(px * e.ux + py * e.uy, 0.0, e.L);
-    dist = std::hypot(px - s * e.ux, py - s * e.uy);
+    const double qx = px - s * e.ux, qy = py - s * e.uy;
+    best = std::min(best, qx * qx + qy * qy);
   }
-  return std::fmax(0.0, dist - half_diag);
+  if (pos && neg) {
+    // The line crosses the rectangle; the segment does if its extent along
+    // the line overlaps the rectangle's (it does not contain an end point).
+    const double tmin = std::min({(x0 - e.ax) * e.ux + (y0 - e.ay) * e.uy, (x1 - e.ax) * e.ux + (y0 - e.ay) * e.uy,
+                                  (x1 - e.ax) * e.ux + (y1 - e.ay) * e.uy, (x0 - e.ax) * e.ux + (y1 - e.ay) * e.uy});
+    const double tmax = std::max({(x0 - e.ax) * e.ux + (y0 - e.ay) * e.uy, (x1 - e.ax) * e.ux + (y0 - e.ay) * e.uy,
+                                  (x1 - e.ax) * e.ux + (y1 - e.ay) * e.uy, (x0 - e.ax) * e.ux + (y1 - e.ay) * e.uy});
+    if (tmax >= 0 && tmin <= e.L) return 0.0;
+  }
+  return std::sqrt(best);
 }
 
 }  // namespace cncstream::cl_detail

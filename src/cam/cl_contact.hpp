@@ -10,6 +10,7 @@
 // is concave over any convex piece of S: a facet's maximum is the tangent
 // point of its plane (if inside the facet) or lies on its boundary, an edge
 // is a 1-D concave maximisation.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -35,10 +36,19 @@ struct CutterShape {
   // Profile height above the tip at radius rho, 0 <= rho <= R (clamped).
   double h(double rho) const {
     if (rho <= rc) return 0.0;
-    const double u = std::fmin(rho - rc, rk);
-    return rk - std::sqrt(std::fmax(0.0, (rk - u) * (rk + u)));
+    const double u = std::min(rho - rc, rk);
+    return rk - std::sqrt(std::max(0.0, (rk - u) * (rk + u)));
   }
 };
+
+// Whether h(rho) < t, from rho^2 (cheap: no square root for flat and ball).
+inline bool profile_below(const CutterShape& c, double rho2, double t) {
+  if (t > c.rk) return true;  // h <= rk everywhere
+  if (c.rc == 0) return c.R * c.R - rho2 > (c.R - t) * (c.R - t);
+  if (rho2 <= c.rc * c.rc) return t > 0;
+  const double u = std::sqrt(rho2) - c.rc;
+  return (c.rk - u) * (c.rk + u) > (c.rk - t) * (c.rk - t);
+}
 
 // Facet interior contact ("face offset"). For nodes c with c - shift inside
 // the facet's xy triangle (within tol), the facet's drop height is linear in
@@ -89,14 +99,29 @@ struct EdgeGeom {
   double dz = 0;                  // b.z - a.z
   double ux = 0, uy = 0;          // unit xy direction a -> b
   double L = 0;                   // xy length (0: vertical edge)
+  double inv_L = 0;               // 1 / L
+  double sin_slope = 0;           // dz / |b - a|: where a ball touches along the edge
   double zmax = 0;                // max(a.z, b.z)
   double xmin = 0, xmax = 0, ymin = 0, ymax = 0;  // xy bounds of the segment
 };
 EdgeGeom make_edge(const Vec3& a, const Vec3& b);
 
 // Drop height of the cutter at (x, y) against the closed segment; kNoContact
-// if no point of it lies within R.
-double edge_drop(const EdgeGeom& e, const CutterShape& cutter, double x, double y);
+// if no point of it lies within R, or (for speed) if a bound shows the
+// result cannot exceed `current`.
+double edge_drop(const EdgeGeom& e, const CutterShape& cutter, double x, double y, double current = kNoContact);
+// The same where it can exceed `current`; kNoContact where a cheap bound
+// (top of the edge minus the profile height at its nearest point) shows it
+// cannot.
+inline double edge_drop_above(const EdgeGeom& e, const CutterShape& c, double x, double y, double current) {
+  const double px = x - e.ax, py = y - e.ay;
+  const double d = px * e.uy - py * e.ux;
+  const double s0 = px * e.ux + py * e.uy;
+  const double out = std::max(0.0, std::max(-s0, s0 - e.L));
+  const double rho2 = e.L > 0 ? d * d + out * out : px * px + py * py;
+  if (rho2 > c.R * c.R || !profile_below(c, rho2, e.zmax - current)) return kNoContact;
+  return edge_drop(e, c, x, y, current);
+}
 
 inline double vertex_drop(const Vec3& v, const CutterShape& cutter, double x, double y) {
   const double ddx = v.x - x, ddy = v.y - y;
@@ -105,8 +130,23 @@ inline double vertex_drop(const Vec3& v, const CutterShape& cutter, double x, do
   return v.z - cutter.h(std::sqrt(rho2));
 }
 
-// Lower bound on the xy distance from any point of the rectangle to the
-// segment (used to cull whole blocks of nodes).
+inline double vertex_drop_above(const Vec3& v, const CutterShape& cutter, double x, double y, double current) {
+  const double ddx = v.x - x, ddy = v.y - y;
+  const double rho2 = ddx * ddx + ddy * ddy;
+  if (rho2 > cutter.R * cutter.R || !profile_below(cutter, rho2, v.z - current)) return kNoContact;
+  return v.z - cutter.h(std::sqrt(rho2));
+}
+
+// XY distance between the rectangle [x0, x1] x [y0, y1] and the segment
+// (used to cull whole blocks of nodes).
 double rect_segment_distance(const EdgeGeom& e, double x0, double y0, double x1, double y1);
+// Cheaper, looser: distance from the centre minus the half diagonal.
+inline double rect_segment_distance_lb(const EdgeGeom& e, double x0, double y0, double x1, double y1) {
+  const double px = 0.5 * (x0 + x1) - e.ax, py = 0.5 * (y0 + y1) - e.ay;
+  const double s = std::clamp(px * e.ux + py * e.uy, 0.0, e.L);  // L = 0: the point
+  const double qx = px - s * e.ux, qy = py - s * e.uy;
+  const double half_diag = 0.5 * std::sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0));
+  return std::max(0.0, std::sqrt(qx * qx + qy * qy) - half_diag);
+}
 
 }  // namespace cncstream::cl_detail

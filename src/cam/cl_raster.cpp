@@ -13,8 +13,12 @@ namespace cncstream::cl_detail {
 namespace {
 
 constexpr std::size_t kTile = 128;  // nodes per tile side: 128 KB of doubles
-constexpr std::size_t kBlock = 8;   // nodes per culling-block side
+// Culling hierarchy: blocks of 4 x 4 nodes inside super-blocks of 16 x 16.
+constexpr std::size_t kBlock = 4;
+constexpr std::size_t kSuper = 16;
 constexpr std::size_t kBlocksPerSide = kTile / kBlock;
+constexpr std::size_t kSupersPerSide = kTile / kSuper;
+constexpr std::size_t kBlocksPerSuper = kSuper / kBlock;
 
 struct Range {
   std::size_t lo = 0, hi = 0;  // [lo, hi)
@@ -87,6 +91,7 @@ struct Context {
 struct Scratch {
   std::vector<double> z = std::vector<double>(kTile * kTile);
   std::vector<double> block_min = std::vector<double>(kBlocksPerSide * kBlocksPerSide);
+  std::vector<double> super_min = std::vector<double>(kSupersPerSide * kSupersPerSide);
 };
 
 void draw_faces(const Context& c, std::size_t tile, std::size_t i0, std::size_t i1, std::size_t jt0,
@@ -113,7 +118,7 @@ void draw_faces(const Context& c, std::size_t tile, std::size_t i0, std::size_t 
       for (std::size_t i = rx.lo; i < rx.hi; ++i) {
         const double x = g.x(i);
         if (!f.contains(x, y)) continue;
-        row[i] = std::fmax(row[i], f.value(x, y));
+        row[i] = std::max(row[i], f.value(x, y));
       }
     }
   }
@@ -130,52 +135,77 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
 
   draw_faces(c, tile, i0, i1, jt0, jt1, z, w);
 
-  // Per-block minimum of the buffer: a primitive whose best possible value
-  // over a block is not above it cannot change any node there.
+  // Minimum of the buffer per block and per super-block: a primitive whose
+  // best possible value over a (super-)block is not above it cannot change
+  // any node there.
   const std::size_t bw = (w + kBlock - 1) / kBlock, bh = (h + kBlock - 1) / kBlock;
-  auto block_nodes = [&](std::size_t bx, std::size_t by) {
-    return std::pair<Range, Range>{{i0 + bx * kBlock, std::min(i1, i0 + (bx + 1) * kBlock)},
-                                   {jt0 + by * kBlock, std::min(jt1, jt0 + (by + 1) * kBlock)}};
+  auto block_nodes = [&](std::size_t bx, std::size_t by, std::size_t size) {
+    return std::pair<Range, Range>{{i0 + bx * size, std::min(i1, i0 + (bx + 1) * size)},
+                                   {jt0 + by * size, std::min(jt1, jt0 + (by + 1) * size)}};
   };
-  auto refresh_min = [&](std::size_t bx, std::size_t by) {
-    const auto [rx, ry] = block_nodes(bx, by);
+  auto refresh_block = [&](std::size_t bx, std::size_t by) {
+    const auto [rx, ry] = block_nodes(bx, by, kBlock);
     double m = HUGE_VAL;
     for (std::size_t j = ry.lo; j < ry.hi; ++j)
-      for (std::size_t i = rx.lo; i < rx.hi; ++i) m = std::fmin(m, z[(j - jt0) * w + (i - i0)]);
+      for (std::size_t i = rx.lo; i < rx.hi; ++i) m = std::min(m, z[(j - jt0) * w + (i - i0)]);
     s.block_min[by * kBlocksPerSide + bx] = m;
   };
+  auto refresh_super = [&](std::size_t sx, std::size_t sy) {
+    double m = HUGE_VAL;
+    for (std::size_t by = sy * kBlocksPerSuper; by < std::min(bh, (sy + 1) * kBlocksPerSuper); ++by)
+      for (std::size_t bx = sx * kBlocksPerSuper; bx < std::min(bw, (sx + 1) * kBlocksPerSuper); ++bx)
+        m = std::min(m, s.block_min[by * kBlocksPerSide + bx]);
+    s.super_min[sy * kSupersPerSide + sx] = m;
+  };
   for (std::size_t by = 0; by < bh; ++by)
-    for (std::size_t bx = 0; bx < bw; ++bx) refresh_min(bx, by);
+    for (std::size_t bx = 0; bx < bw; ++bx) refresh_block(bx, by);
+  for (std::size_t sy = 0; sy * kSuper < h; ++sy)
+    for (std::size_t sx = 0; sx * kSuper < w; ++sx) refresh_super(sx, sy);
 
-  // Edges and vertices: visit the blocks of the footprint, skip those the
-  // primitive cannot raise, then nodes whose height is already at least the
-  // primitive's top.
+  // Edges and vertices: visit the super-blocks and blocks of the footprint,
+  // skip those the primitive cannot raise, then nodes where a cheap bound
+  // shows it cannot (inside drop()).
   const double R = c.cutter.R;
   auto draw = [&](const Range& fx, const Range& fy, double zmax, auto&& distance_lb, auto&& drop) {
     const Range rx = intersect(fx, i0, i1), ry = intersect(fy, jt0, jt1);
     if (rx.empty() || ry.empty()) return;
-    for (std::size_t by = (ry.lo - jt0) / kBlock; by <= (ry.hi - 1 - jt0) / kBlock; ++by) {
-      for (std::size_t bx = (rx.lo - i0) / kBlock; bx <= (rx.hi - 1 - i0) / kBlock; ++bx) {
-        auto [nx, ny] = block_nodes(bx, by);
-        nx = intersect(nx, rx.lo, rx.hi);
-        ny = intersect(ny, ry.lo, ry.hi);
-        const double lb = distance_lb(g.x(nx.lo), g.y(ny.lo), g.x(nx.hi - 1), g.y(ny.hi - 1));
-        if (lb > R) continue;
-        if (zmax - c.cutter.h(lb) <= s.block_min[by * kBlocksPerSide + bx]) continue;
-        bool changed = false;
-        for (std::size_t j = ny.lo; j < ny.hi; ++j) {
-          const double y = g.y(j);
-          double* row = z + (j - jt0) * w - i0;
-          for (std::size_t i = nx.lo; i < nx.hi; ++i) {
-            if (row[i] >= zmax) continue;
-            const double v = drop(g.x(i), y);
-            if (v > row[i]) {
-              row[i] = v;
-              changed = true;
+    auto cannot_raise = [&](const Range& nx, const Range& ny, double floor_z, bool exact) {
+      const double lb = distance_lb(g.x(nx.lo), g.y(ny.lo), g.x(nx.hi - 1), g.y(ny.hi - 1), exact);
+      return lb > R || zmax - c.cutter.h(lb) <= floor_z;
+    };
+    for (std::size_t sy = (ry.lo - jt0) / kSuper; sy <= (ry.hi - 1 - jt0) / kSuper; ++sy) {
+      for (std::size_t sx = (rx.lo - i0) / kSuper; sx <= (rx.hi - 1 - i0) / kSuper; ++sx) {
+        auto [snx, sny] = block_nodes(sx, sy, kSuper);
+        snx = intersect(snx, rx.lo, rx.hi);
+        sny = intersect(sny, ry.lo, ry.hi);
+        if (cannot_raise(snx, sny, s.super_min[sy * kSupersPerSide + sx], true)) continue;
+        bool super_changed = false;
+        for (std::size_t by = (sny.lo - jt0) / kBlock; by <= (sny.hi - 1 - jt0) / kBlock; ++by) {
+          for (std::size_t bx = (snx.lo - i0) / kBlock; bx <= (snx.hi - 1 - i0) / kBlock; ++bx) {
+            auto [nx, ny] = block_nodes(bx, by, kBlock);
+            nx = intersect(nx, snx.lo, snx.hi);
+            ny = intersect(ny, sny.lo, sny.hi);
+            if (cannot_raise(nx, ny, s.block_min[by * kBlocksPerSide + bx], false)) continue;
+            bool changed = false;
+            for (std::size_t j = ny.lo; j < ny.hi; ++j) {
+              const double y = g.y(j);
+              double* row = z + (j - jt0) * w - i0;
+              for (std::size_t i = nx.lo; i < nx.hi; ++i) {
+                if (row[i] >= zmax) continue;
+                const double v = drop(g.x(i), y, row[i]);
+                if (v > row[i]) {
+                  row[i] = v;
+                  changed = true;
+                }
+              }
+            }
+            if (changed) {
+              refresh_block(bx, by);
+              super_changed = true;
             }
           }
         }
-        if (changed) refresh_min(bx, by);
+        if (super_changed) refresh_super(sx, sy);
       }
     }
   };
@@ -185,15 +215,19 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
     const EdgeGeom e = make_edge(c.mesh.vertices[ab[0]], c.mesh.vertices[ab[1]]);
     draw(node_range(e.xmin - R, e.xmax + R, g.x0, g.dx, g.nx), node_range(e.ymin - R, e.ymax + R, g.y0, g.dy, g.ny),
          e.zmax,
-         [&](double xa, double ya, double xb, double yb) { return rect_segment_distance(e, xa, ya, xb, yb); },
-         [&](double x, double y) { return edge_drop(e, c.cutter, x, y); });
+         [&](double xa, double ya, double xb, double yb, bool exact) {
+           return exact ? rect_segment_distance(e, xa, ya, xb, yb) : rect_segment_distance_lb(e, xa, ya, xb, yb);
+         },
+         [&](double x, double y, double current) { return edge_drop_above(e, c.cutter, x, y, current); });
   }
   for (const std::uint32_t* p = c.vertices.begin(tile); p != c.vertices.end(tile); ++p) {
     const Vec3 v = c.mesh.vertices[c.prims.vertices[*p]];
     const EdgeGeom point = make_edge(v, v);
     draw(node_range(v.x - R, v.x + R, g.x0, g.dx, g.nx), node_range(v.y - R, v.y + R, g.y0, g.dy, g.ny), v.z,
-         [&](double xa, double ya, double xb, double yb) { return rect_segment_distance(point, xa, ya, xb, yb); },
-         [&](double x, double y) { return vertex_drop(v, c.cutter, x, y); });
+         [&](double xa, double ya, double xb, double yb, bool exact) {
+           return exact ? rect_segment_distance(point, xa, ya, xb, yb) : rect_segment_distance_lb(point, xa, ya, xb, yb);
+         },
+         [&](double x, double y, double current) { return vertex_drop_above(v, c.cutter, x, y, current); });
   }
 
   for (std::size_t j = jt0; j < jt1; ++j)

@@ -10,6 +10,9 @@
 #include <cmath>
 #include <limits>
 
+#include <vector>
+
+#include "cncstream/geometry/mesh.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
 namespace cl_oracle {
@@ -172,6 +175,43 @@ inline double xy_distance(const Vec3& p0, const Vec3& p1, const Vec3& p2, double
 // Drop height against a segment (1-D, same method).
 inline double segment_drop(const Vec3& a, const Vec3& b, const Tool& tool, double cx, double cy) {
   return facet_drop(a, b, b, tool, cx, cy);
+}
+
+struct MeshDrop {
+  double drop = kNone;        // max over facets
+  double distance = HUGE_VAL; // xy distance to the nearest facet
+};
+
+// Facet indices, highest top first.
+inline std::vector<std::size_t> facets_by_top(const cncstream::Mesh& m) {
+  std::vector<std::size_t> order(m.triangles.size());
+  for (std::size_t f = 0; f < order.size(); ++f) order[f] = f;
+  auto top = [&](std::size_t f) { return std::max({m.corner(f, 0).z, m.corner(f, 1).z, m.corner(f, 2).z}); };
+  std::sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return top(p) > top(q); });
+  return order;
+}
+
+// Max over facets of the oracle's drop at (x, y). Facets are visited highest
+// first and skipped when even their top minus the profile height at their
+// nearest point cannot beat the best so far.
+inline MeshDrop mesh_drop(const cncstream::Mesh& m, const std::vector<std::size_t>& by_top, const Tool& t, double x,
+                          double y) {
+  MeshDrop r;
+  for (std::size_t f : by_top) {
+    const Vec3 a = m.corner(f, 0), b = m.corner(f, 1), c = m.corner(f, 2);
+    const double top = std::max({a.z, b.z, c.z});
+    if (top < r.drop - 1e-9 && r.distance < t.R) break;  // nothing lower can win
+    if (std::min({a.x, b.x, c.x}) > x + t.R || std::max({a.x, b.x, c.x}) < x - t.R ||
+        std::min({a.y, b.y, c.y}) > y + t.R || std::max({a.y, b.y, c.y}) < y - t.R) {
+      continue;
+    }
+    const double d = xy_distance(a, b, c, x, y);
+    r.distance = std::min(r.distance, d);
+    if (d > t.reach()) continue;
+    if (top - t.h(std::min(d, t.R)) < r.drop - 1e-9) continue;
+    r.drop = std::max(r.drop, facet_drop(a, b, c, t, x, y));
+  }
+  return r;
 }
 
 }  // namespace cl_oracle

@@ -19,41 +19,15 @@ cl_oracle::Tool tool_of(const Cutter& c) {
   return {c.radius, c.type == CutterType::Flat ? 0.0 : c.type == CutterType::Ball ? c.radius : c.corner_radius};
 }
 
-struct OracleResult {
-  double drop = cl_oracle::kNone;  // max over facets
-  double distance = HUGE_VAL;      // xy distance to the nearest facet
-};
-
-// Max over facets of the oracle's drop at (x, y). Facets are visited highest
-// first and skipped when even their top minus the profile height at their
-// nearest point cannot beat the best so far.
-OracleResult oracle_drop(const Mesh& m, const std::vector<std::size_t>& by_top, const cl_oracle::Tool& t, double x,
-                         double y) {
-  OracleResult r;
-  for (std::size_t f : by_top) {
-    const Vec3 a = m.corner(f, 0), b = m.corner(f, 1), c = m.corner(f, 2);
-    const double d = cl_oracle::xy_distance(a, b, c, x, y);
-    r.distance = std::fmin(r.distance, d);
-    if (d > t.reach()) continue;
-    const double top = std::fmax(a.z, std::fmax(b.z, c.z));
-    if (top - t.h(std::fmin(d, t.R)) < r.drop - 1e-9) continue;
-    r.drop = std::fmax(r.drop, cl_oracle::facet_drop(a, b, c, t, x, y));
-  }
-  return r;
-}
-
 // Every node: touched exactly as the oracle says (within tol), else floor.
 void expect_matches_oracle(const Mesh& m, const Cutter& c, const ClGrid& g, double tol) {
   const cl_oracle::Tool t = tool_of(c);
-  std::vector<std::size_t> by_top(m.triangles.size());
-  for (std::size_t f = 0; f < by_top.size(); ++f) by_top[f] = f;
-  auto top = [&](std::size_t f) { return std::fmax(m.corner(f, 0).z, std::fmax(m.corner(f, 1).z, m.corner(f, 2).z)); };
-  std::sort(by_top.begin(), by_top.end(), [&](std::size_t p, std::size_t q) { return top(p) > top(q); });
+  const std::vector<std::size_t> by_top = cl_oracle::facets_by_top(m);
   int touched = 0;
   for (std::size_t j = 0; j < g.spec.ny; ++j)
     for (std::size_t i = 0; i < g.spec.nx; ++i) {
       const double x = g.spec.x(i), y = g.spec.y(j);
-      const OracleResult o = oracle_drop(m, by_top, t, x, y);
+      const cl_oracle::MeshDrop o = cl_oracle::mesh_drop(m, by_top, t, x, y);
       const std::size_t k = j * g.spec.nx + i;
       if (o.drop == cl_oracle::kNone) {
         ASSERT_EQ(g.on_floor[k], 1) << "touched where the oracle finds nothing at " << x << "," << y;

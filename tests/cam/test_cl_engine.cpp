@@ -1,0 +1,179 @@
+// CL engine API: thread independence, streamed tiles, the point query, the
+// floor, and input errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "cam/cl_test_meshes.hpp"
+#include "cncstream/cam/cl_engine.hpp"
+
+using namespace cncstream;
+
+namespace {
+
+Mesh bumpy() {
+  return cl_test::terrain(0, 0, 40, 60, [](double x, double y) {
+    double z = 3 + std::sin(x / 3) * std::cos(y / 4) + 0.2 * std::sin(1.7 * x + y);
+    if (std::hypot(x - 25, y - 15) < 6) z = 5.5;  // plateau with near-vertical sides
+    return z;
+  });
+}
+
+std::vector<Cutter> cutters() { return {Cutter::ball(6), Cutter::flat(3), Cutter::bull(8, 1.5)}; }
+
+}  // namespace
+
+TEST(ClEngine, SameResultForAnyThreadCount) {
+  const Mesh m = bumpy();
+  // Big enough for many tiles (128 x 128 nodes each).
+  const GridSpec spec = GridSpec::covering(-3, -3, 43, 43, 0.13, 0.11);
+  for (const Cutter& c : cutters()) {
+    SCOPED_TRACE(c.spec());
+    ClOptions one;
+    one.threads = 1;
+    const ClGrid a = ClEngine(m, c, one).compute(spec);
+    for (unsigned n : {2u, 3u, 0u}) {
+      ClOptions o;
+      o.threads = n;
+      const ClGrid b = ClEngine(m, c, o).compute(spec);
+      EXPECT_EQ(a.z, b.z) << n << " threads";
+      EXPECT_EQ(a.on_floor, b.on_floor) << n << " threads";
+    }
+  }
+}
+
+TEST(ClEngine, TilesConcatenateToTheWholeGrid) {
+  const Mesh m = bumpy();
+  const GridSpec spec = GridSpec::covering(-3, -3, 43, 43, 0.17, 0.19);
+  for (const Cutter& c : cutters()) {
+    SCOPED_TRACE(c.spec());
+    ClOptions o;
+    o.max_tile_bytes = spec.nx * 9 * 37 + 5;  // 37 rows per tile, last one short
+    const ClEngine e(m, c, o);
+    const ClGrid whole = e.compute(spec);
+    std::vector<double> z;
+    std::vector<std::uint8_t> fl;
+    std::size_t expect_j0 = 0, tiles = 0;
+    e.compute_tiles(spec, [&](const ClTile& t) {
+      EXPECT_EQ(t.j0, expect_j0);
+      EXPECT_LE(t.grid.spec.ny, 37u);
+      EXPECT_EQ(t.grid.spec.nx, spec.nx);
+      EXPECT_DOUBLE_EQ(t.grid.spec.y0, spec.y(t.j0));
+      EXPECT_EQ(t.grid.z.size(), t.grid.spec.size());
+      expect_j0 += t.grid.spec.ny;
+      ++tiles;
+      z.insert(z.end(), t.grid.z.begin(), t.grid.z.end());
+      fl.insert(fl.end(), t.grid.on_floor.begin(), t.grid.on_floor.end());
+    });
+    EXPECT_EQ(tiles, (spec.ny + 36) / 37);
+    EXPECT_EQ(z, whole.z);
+    EXPECT_EQ(fl, whole.on_floor);
+  }
+}
+
+TEST(ClEngine, HeightAtAgreesWithGridNodes) {
+  const Mesh m = bumpy();
+  const GridSpec spec = GridSpec::covering(-4, -4, 44, 44, 0.7, 0.9);
+  for (const Cutter& c : cutters()) {
+    SCOPED_TRACE(c.spec());
+    const ClEngine e(m, c);
+    const ClGrid g = e.compute(spec);
+    int touched = 0;
+    for (std::size_t j = 0; j < spec.ny; ++j)
+      for (std::size_t i = 0; i < spec.nx; ++i) {
+        bool on_floor = false;
+        const double z = e.height_at(spec.x(i), spec.y(j), on_floor);
+        ASSERT_EQ(on_floor, g.on_floor[j * spec.nx + i] == 1) << i << "," << j;
+        ASSERT_NEAR(z, g.at(i, j), 1e-9) << i << "," << j;
+        touched += !on_floor;
+      }
+    EXPECT_GT(touched, 100);
+    // Off the nodes: a fine grid shifted by a fraction of the step.
+    GridSpec fine = spec;
+    fine.x0 += 0.31;
+    fine.y0 += 0.47;
+    fine.nx -= 1;
+    fine.ny -= 1;
+    const ClGrid f = e.compute(fine);
+    for (std::size_t j = 0; j < fine.ny; j += 3)
+      for (std::size_t i = 0; i < fine.nx; i += 3) ASSERT_NEAR(e.height_at(fine.x(i), fine.y(j)), f.at(i, j), 1e-9);
+  }
+}
+
+TEST(ClEngine, FloorAndUntouchedNodes) {
+  const Mesh m = cl_test::box({0, 0, 2}, {10, 10, 5});
+  const GridSpec spec = GridSpec::covering(-20, -20, 30, 30, 1, 1);
+  const ClEngine by_default(m, Cutter::ball(4));
+  EXPECT_EQ(by_default.floor(), 2.0);  // the mesh's lowest z
+  const ClGrid g = by_default.compute(spec);
+  EXPECT_EQ(g.floor, 2.0);
+  EXPECT_EQ(g.at(0, 0), 2.0);
+  EXPECT_EQ(g.on_floor[0], 1);
+  EXPECT_EQ(g.at(25, 25), 5.0);  // (5, 5): on the top
+  EXPECT_EQ(g.on_floor[25 * spec.nx + 25], 0);
+  ClOptions o;
+  o.floor = -1.5;
+  const ClEngine low(m, Cutter::ball(4), o);
+  EXPECT_EQ(low.compute(spec).at(0, 0), -1.5);
+  EXPECT_EQ(low.height_at(-15, 3), -1.5);
+  // Touched but below the floor stays where it touches (never raised into the part).
+  ClOptions high;
+  high.floor = 4.5;
+  const ClGrid h = ClEngine(m, Cutter::ball(4), high).compute(spec);
+  EXPECT_NEAR(h.at(19, 25), 5 - (2 - std::sqrt(4 - 1.0)), 1e-12);  // (-1, 5): 1 mm outside the wall
+  EXPECT_EQ(h.on_floor[25 * spec.nx + 19], 0);
+}
+
+TEST(ClEngine, EmptyMeshIsAllFloor) {
+  const Mesh m;
+  const ClEngine e(m, Cutter::flat(6));
+  const ClGrid g = e.compute(GridSpec::covering(0, 0, 5, 5, 1, 1));
+  for (std::size_t k = 0; k < g.z.size(); ++k) {
+    EXPECT_EQ(g.z[k], 0.0);
+    EXPECT_EQ(g.on_floor[k], 1);
+  }
+  EXPECT_EQ(e.height_at(1, 1), 0.0);
+}
+
+TEST(ClEngine, RejectsBadInput) {
+  const Mesh m = cl_test::box({0, 0, 0}, {1, 1, 1});
+  EXPECT_THROW(ClEngine(m, Cutter::ball(0)), std::invalid_argument);
+  EXPECT_THROW(ClEngine(m, Cutter{CutterType::Bull, 3, 4}), std::invalid_argument);
+  Mesh bad = m;
+  bad.triangles.push_back({0, 1, 99});
+  try {
+    ClEngine e(bad, Cutter::ball(2));
+    FAIL() << "accepted a facet with a vertex index out of range";
+  } catch (const std::invalid_argument& err) {
+    EXPECT_NE(std::string(err.what()).find("facet 12"), std::string::npos) << err.what();
+  }
+  Mesh nan = m;
+  nan.vertices[3].y = std::nan("");
+  EXPECT_THROW(ClEngine(nan, Cutter::ball(2)), std::invalid_argument);
+  const ClEngine e(m, Cutter::ball(2));
+  GridSpec s = GridSpec::covering(0, 0, 1, 1, 0.5, 0.5);
+  s.dx = 0;
+  EXPECT_THROW(e.compute(s), std::invalid_argument);
+  s.dx = 0.5;
+  s.y0 = HUGE_VAL;
+  EXPECT_THROW(e.compute_tiles(s, [](const ClTile&) {}), std::invalid_argument);
+  ClOptions o;
+  o.floor = std::nan("");
+  EXPECT_THROW(ClEngine(m, Cutter::ball(2), o), std::invalid_argument);
+}
+
+TEST(ClEngine, StatsCountWhatIsDrawn) {
+  const Mesh m = cl_test::box({0, 0, 0}, {10, 10, 3});
+  const ClEngine e(m, Cutter::ball(2));
+  const ClEngineStats& s = e.stats();
+  EXPECT_EQ(s.facets, 12u);
+  EXPECT_EQ(s.face_offsets, 4u);  // top and bottom; the walls are vertical
+  EXPECT_EQ(s.edges, 18u);        // 12 box edges + 6 face diagonals
+  EXPECT_EQ(s.vertices, 8u);
+  // The top and bottom diagonals are coplanar: left out. Every other edge
+  // borders a vertical wall, which never lets an edge go.
+  EXPECT_EQ(s.edges_drawn, 16u);
+  EXPECT_EQ(s.vertices_drawn, 0u);
+}
