@@ -57,16 +57,7 @@ cncstream::HeightFieldStock stock_from_heights(const cncstream::GridSpec& grid, 
   for (float z : heights)
     if (std::isfinite(z)) top = std::max(top, static_cast<double>(z));
   if (!std::isfinite(top)) throw std::invalid_argument("height field has no values");
-  cncstream::HeightFieldStock stock(grid, top);
-  const cncstream::Cutter pin = cncstream::Cutter::flat(0.5 * std::min(grid.dx, grid.dy));
-  for (std::size_t j = 0; j < grid.ny; ++j) {
-    for (std::size_t i = 0; i < grid.nx; ++i) {
-      const double z = heights[j * grid.nx + i];
-      if (!std::isfinite(z) || z >= top) continue;
-      stock.cut_segment({grid.x(i), grid.y(j), top}, {grid.x(i), grid.y(j), z}, pin);
-    }
-  }
-  return stock;
+  return cncstream::HeightFieldStock(grid, top, std::vector<double>(heights.begin(), heights.end()));
 }
 
 }  // namespace cncsim

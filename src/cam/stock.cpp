@@ -75,6 +75,16 @@ HeightFieldStock::HeightFieldStock(const GridSpec& grid, double top) : grid_(gri
   z_.assign(grid.size(), top);
 }
 
+HeightFieldStock::HeightFieldStock(const GridSpec& grid, double top, std::vector<double> heights)
+    : HeightFieldStock(grid, top) {
+  if (heights.size() != grid.size())
+    throw std::invalid_argument("stock heights: " + std::to_string(heights.size()) + " values for a grid of " +
+                                std::to_string(grid.size()) + " nodes");
+  for (double& z : heights)
+    if (!std::isfinite(z)) z = top;
+  z_ = std::move(heights);
+}
+
 double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter& cutter) {
   check_cutter(cutter);
   check_point(a, "a");

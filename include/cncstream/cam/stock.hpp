@@ -19,6 +19,9 @@ class HeightFieldStock {
   // Nodes of `grid` start at height `top`. Throws std::invalid_argument for
   // an empty grid, a non-positive step or a non-finite top.
   HeightFieldStock(const GridSpec& grid, double top);
+  // A stock already machined to `heights` (grid.size() values; a machined
+  // result read back from a file). Non-finite values are taken as `top`.
+  HeightFieldStock(const GridSpec& grid, double top, std::vector<double> heights);
 
   const GridSpec& grid() const { return grid_; }
   double top() const { return top_; }
