@@ -125,7 +125,12 @@ namespace {
 double bull_line_contact_offset(const CutterShape& c, double k, double ad) {
   if (k <= 0) return 0.0;  // horizontal edge: the nearest point is best
   const double k2 = k * k;
-  double lo = 0, hi = 1, u = std::min(1.0, ad / c.R);
+  // With phi(u) = u / sqrt(u^2 + k^2 (1 - u^2)) >= u:  R u <= g(u) <= R phi(u),
+  // which brackets the root; g is concave, so Newton from the right end
+  // approaches it monotonically.
+  const double y = std::min(1.0, ad / c.R);
+  double lo = y * k / std::sqrt(std::max(1e-300, 1 - y * y * (1 - k2))), hi = y, u = y;
+  if (!(lo <= hi)) lo = 0;
   for (int iter = 0; iter < 100; ++iter) {
     const double q = u * u + k2 * (1 - u * u);
     const double sq = std::sqrt(q);
