@@ -190,8 +190,9 @@ double edge_drop(const EdgeGeom& e, const CutterShape& c, double x, double y, do
 }
 
 double rect_segment_distance(const EdgeGeom& e, double x0, double y0, double x1, double y1) {
-  // Exact distance between the rectangle and the segment: zero if they
-  // meet, else attained at a segment end point or a rectangle corner.
+  // Distance between the rectangle and the segment, attained at a segment end
+  // point or a rectangle corner unless they meet; where the line crosses the
+  // rectangle and the extents overlap, 0 (conservative: a lower bound).
   const double bx = e.ax + e.ux * e.L, by = e.ay + e.uy * e.L;
   auto point_rect2 = [&](double px, double py) {
     const double dx = std::max(0.0, std::max(x0 - px, px - x1)), dy = std::max(0.0, std::max(y0 - py, py - y1));
