@@ -125,7 +125,12 @@ namespace {
 double bull_line_contact_offset(const CutterShape& c, double k, double ad) {
   if (k <= 0) return 0.0;  // horizontal edge: the nearest point is best
   const double k2 = k * k;
-  double lo = 0, hi = 1, u = std::min(1.0, ad / c.R);
+  // With phi(u) = u / sqrt(u^2 + k^2 (1 - u^2)) >= u:  R u <= g(u) <= R phi(u),
+  // which brackets the root; g is concave, so Newton from the right end
+  // approaches it monotonically.
+  const double y = std::min(1.0, ad / c.R);
+  double lo = y * k / std::sqrt(std::max(1e-300, 1 - y * y * (1 - k2))), hi = y, u = y;
+  if (!(lo <= hi)) lo = 0;
   for (int iter = 0; iter < 100; ++iter) {
     const double q = u * u + k2 * (1 - u * u);
     const double sq = std::sqrt(q);
@@ -185,8 +190,9 @@ double edge_drop(const EdgeGeom& e, const CutterShape& c, double x, double y, do
 }
 
 double rect_segment_distance(const EdgeGeom& e, double x0, double y0, double x1, double y1) {
-  // Exact distance between the rectangle and the segment: zero if they
-  // meet, else attained at a segment end point or a rectangle corner.
+  // Distance between the rectangle and the segment, attained at a segment end
+  // point or a rectangle corner unless they meet; where the line crosses the
+  // rectangle and the extents overlap, 0 (conservative: a lower bound).
   const double bx = e.ax + e.ux * e.L, by = e.ay + e.uy * e.L;
   auto point_rect2 = [&](double px, double py) {
     const double dx = std::max(0.0, std::max(x0 - px, px - x1)), dy = std::max(0.0, std::max(y0 - py, py - y1));

@@ -137,8 +137,9 @@ inline double vertex_drop_above(const Vec3& v, const CutterShape& cutter, double
   return v.z - cutter.h(std::sqrt(rho2));
 }
 
+// Lower bound (exact unless the segment's line crosses the rectangle) on the
 // XY distance between the rectangle [x0, x1] x [y0, y1] and the segment
-// (used to cull whole blocks of nodes).
+// (used to cull whole super-blocks of nodes).
 double rect_segment_distance(const EdgeGeom& e, double x0, double y0, double x1, double y1);
 // Cheaper, looser: distance from the centre minus the half diagonal.
 inline double rect_segment_distance_lb(const EdgeGeom& e, double x0, double y0, double x1, double y1) {
