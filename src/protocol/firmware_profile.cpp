@@ -1,8 +1,9 @@
 #include "cncstream/protocol/firmware_profile.hpp"
 
+#include "cncstream/protocol/pattern.hpp"
+
 #include <algorithm>
 #include <cstdlib>
-#include <regex>
 #include <set>
 #include <sstream>
 
@@ -69,11 +70,7 @@ std::vector<std::string> get_strings(const std::filesystem::path& path, const to
 
 void check_regexes(const std::filesystem::path& path, const toml::node& n, const std::vector<std::string>& res) {
   for (const auto& r : res) {
-    try {
-      std::regex re(r);
-    } catch (const std::regex_error& e) {
-      fail(path, n, "bad regular expression '" + r + "': " + e.what());
-    }
+    if (auto err = pattern_error(r)) fail(path, n, "bad regular expression '" + r + "': " + *err);
   }
 }
 

@@ -1,7 +1,8 @@
 #include "cncstream/protocol/grbl_session.hpp"
 
+#include "cncstream/protocol/pattern.hpp"
+
 #include <algorithm>
-#include <regex>
 #include <stdexcept>
 
 namespace cncstream::protocol {
@@ -102,8 +103,7 @@ void GrblSession::on_line(std::string_view line, double now) {
     default: break;
   }
   const bool banner =
-      std::any_of(profile_.banner_patterns.begin(), profile_.banner_patterns.end(),
-                  [&](const std::string& p) { return std::regex_search(r.body, std::regex(p)); }) ||
+      matches_any_pattern(profile_.banner_patterns, r.body) ||
       r.body.rfind("Grbl ", 0) == 0 || r.body.rfind("GrblHAL ", 0) == 0;
   if (banner) {
     on_banner();

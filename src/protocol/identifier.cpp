@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <regex>
 #include <stdexcept>
 
+#include "cncstream/protocol/pattern.hpp"
 #include "cncstream/protocol/response.hpp"
 
 namespace cncstream::protocol {
@@ -12,9 +12,7 @@ namespace cncstream::protocol {
 namespace {
 
 bool matches_any(const std::vector<std::string>& patterns, std::string_view line) {
-  for (const auto& p : patterns)
-    if (std::regex_search(line.begin(), line.end(), std::regex(p))) return true;
-  return false;
+  return matches_any_pattern(patterns, line);
 }
 
 const FirmwareProfile* find_id(const std::vector<FirmwareProfile>& ps, const std::string& id) {
