@@ -22,7 +22,7 @@ FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cut
   Vec3 n = nn / len;
   if (n.z < 0) n = -n;
   if (n.z < kVerticalNz) return f;
-  const double nxy = std::hypot(n.x, n.y);
+  const double nxy = std::sqrt(n.x * n.x + n.y * n.y);
   f.nz = n.z;
   f.horizontal = nxy < kHorizontalNxy;
 
@@ -54,7 +54,7 @@ FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cut
   for (int k = 0; k < 3; ++k) {
     const int k1 = (k + 1) % 3;
     const double ex = f.qx[k1] - f.qx[k], ey = f.qy[k1] - f.qy[k];
-    const double el = std::hypot(ex, ey);
+    const double el = std::sqrt(ex * ex + ey * ey);
     if (!(el > 0)) return FaceOffset{};
     f.inx[k] = -ey / el;
     f.iny[k] = ex / el;
@@ -96,13 +96,13 @@ EdgeGeom make_edge(const Vec3& a, const Vec3& b) {
   e.ymin = std::fmin(a.y, b.y);
   e.ymax = std::fmax(a.y, b.y);
   const double dx = b.x - a.x, dy = b.y - a.y;
-  e.L = std::hypot(dx, dy);
+  e.L = std::sqrt(dx * dx + dy * dy);
   if (e.L > 0) {
     e.ux = dx / e.L;
     e.uy = dy / e.L;
     e.dz = b.z - a.z;
     e.inv_L = 1.0 / e.L;
-    e.sin_slope = e.dz / std::hypot(e.L, e.dz);
+    e.sin_slope = e.dz / std::sqrt(e.L * e.L + e.dz * e.dz);
   } else {
     // A vertical edge touches the cutter first at its top end.
     e.az = e.zmax;

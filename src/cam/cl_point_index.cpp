@@ -30,18 +30,14 @@ double PointIndex::top(std::uint32_t item) const {
   }
 }
 
-double PointIndex::evaluate(std::uint32_t item, double x, double y) const {
+double PointIndex::evaluate(std::uint32_t item, double x, double y, double best) const {
   const std::uint32_t id = item & kIdMask;
   switch (item & ~kIdMask) {
     case kFace: {
-      const auto& t = mesh_.triangles[prims_.faces[id]];
-      const FaceOffset f = face_offset(mesh_.vertices[t[0]], mesh_.vertices[t[1]], mesh_.vertices[t[2]], cutter_);
+      const FaceOffset& f = faces_[id];
       return f.active && f.contains(x, y) ? f.value(x, y) : kNoContact;
     }
-    case kEdge: {
-      const auto& e = prims_.edges[id];
-      return edge_drop(make_edge(mesh_.vertices[e[0]], mesh_.vertices[e[1]]), cutter_, x, y);
-    }
+    case kEdge: return edge_drop_above(edges_[id], cutter_, x, y, best);
     default:
       return vertex_drop(mesh_.vertices[prims_.vertices[id]], cutter_, x, y);
   }
@@ -50,13 +46,19 @@ double PointIndex::evaluate(std::uint32_t item, double x, double y) const {
 PointIndex::PointIndex(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter)
     : mesh_(mesh), prims_(prims), cutter_(cutter) {
   const double R = cutter.R;
+  faces_.reserve(prims.faces.size());
+  for (const auto f : prims.faces) {
+    const auto& t = mesh.triangles[f];
+    faces_.push_back(face_offset(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], cutter));
+  }
+  edges_.reserve(prims.edges.size());
+  for (const auto& e : prims.edges) edges_.push_back(make_edge(mesh.vertices[e[0]], mesh.vertices[e[1]]));
   // Footprint of each item: the XY box outside which it cannot touch.
   auto footprint = [&](std::uint32_t item, Box2& b) {
     const std::uint32_t id = item & kIdMask;
     switch (item & ~kIdMask) {
       case kFace: {
-        const auto& t = mesh.triangles[prims.faces[id]];
-        const FaceOffset f = face_offset(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], cutter);
+        const FaceOffset& f = faces_[id];
         if (!f.active) return false;
         b = {f.xmin(), f.ymin(), f.xmax(), f.ymax()};
         break;
@@ -137,6 +139,8 @@ PointIndex::PointIndex(const Mesh& mesh, const ClPrimitives& prims, const Cutter
                 const double tp = top(p), tq = top(q);
                 return tp != tq ? tp > tq : p < q;
               });
+  item_tops_.resize(items_.size());
+  for (std::size_t k = 0; k < items_.size(); ++k) item_tops_[k] = top(items_[k]);
 }
 
 double PointIndex::drop(double x, double y) const {
@@ -146,9 +150,8 @@ double PointIndex::drop(double x, double y) const {
   const std::size_t cell = static_cast<std::size_t>(ky) * nx_ + static_cast<std::size_t>(kx);
   double best = kNoContact;
   for (std::uint32_t k = offset_[cell]; k < offset_[cell + 1]; ++k) {
-    const std::uint32_t item = items_[k];
-    if (top(item) <= best) break;  // listed highest first: nothing below can win
-    best = std::fmax(best, evaluate(item, x, y));
+    if (item_tops_[k] <= best) break;  // listed highest first: nothing below can win
+    best = std::fmax(best, evaluate(items_[k], x, y, best));
   }
   return best;
 }

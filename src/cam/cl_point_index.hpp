@@ -24,7 +24,7 @@ class PointIndex {
   enum Kind : std::uint32_t { kFace = 0, kEdge = 1u << 30, kVertex = 2u << 30 };
   static constexpr std::uint32_t kIdMask = (1u << 30) - 1;
   double top(std::uint32_t item) const;
-  double evaluate(std::uint32_t item, double x, double y) const;
+  double evaluate(std::uint32_t item, double x, double y, double best) const;
 
   const Mesh& mesh_;
   const ClPrimitives& prims_;
@@ -33,6 +33,11 @@ class PointIndex {
   std::size_t nx_ = 0, ny_ = 0;
   std::vector<std::uint32_t> offset_;
   std::vector<std::uint32_t> items_;
+  std::vector<double> item_tops_;  // top(items_[k]), so a query reads no vertex
+  // Prepared once: a query evaluates many primitives, and preparing them
+  // (square roots, normals) costs more than evaluating them.
+  std::vector<FaceOffset> faces_;
+  std::vector<EdgeGeom> edges_;
 };
 
 }  // namespace cncstream::cl_detail

@@ -32,13 +32,13 @@ class SweptCutter {
     shape_ = rk_ <= R_ * 1e-12 ? Shape::Flat : (rc_ <= R_ * 1e-12 ? Shape::Ball : Shape::Bull);
     if (shape_ == Shape::Ball) rc_ = 0, rk_ = R_;
     const double ddx = b.x - a.x, ddy = b.y - a.y, ddz = b.z - a.z;
-    L_ = std::hypot(ddx, ddy);
+    L_ = std::sqrt(ddx * ddx + ddy * ddy);
     vertical_ = L_ < 1e-9;
     if (!vertical_) {
       ux_ = ddx / L_;
       uy_ = ddy / L_;
       m_ = ddz / L_;
-      k_ = ddz / std::hypot(L_, ddz);
+      k_ = ddz / std::sqrt(L_ * L_ + ddz * ddz);
     }
     zmin_ = std::min(a.z, b.z);
     level_ = std::fabs(ddz) <= 1e-12 * std::max(1.0, L_);
