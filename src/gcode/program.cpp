@@ -1,5 +1,8 @@
 #include "cncstream/gcode/program.hpp"
 
+#include <algorithm>
+#include <limits>
+
 #include "cncstream/gcode/arc_segments.hpp"
 #include "cncstream/gcode/grbl_codes.hpp"
 #include "cncstream/gcode/line_lexer.hpp"
@@ -12,6 +15,39 @@ bool carries_no_gcode(const CleanLine& c) {
 }
 
 }  // namespace
+
+std::vector<double> estimate_line_end_times(const ProgramTrace& trace, const MotionLimits& limits,
+                                            std::size_t line_count) {
+  std::vector<double> end(line_count, 0.0);
+  std::vector<char> seen(line_count, 0);
+  MotionQueue q(limits);
+  double t = 0;
+  auto step = [&] {
+    const std::uint64_t tag = q.current()->tag;
+    const auto a = q.advance(std::numeric_limits<double>::infinity(), {}, true);
+    t += a.time;
+    if (a.completed > 0 && tag < line_count) {
+      end[tag] = t;  // a later block of the same line moves it later
+      seen[tag] = 1;
+    }
+  };
+  bool positioned = false;
+  for (const MotionBlock& b : to_motion_blocks(trace.segments)) {
+    if (!positioned) {
+      q.set_position(b.from);
+      positioned = true;
+    }
+    while (q.full()) step();
+    q.push(b);
+  }
+  while (!q.empty()) step();
+  double last = 0;
+  for (std::size_t i = 0; i < line_count; ++i) {
+    if (seen[i]) last = std::max(last, end[i]);
+    end[i] = last;
+  }
+  return end;
+}
 
 std::vector<std::string_view> split_lines(std::string_view text) {
   std::vector<std::string_view> lines;

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <ctime>
+#include <string>
 
 namespace cncstream::transport {
 
@@ -75,11 +76,14 @@ JobRecord read_job(const Stmt& s) {
   j.ended_at = s.opt_text(8);
   j.outcome = s.opt_text(9);
   j.message = s.text(10);
+  j.resumed_from = s.is_null(11) ? 0 : s.i64(11);
+  j.from_line = s.is_null(12) ? 0 : s.i64(12);
   return j;
 }
 
 constexpr const char* kJobColumns =
-    "id, file, file_sha256, profile, port, mode, total_lines, started_at, ended_at, outcome, message";
+    "id, file, file_sha256, profile, port, mode, total_lines, started_at, ended_at, outcome, message,"
+    " resumed_from, from_line";
 
 }  // namespace
 
@@ -104,6 +108,13 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " id INTEGER PRIMARY KEY AUTOINCREMENT, file TEXT NOT NULL, file_sha256 TEXT NOT NULL,"
          " profile TEXT NOT NULL, port TEXT NOT NULL, mode TEXT NOT NULL, total_lines INTEGER NOT NULL,"
          " started_at TEXT NOT NULL, ended_at TEXT, outcome TEXT, message TEXT NOT NULL DEFAULT '')");
+    // Columns added later: a journal from an older version gains them here.
+    for (const char* add : {"ALTER TABLE jobs ADD COLUMN resumed_from INTEGER",
+                            "ALTER TABLE jobs ADD COLUMN from_line INTEGER"}) {
+      if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
+          std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
+        throw JournalError(path.string() + ": cannot upgrade the jobs table: " + sqlite3_errmsg(db_));
+    }
     exec("CREATE TABLE IF NOT EXISTS progress ("
          " id INTEGER PRIMARY KEY AUTOINCREMENT, job_id INTEGER NOT NULL REFERENCES jobs(id),"
          " at TEXT NOT NULL, lines_ok INTEGER NOT NULL, last_line INTEGER NOT NULL, reason TEXT NOT NULL,"
@@ -150,10 +161,14 @@ std::string Journal::now_iso8601() {
 }
 
 std::int64_t Journal::begin_job(const std::string& file, const std::string& sha256, const std::string& profile,
-                                const std::string& port, const std::string& mode, std::int64_t total_lines) {
+                                const std::string& port, const std::string& mode, std::int64_t total_lines,
+                                std::int64_t resumed_from, std::int64_t from_line) {
   Stmt s(db_, path_,
-         "INSERT INTO jobs(file, file_sha256, profile, port, mode, total_lines, started_at) VALUES(?,?,?,?,?,?,?)");
+         "INSERT INTO jobs(file, file_sha256, profile, port, mode, total_lines, started_at, resumed_from, from_line)"
+         " VALUES(?,?,?,?,?,?,?,?,?)");
   s.bind(1, file).bind(2, sha256).bind(3, profile).bind(4, port).bind(5, mode).bind(6, total_lines).bind(7, now_iso8601());
+  if (resumed_from > 0) s.bind(8, resumed_from).bind(9, from_line);
+  else s.bind_null(8).bind_null(9);
   s.step();
   return sqlite3_last_insert_rowid(db_);
 }

@@ -33,12 +33,25 @@ std::string reason_for(const Event& e) {
 
 }  // namespace
 
-RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
+JobInput job_from_file(const std::filesystem::path& gcode_path) {
+  JobInput j;
+  j.file = gcode_path;
+  j.lines = read_gcode_lines(gcode_path.string());
+  j.file_sha256 = sha256_file(gcode_path);
+  j.total_lines = static_cast<std::int64_t>(j.lines.size());
+  return j;
+}
+
+RunResult StreamRunner::run(const std::filesystem::path& gcode_path) { return run(job_from_file(gcode_path)); }
+
+RunResult StreamRunner::run(const JobInput& job) {
   auto log = [&](const std::string& s) {
     if (opt_.on_log) opt_.on_log(s);
   };
-  const auto file_lines = read_gcode_lines(gcode_path.string());
-  const std::string file_hash = sha256_file(gcode_path);
+  const auto& file_lines = job.lines;
+  const auto& gcode_path = job.file;
+  if (!job.source_lines.empty() && job.source_lines.size() != job.lines.size())
+    throw std::invalid_argument("job input: one source line per line expected");
   auto profiles = load_firmware_profiles(opt_.profiles_dir);
 
   boost::asio::io_context io;
@@ -108,10 +121,15 @@ RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
     if (!done && dirty && now() - last_row >= opt_.progress_interval_s) record("periodic");
   };
 
-  auto start_engine = [&] {
+  // After identification: choose the profile, then (GRBL family) read `$$`.
+  enum class SettingsPhase { NotStarted, Reading, Done } settings_phase = SettingsPhase::NotStarted;
+  double settings_deadline = 0;
+  GrblSettings settings;
+  FirmwareProfile profile;
+  auto choose_profile = [&] {
     const auto& id = identifier.result();
     for (const auto& w : id.warnings) log("warning: " + w);
-    FirmwareProfile profile = id.profile;
+    profile = id.profile;
     if (opt_.force_profile) {
       bool found = false;
       for (const auto& p : profiles)
@@ -121,6 +139,21 @@ RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
         }
       if (!found) throw std::invalid_argument("no firmware profile named '" + *opt_.force_profile + "'");
     }
+  };
+  auto settings_done = [&](const std::string& why) {
+    settings_phase = SettingsPhase::Done;
+    if (!why.empty()) log("warning: controller settings ($$) not read: " + why);
+    else if (opt_.on_settings) opt_.on_settings(settings);
+  };
+  auto on_settings_line = [&](std::string_view line) {
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
+    if (line == "ok") settings_done("");
+    else if (line.rfind("error:", 0) == 0) settings_done("the controller answered " + std::string(line));
+    else if (const auto kv = parse_setting_line(line)) settings[kv->first] = kv->second;
+  };
+
+  auto start_engine = [&] {
+    const auto& id = identifier.result();
     result.profile = profile.id;
     log("controller: " + profile.id + (id.banner.empty() ? "" : " ('" + id.banner + "')") + ", RX " +
         std::to_string(profile.rx_buffer_size) + " bytes, lines up to " + std::to_string(profile.line_length_limit));
@@ -135,18 +168,38 @@ RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
       for (const auto& e : program.errors) all += "\n  " + e;
       throw std::invalid_argument(all);
     }
+    if (!job.source_lines.empty())
+      for (std::size_t i = 0; i < program.lines.size(); ++i) program.lines[i].source_line = job.source_lines[i];
     if (profile.flow == FlowControl::SendResponse) engine = std::make_unique<MarlinSession>(profile);
     else engine = std::make_unique<GrblSession>(profile);
     if (opt_.journal_path) {
       journal = std::make_unique<Journal>(*opt_.journal_path);
-      job_id = journal->begin_job(std::filesystem::absolute(gcode_path).string(), file_hash, profile.id, opt_.port,
-                                  opt_.mode == JobMode::Check ? "check" : "run",
-                                  static_cast<std::int64_t>(file_lines.size()));
+      job_id = journal->begin_job(std::filesystem::absolute(gcode_path).string(), job.file_sha256, profile.id,
+                                  opt_.port, opt_.mode == JobMode::Check ? "check" : "run", job.total_lines,
+                                  job.resumed_from, job.from_line);
       result.job_id = job_id;
     }
     engine->start_job(std::move(program), opt_.mode, now());
     if (!pending_after_id.empty()) engine->on_bytes(std::exchange(pending_after_id, {}), now());
     drain();
+  };
+
+  // Moves on from identification: settings read, then the engine.
+  auto after_identification = [&] {
+    if (engine || !identifier.done()) return;
+    if (settings_phase == SettingsPhase::NotStarted) {
+      choose_profile();
+      if (opt_.read_settings && profile.flow != FlowControl::SendResponse) {
+        settings_phase = SettingsPhase::Reading;
+        settings_deadline = now() + opt_.settings_timeout_s;
+        port.write("$$\n");
+      } else {
+        settings_phase = SettingsPhase::Done;
+      }
+    }
+    if (settings_phase == SettingsPhase::Reading && now() > settings_deadline)
+      settings_done("no answer within " + std::to_string(opt_.settings_timeout_s) + " s");
+    if (settings_phase == SettingsPhase::Done) start_engine();
   };
 
   std::exception_ptr failure;
@@ -170,10 +223,13 @@ RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
           }
           id_splitter.feed(bytes, [&](std::string_view line) {
             if (!identifier.done()) identifier.on_line(line, now());
+            else if (settings_phase == SettingsPhase::Reading) on_settings_line(line);
+            else if (engine) engine->on_bytes(std::string(line) + "\n", now());
             else pending_after_id.append(line).push_back('\n');
           });
           port.write(identifier.take_output());
-          if (identifier.done()) start_engine();
+          after_identification();
+          if (engine) drain();
         });
       },
       [&](const std::string& reason) {
@@ -199,9 +255,9 @@ RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
       guarded([&] {
         const double t = now();
         if (!engine) {
-          identifier.tick(t);
+          if (!identifier.done()) identifier.tick(t);
           port.write(identifier.take_output());
-          if (identifier.done()) start_engine();
+          after_identification();
         } else {
           if (stop_requested_.exchange(false)) {
             log("stop requested: holding, then resetting once motion has stopped");
@@ -223,6 +279,20 @@ RunResult StreamRunner::run(const std::filesystem::path& gcode_path) {
           }
           engine->tick(t);
           drain();
+          if (opt_.on_tick && engine) {
+            RunnerSnapshot snap;
+            snap.now = t;
+            snap.profile = engine->profile().id;
+            snap.progress = engine->progress();
+            snap.progress.check_errors.clear();
+            if (auto* g = dynamic_cast<GrblSession*>(engine.get())) {
+              snap.status = g->status().last();
+              snap.overrides = g->status().overrides();
+              snap.rx_in_flight = g->counter().in_flight_bytes();
+              snap.rx_size = engine->profile().rx_buffer_size;
+            }
+            opt_.on_tick(snap);
+          }
         }
         if (opt_.max_run_s > 0 && t > opt_.max_run_s && !done) {
           if (engine) engine->disconnected();

@@ -61,6 +61,13 @@ struct TimeEstimate {
 };
 TimeEstimate estimate_program_time(const ProgramTrace& trace, const MotionLimits& limits);
 
+// When each line's motion is done, in seconds from the start, through the
+// same planner as estimate_motion_time: entry i is for 0-based line i (a line
+// without motion gets the time of the motion before it). `line_count`
+// entries; the last one is the total motion time. Dwells are not included.
+std::vector<double> estimate_line_end_times(const ProgramTrace& trace, const MotionLimits& limits,
+                                            std::size_t line_count);
+
 // Splits text into lines at '\n' (a trailing '\r' is kept; cleaning drops it).
 std::vector<std::string_view> split_lines(std::string_view text);
 

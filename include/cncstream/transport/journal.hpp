@@ -33,6 +33,8 @@ struct JobRecord {
   std::optional<std::string> ended_at;
   std::optional<std::string> outcome;  // nullopt: never ended (killed, crashed)
   std::string message;
+  std::int64_t resumed_from = 0;  // the job this one resumes (0: a fresh job)
+  std::int64_t from_line = 0;     // the file line the resumed job continued after
 };
 
 struct ProgressRecord {
@@ -57,7 +59,8 @@ class Journal {
   const std::filesystem::path& path() const { return path_; }
 
   std::int64_t begin_job(const std::string& file, const std::string& sha256, const std::string& profile,
-                         const std::string& port, const std::string& mode, std::int64_t total_lines);
+                         const std::string& port, const std::string& mode, std::int64_t total_lines,
+                         std::int64_t resumed_from = 0, std::int64_t from_line = 0);
   void record_progress(const ProgressRecord& p);
   void end_job(std::int64_t job_id, const std::string& outcome, const std::string& message);
 

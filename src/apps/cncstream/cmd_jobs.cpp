@@ -38,6 +38,8 @@ void register_jobs(CLI::App& app, CommandRegistry& registry) {
                 << " lines\n  started " << job->started_at << ", ended " << job->ended_at.value_or("never")
                 << "\n  outcome: " << job->outcome.value_or("interrupted (the process died mid-job)") << "\n";
       if (!job->message.empty()) std::cout << "  " << job->message << "\n";
+      if (job->resumed_from)
+        std::cout << "  resumes job " << job->resumed_from << " after file line " << job->from_line << "\n";
       if (const auto p = j.last_progress(job->id)) {
         std::cout << "  last record (" << p->reason << ", " << p->at << "): " << p->lines_ok
                   << " lines answered ok, last answered file line " << p->last_line << "\n  modal state: "

@@ -1,106 +1,112 @@
-// `cncstream stream FILE PORT`: stream a G-code file to a GRBL-family or
-// Marlin controller. Ctrl-C asks for a controlled stop (hold, wait for the
-// motion to stop, soft reset); a second Ctrl-C forces exit.
-#include <csignal>
+// `cncstream FILE PORT [options]` (also `cncstream stream FILE PORT`): stream a
+// G-code file, or machine an STL: generate the finishing path, show the plan,
+// confirm, stream. PORT may be a device, `auto`, or `sim` (built-in simulator).
+// Ctrl-C or `s` asks for a controlled stop (hold, wait, soft reset).
+#include <fstream>
 #include <iostream>
 #include <memory>
 
-#include "cncstream/protocol/firmware_profile.hpp"
-#include "cncstream/transport/journal.hpp"
-#include "cncstream/transport/port_discovery.hpp"
-#include "cncstream/transport/stream_runner.hpp"
+#include "cncstream/gcode/gcode_writer.hpp"
+#include "cncstream/transport/sha256.hpp"
 #include "commands.hpp"
-#include "keyboard_control.hpp"
+#include "job_session.hpp"
+#include "toolpath_job.hpp"
 
 namespace cncstream::app {
 
 namespace {
 
-transport::StreamRunner* g_runner = nullptr;
-volatile std::sig_atomic_t g_interrupts = 0;
+bool is_stl(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return ext == ".stl";
+}
 
-extern "C" void on_sigint(int) {
-  g_interrupts = g_interrupts + 1;
-  if (g_interrupts >= 2) std::signal(SIGINT, SIG_DFL);
-  if (g_runner) g_runner->request_stop();  // sets an atomic flag only
+// Where a generated program is kept: next to the journal, named by the part
+// and the program's hash, so `cncstream resume` finds the same bytes again.
+std::filesystem::path program_path(const ConnectionOptions& c, const std::string& stl, const std::string& sha) {
+  const auto dir = journal_path(c).parent_path() / "programs";
+  std::filesystem::create_directories(dir);
+  return dir / (std::filesystem::path(stl).stem().string() + "-" + sha.substr(0, 12) + ".nc");
+}
+
+std::string bounds_text(const Box3& b) {
+  return "X " + format_gcode_number(b.lo.x) + " .. " + format_gcode_number(b.hi.x) + ", Y " +
+         format_gcode_number(b.lo.y) + " .. " + format_gcode_number(b.hi.y) + ", Z " + format_gcode_number(b.lo.z) +
+         " .. " + format_gcode_number(b.hi.z);
 }
 
 }  // namespace
 
 void register_stream(CLI::App& app, CommandRegistry& registry) {
   struct Opts {
-    std::string file, port = "auto", serial = "115200", profile, journal;
-    bool check = false, no_journal = false, verbose = false;
+    std::string file, output;
+    ToolpathOptions tp;
+    ConnectionOptions conn;
+    SimCliOptions sim;
   };
   auto o = std::make_shared<Opts>();
-  auto* sub = app.add_subcommand("stream", "Stream a G-code file to the controller (GRBL 1.1, grblHAL, FluidNC, Marlin)");
-  sub->add_option("file", o->file, "G-code file")->required()->check(CLI::ExistingFile);
-  sub->add_option("port", o->port, "Serial port, or 'auto' (the one known controller board)");
-  sub->add_option("--serial", o->serial, "Baud and frame, e.g. 115200 or 115200,8N1");
-  sub->add_option("--profile", o->profile, "Force a firmware profile (grbl-1.1, grblhal, fluidnc, marlin)");
-  sub->add_flag("--check", o->check, "Check-mode pass ($C): report every G-code error without moving");
-  sub->add_option("--journal", o->journal, "Journal database (default: $XDG_STATE_HOME/cncstream/journal.sqlite)");
-  sub->add_flag("--no-journal", o->no_journal, "Do not journal this job");
-  sub->add_flag("-v,--verbose", o->verbose, "Print controller messages and status");
+  auto* sub = app.add_subcommand(
+      "stream",
+      "Stream a G-code file, or machine an STL (finishing path, plan, confirm), to a controller or `sim`. "
+      "The bare form `cncstream FILE PORT ...` is the same command");
+  sub->add_option("file", o->file, "G-code file (.nc .gcode .ngc .tap) or part (.stl)")->required()->check(CLI::ExistingFile);
+  sub->add_option("port", o->conn.port, "Serial port, 'auto' (the one known controller board) or 'sim'")
+      ->capture_default_str();
+  add_connection_options(sub, o->conn);
+  add_sim_options(sub, o->sim);
+  add_toolpath_options(sub, o->tp, /*tool_required=*/false);
+  for (auto* opt : sub->get_options())
+    if (opt->get_group() == "Options" && opt->get_name().rfind("--", 0) == 0 &&
+        std::string("--units --scale --tool --stepover --step --direction --feed --plunge-feed --rpm --safe-z "
+                    "--tolerance --bounds --floor --origin --z-zero --threads ")
+                .find(opt->get_name() + " ") != std::string::npos)
+      opt->group("Tool path (STL input)");
+  sub->add_option("-o,--output", o->output, "STL input: write the generated G-code here (default: next to the journal)")
+      ->group("Tool path (STL input)");
   registry.add(sub, [o] {
-    transport::RunnerOptions ro;
-    if (o->port == "auto") {
-      const auto choice = transport::choose_auto_port(transport::list_ports());
-      if (!choice.port) {
-        std::cerr << "cncstream: error: " << choice.message << "\n";
-        return 2;
+    const auto& c = o->conn;
+    transport::JobInput job;
+    std::optional<VerifyTarget> verify;
+    const auto limits = planning_limits(c, o->sim);
+    const std::string limits_note = c.port == "sim" ? "the simulator's $110-$122"
+                                                    : "GRBL default rates; refined from the controller's $$";
+    if (is_stl(o->file)) {
+      if (o->tp.tool.empty())
+        throw std::invalid_argument(o->file + " is a part: say which cutter machines it with --tool (e.g. ball:3.175)");
+      o->tp.part.stl = o->file;
+      const ToolpathResult r = generate_toolpath(o->tp);
+      const std::string sha = transport::sha256_hex(r.gcode);
+      const std::filesystem::path out = o->output.empty() ? program_path(c, o->file, sha) : std::filesystem::path(o->output);
+      {
+        std::ofstream f(out, std::ios::binary);
+        if (!f) throw std::runtime_error(out.string() + ": cannot open for writing");
+        f << r.gcode;
+        f.close();
+        if (!f) throw std::runtime_error(out.string() + ": write failed");
       }
-      std::cerr << choice.message << "\n";
-      ro.port = choice.port->path;
-    } else {
-      ro.port = o->port;
+      job = transport::job_from_file(out);
+      EtaEstimator eta = estimate_job(job, limits);
+      std::cout << "plan for " << o->file << ":\n"
+                << "  tool: " << r.cutter.description() << " [" << r.cutter.spec() << "]\n"
+                << "  rows: " << r.path.rows.size() << " at " << format_gcode_number(r.path.stepover, 4)
+                << " mm stepover along " << (o->tp.direction == "y" ? "Y" : "X") << ", feed "
+                << format_gcode_number(o->tp.feed) << " mm/min\n"
+                << "  tool tip in work coordinates: " << bounds_text(r.stats.work_bounds) << "\n"
+                << "  work origin: XY at the part's " << o->tp.origin << ", Z0 at the part's " << o->tp.z_zero
+                << " (set G54 there before cutting)\n"
+                << "  program: " << out.string() << ", " << job.total_lines << " lines\n"
+                << "  estimated machining time: " << format_duration(eta.total()) << " (" << limits_note << ")\n"
+                << std::flush;
+      if (!confirm("Start machining on " + c.port + "?", c.yes)) return 2;
+      verify = VerifyTarget{r.work_mesh, r.cutter};
+      return run_session(c, o->sim, job, verify, std::move(eta));
     }
-    ro.serial = transport::parse_serial_settings(o->serial);
-    ro.profiles_dir = protocol::default_profiles_dir();
-    if (!o->profile.empty()) ro.force_profile = o->profile;
-    ro.mode = o->check ? protocol::JobMode::Check : protocol::JobMode::Run;
-    if (!o->no_journal)
-      ro.journal_path = o->journal.empty() ? transport::Journal::default_path() : std::filesystem::path(o->journal);
-    ro.on_log = [](const std::string& s) { std::cerr << s << "\n"; };
-    const bool verbose = o->verbose;
-    ro.on_event = [verbose](const protocol::Event& e) {
-      using protocol::EventKind;
-      switch (e.kind) {
-        case EventKind::LineAnswered: return;
-        case EventKind::Status:
-          if (verbose) std::cerr << "status: " << e.text << "\n";
-          return;
-        case EventKind::Info:
-        case EventKind::CommandAnswered:
-          if (verbose) std::cerr << e.text << "\n";
-          return;
-        case EventKind::LineError:
-          std::cerr << "ERROR at " << e.text << "\n  (the job is held: press Ctrl-C to stop)\n";
-          return;
-        case EventKind::Alarm: std::cerr << "ALARM: " << e.text << "\n"; return;
-        default: std::cerr << to_string(e.kind) << ": " << e.text << "\n"; return;
-      }
-    };
-    transport::StreamRunner runner(ro);
-    g_runner = &runner;
-    auto previous = std::signal(SIGINT, on_sigint);
-    transport::RunResult r;
-    try {
-      KeyboardControl keys(runner);  // restores the terminal when the job ends
-      if (keys.active()) std::cerr << KeyboardControl::help() << "\n";
-      r = runner.run(o->file);
-    } catch (...) {
-      g_runner = nullptr;
-      std::signal(SIGINT, previous);
-      throw;
-    }
-    g_runner = nullptr;
-    std::signal(SIGINT, previous);
-    std::cerr << "outcome: " << to_string(r.outcome) << " (" << r.message << "); " << r.lines_answered
-              << " lines answered, " << r.bytes_written << " bytes in " << r.seconds << " s";
-    if (r.job_id) std::cerr << "; journal job " << r.job_id;
-    std::cerr << "\n";
-    return (r.outcome == protocol::JobOutcome::Completed || r.outcome == protocol::JobOutcome::CheckPassed) ? 0 : 1;
+    job = transport::job_from_file(o->file);
+    EtaEstimator eta = estimate_job(job, limits);
+    std::cout << o->file << ": " << job.total_lines << " lines, estimated machining time "
+              << format_duration(eta.total()) << " (" << limits_note << ")" << std::endl;
+    return run_session(c, o->sim, job, std::nullopt, std::move(eta));
   });
 }
 

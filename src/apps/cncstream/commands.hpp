@@ -32,5 +32,6 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry);
 void register_ports(CLI::App& app, CommandRegistry& registry);
 void register_jobs(CLI::App& app, CommandRegistry& registry);
 void register_stream(CLI::App& app, CommandRegistry& registry);
+void register_resume(CLI::App& app, CommandRegistry& registry);
 
 }  // namespace cncstream::app

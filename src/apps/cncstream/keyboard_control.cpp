@@ -1,5 +1,7 @@
 #include "keyboard_control.hpp"
 
+#include "job_display.hpp"
+
 #include <poll.h>
 #include <termios.h>
 #include <unistd.h>
@@ -10,10 +12,7 @@ namespace {
 termios g_saved{};
 }
 
-const char* KeyboardControl::help() {
-  return "keys: space pause/resume, s stop, +/- feed 10%, ]/[ feed 1%, 0 feed 100%, >/< spindle 10%, "
-         "1/2/3 rapid 100/50/25%, Ctrl-C stop";
-}
+const char* KeyboardControl::help() { return job_keys_help(); }
 
 KeyboardControl::KeyboardControl(transport::StreamRunner& runner) : runner_(runner) {
   if (!::isatty(STDIN_FILENO) || ::tcgetattr(STDIN_FILENO, &g_saved) != 0) return;
@@ -56,6 +55,7 @@ void KeyboardControl::loop() {
       case '1': runner_.request_realtime(Realtime::RapidOvReset); break;
       case '2': runner_.request_realtime(Realtime::RapidOvMedium); break;
       case '3': runner_.request_realtime(Realtime::RapidOvLow); break;
+      case '?': case 'h': show_help_ = !show_help_; break;
       default: break;
     }
   }

@@ -1,7 +1,8 @@
 #pragma once
 // Single-key operator control while a job streams (only when stdin is a
 // terminal): space pause/resume, s stop, + / - feed ±10 %, ] / [ feed ±1 %,
-// 0 feed 100 %, > / < spindle ±10 %, 1 2 3 rapid 100/50/25 %.
+// 0 feed 100 %, > / < spindle ±10 %, 1 2 3 rapid 100/50/25 %, ? toggles the
+// key help in the live display.
 #include <atomic>
 #include <thread>
 
@@ -17,6 +18,7 @@ class KeyboardControl {
   KeyboardControl& operator=(const KeyboardControl&) = delete;
   bool active() const { return active_; }
   static const char* help();
+  bool help_shown() const { return show_help_; }
 
  private:
   void loop();
@@ -24,6 +26,7 @@ class KeyboardControl {
   std::atomic<bool> running_{true};
   bool active_ = false;
   bool paused_ = false;
+  std::atomic<bool> show_help_{false};
   std::thread thread_;
 };
 

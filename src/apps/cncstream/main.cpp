@@ -2,7 +2,10 @@
 // files of this folder (one concern each); main only wires them up.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
+#include <string>
+#include <vector>
 #include <exception>
 #include <iostream>
 
@@ -18,8 +21,19 @@ int main(int argc, char** argv) {
   cncstream::app::register_ports(app, registry);
   cncstream::app::register_jobs(app, registry);
   cncstream::app::register_stream(app, registry);
+  cncstream::app::register_resume(app, registry);
+  // The bare form `cncstream FILE PORT ...` is `cncstream stream FILE PORT ...`:
+  // anything first that is neither a subcommand nor an option is a file.
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (!args.empty() && !args[0].empty() && args[0][0] != '-') {
+    bool known = false;
+    for (const auto* sub : app.get_subcommands({}))
+      if (sub->check_name(args[0])) known = true;
+    if (!known) args.insert(args.begin(), "stream");
+  }
+  std::reverse(args.begin(), args.end());  // CLI11 takes them last-first
   try {
-    app.parse(argc, argv);
+    app.parse(args);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }

@@ -8,9 +8,10 @@
 
 namespace cncstream::app {
 
-void add_toolpath_options(CLI::App* sub, ToolpathOptions& o) {
+void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required) {
   add_part_options(sub, o.part);
-  sub->add_option("--tool", o.tool, "Cutter: flat:D, ball:D, bull:D:r (mm; e.g. ball:3.175, ball:1/8in)")->required();
+  auto* tool = sub->add_option("--tool", o.tool, "Cutter: flat:D, ball:D, bull:D:r (mm; e.g. ball:3.175, ball:1/8in)");
+  if (tool_required) tool->required();
   sub->add_option("--stepover", o.stepover, "Distance between rows, mm")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--step", o.step, "Sampling step along a row, mm (default: min(stepover/4, 0.1))")->check(CLI::NonNegativeNumber);
   sub->add_option("--direction", o.direction, "Row direction: x or y")->check(CLI::IsMember({"x", "y"}))->capture_default_str();
@@ -72,6 +73,9 @@ ToolpathResult generate_toolpath(const ToolpathOptions& o) {
   const XYOrigin xy = o.origin == "center" ? XYOrigin::PartCenter : o.origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
   const ZZero zz = o.z_zero == "bottom" ? ZZero::PartBottom : o.z_zero == "model" ? ZZero::Model : ZZero::PartTop;
   const Vec3 offset = work_offset(box, xy, zz);
+  r.work_offset = offset;
+  r.work_mesh = part.mesh;
+  r.work_mesh.translate(offset);
   MachiningParams mp;
   mp.feed = o.feed;
   mp.plunge_feed = o.plunge_feed;

@@ -31,7 +31,8 @@ struct ToolpathOptions {
   unsigned threads = 0;
 };
 
-void add_toolpath_options(CLI::App* sub, ToolpathOptions& o);
+// `tool_required`: false where a G-code file may be given instead of an STL.
+void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required = true);
 
 struct ToolpathResult {
   std::string gcode;
@@ -39,6 +40,8 @@ struct ToolpathResult {
   RasterPath path;
   Cutter cutter;
   std::size_t facets = 0;
+  Vec3 work_offset;  // model -> work coordinates
+  Mesh work_mesh;    // the part placed in work coordinates (for a verify)
   double seconds_load = 0, seconds_path = 0, seconds_gcode = 0;
   std::string report() const;  // human-readable summary
 };

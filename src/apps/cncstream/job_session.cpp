@@ -1,0 +1,275 @@
+#include "job_session.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "cncsim/settings.hpp"
+#include "cncstream/gcode/program.hpp"
+#include "cncstream/geometry/stl.hpp"
+#include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/transport/journal.hpp"
+#include "cncstream/transport/port_discovery.hpp"
+#include "keyboard_control.hpp"
+#include "live_panel.hpp"
+#include "sim_port.hpp"
+
+namespace cncstream::app {
+
+namespace {
+
+transport::StreamRunner* g_runner = nullptr;
+volatile std::sig_atomic_t g_interrupts = 0;
+
+extern "C" void on_sigint(int) {
+  g_interrupts = g_interrupts + 1;
+  if (g_interrupts >= 2) std::signal(SIGINT, SIG_DFL);
+  if (g_runner) g_runner->request_stop();  // sets an atomic flag only
+}
+
+// "LINE:VALUE" fault specs.
+template <typename T>
+void parse_line_faults(const std::vector<std::string>& specs, const char* flag, std::map<std::size_t, T>& out) {
+  for (const std::string& s : specs) {
+    std::size_t line = 0;
+    double value = 0;
+    char tail = 0;
+    if (std::sscanf(s.c_str(), "%zu:%lf%c", &line, &value, &tail) != 2 || line == 0)
+      throw std::invalid_argument(std::string(flag) + " '" + s + "': expected LINE:VALUE with LINE >= 1");
+    out[line] = static_cast<T>(value);
+  }
+}
+
+std::string limits_text(const gcode::MotionLimits& m) {
+  std::ostringstream o;
+  o << "rates " << m.max_rate.x << "/" << m.max_rate.y << "/" << m.max_rate.z << " mm/min, accel "
+    << m.acceleration.x << "/" << m.acceleration.y << "/" << m.acceleration.z << " mm/s^2";
+  return o.str();
+}
+
+}  // namespace
+
+void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
+  sub->add_option("--serial", o.serial, "Baud and frame, e.g. 115200 or 115200,8N1");
+  sub->add_option("--profile", o.profile, "Force a firmware profile (grbl-1.1, grblhal, fluidnc, marlin)");
+  sub->add_flag("--check", o.check, "Check-mode pass ($C): report every G-code error without moving");
+  sub->add_option("--journal", o.journal, "Journal database (default: $XDG_STATE_HOME/cncstream/journal.sqlite)");
+  sub->add_flag("--no-journal", o.no_journal, "Do not journal this job");
+  sub->add_flag("-v,--verbose", o.verbose, "Print controller messages and status");
+  sub->add_flag("-y,--yes", o.yes, "Do not ask for confirmation before starting");
+  sub->add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines without a terminal")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--timeout", o.timeout_s, "Give up after this many seconds (0: never)")->check(CLI::NonNegativeNumber);
+}
+
+void add_sim_options(CLI::App* sub, SimCliOptions& o) {
+  const char* g = "Simulator (PORT=sim)";
+  sub->add_option("--sim-speed", o.speed, "Simulator time scale: 'max' or K (1 = real time)")->group(g)->capture_default_str();
+  sub->add_flag("--sim-lenient", o.lenient, "Drop overflowing RX bytes like the firmware instead of failing")->group(g);
+  sub->add_option("--sim-settings", o.settings, "Simulator settings file ($$, offsets) kept across runs")->group(g);
+  sub->add_flag("--no-sim-verify", o.no_verify, "Do not cut a stock and verify it (STL jobs verify by default)")->group(g);
+  sub->add_option("--sim-design", o.design, "Design STL to verify a G-code job against (machine coordinates)")->group(g);
+  sub->add_option("--sim-tool", o.tool, "Cutter for --sim-design, e.g. ball:3.175")->group(g);
+  sub->add_option("--sim-png", o.png, "Write the verify deviation map (PNG) here")->group(g);
+  sub->add_option("--sim-resolution", o.resolution, "Stock grid step for the verify, mm")->check(CLI::PositiveNumber)->group(g);
+  sub->add_option("--sim-tolerance", o.tolerance, "Verify tolerance, mm")->check(CLI::PositiveNumber)->group(g);
+  sub->add_option("--sim-drop-every", o.drop_every, "Fault: drop every Nth byte received")->group(g);
+  sub->add_option("--sim-corrupt-every", o.corrupt_every, "Fault: flip a bit in every Nth byte received")->group(g);
+  sub->add_option("--sim-error-at", o.error_at, "Fault LINE:E: answer received line LINE with error:E")->group(g);
+  sub->add_option("--sim-alarm-at", o.alarm_at, "Fault LINE:A: raise ALARM:A at received line LINE")->group(g);
+  sub->add_option("--sim-stall-at", o.stall_at, "Fault LINE:S: stop answering for S seconds at line LINE")->group(g);
+  sub->add_option("--sim-vanish-after", o.vanish_after, "Fault: the port disappears after N answers")->group(g);
+}
+
+std::filesystem::path journal_path(const ConnectionOptions& o) {
+  return o.journal.empty() ? transport::Journal::default_path() : std::filesystem::path(o.journal);
+}
+
+gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOptions& s) {
+  if (c.port == "sim" && !s.settings.empty()) return cncsim::load_store(s.settings).settings.motion_limits();
+  return cncsim::Settings::defaults().motion_limits();
+}
+
+EtaEstimator estimate_job(const transport::JobInput& job, const gcode::MotionLimits& limits) {
+  std::string text;
+  for (const auto& l : job.lines) text.append(l).push_back('\n');
+  const auto trace = gcode::trace_program(text);
+  const auto ends = gcode::estimate_line_end_times(trace, limits, job.lines.size());
+  std::vector<double> by_line(static_cast<std::size_t>(std::max<std::int64_t>(job.total_lines, 0)) + 1, 0.0);
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    const long src = job.source_lines.empty() ? long(i) + 1 : job.source_lines[i];
+    if (src >= 0 && static_cast<std::size_t>(src) < by_line.size())
+      by_line[static_cast<std::size_t>(src)] = std::max(by_line[static_cast<std::size_t>(src)], ends[i]);
+  }
+  return EtaEstimator(std::move(by_line));
+}
+
+bool confirm(const std::string& question, bool yes) {
+  if (yes) return true;
+  if (!::isatty(STDIN_FILENO)) {
+    std::cerr << "cncstream: not starting: no terminal to confirm on; pass --yes to start without asking\n";
+    return false;
+  }
+  std::cerr << question << " [y/N] " << std::flush;
+  std::string answer;
+  if (!std::getline(std::cin, answer)) return false;
+  return answer == "y" || answer == "Y" || answer == "yes";
+}
+
+int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transport::JobInput& job,
+                std::optional<VerifyTarget> verify, std::optional<EtaEstimator> precomputed) {
+  std::unique_ptr<SimPort> sim;
+  transport::RunnerOptions ro;
+  if (c.port == "sim") {
+    SimPortOptions so;
+    so.speed = s.speed;
+    so.strict = !s.lenient;
+    so.settings_file = s.settings;
+    so.faults.drop_every = s.drop_every;
+    so.faults.corrupt_every = s.corrupt_every;
+    so.faults.vanish_after = s.vanish_after;
+    parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
+    parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
+    parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
+    if (!s.design.empty()) {
+      if (s.tool.empty()) throw std::invalid_argument("--sim-design needs --sim-tool (the cutter that cuts it)");
+      verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool)};
+    }
+    if (verify && !s.no_verify) {
+      so.design = verify->design;
+      so.cutter = verify->cutter;
+      so.resolution = s.resolution;
+      so.tolerance = s.tolerance;
+      so.png = s.png;
+    }
+    sim = std::make_unique<SimPort>(so);
+    ro.port = sim->path();
+    ro.on_port_opened = [&sim] { sim->start(); };
+    std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << s.speed << ", "
+              << (s.lenient ? "lenient" : "strict") << " RX buffer)\n";
+  } else if (c.port == "auto") {
+    const auto choice = transport::choose_auto_port(transport::list_ports());
+    if (!choice.port) {
+      std::cerr << "cncstream: error: " << choice.message << "\n";
+      return 2;
+    }
+    std::cerr << choice.message << "\n";
+    ro.port = choice.port->path;
+  } else {
+    ro.port = c.port;
+  }
+  ro.serial = transport::parse_serial_settings(c.serial);
+  ro.profiles_dir = protocol::default_profiles_dir();
+  if (!c.profile.empty()) ro.force_profile = c.profile;
+  ro.mode = c.check ? protocol::JobMode::Check : protocol::JobMode::Run;
+  if (!c.no_journal) ro.journal_path = journal_path(c);
+  ro.max_run_s = c.timeout_s;
+
+  const bool tty = ::isatty(STDERR_FILENO);
+  LivePanel panel(stderr, tty, c.progress_interval_s);
+  const gcode::MotionLimits default_limits = planning_limits(c, s);
+  EtaEstimator eta = precomputed ? std::move(*precomputed) : estimate_job(job, default_limits);
+  std::unique_ptr<KeyboardControl> keys;
+
+  ro.on_log = [&panel](const std::string& m) { panel.message(m); };
+  ro.on_settings = [&](const protocol::GrblSettings& settings) {
+    const auto limits = protocol::motion_limits_from(settings);
+    if (!limits) {
+      panel.message("controller settings lack $110-$112/$120-$122: ETA uses GRBL defaults");
+      return;
+    }
+    if (limits->max_rate != default_limits.max_rate || limits->acceleration != default_limits.acceleration ||
+        limits->junction_deviation != default_limits.junction_deviation)
+      eta = estimate_job(job, *limits);
+    panel.message("controller settings: " + limits_text(*limits) + "; estimated machining time " +
+                  format_duration(eta.total()));
+  };
+  const bool verbose = c.verbose;
+  ro.on_event = [&panel, verbose](const protocol::Event& e) {
+    using protocol::EventKind;
+    switch (e.kind) {
+      case EventKind::LineAnswered: return;
+      case EventKind::Status:
+        if (verbose) panel.message("status: " + e.text);
+        return;
+      case EventKind::Info:
+      case EventKind::CommandAnswered:
+        if (verbose) panel.message(e.text);
+        return;
+      case EventKind::LineError:
+        panel.message("ERROR at " + e.text + "\n  (the job is held: press s or Ctrl-C to stop)");
+        return;
+      case EventKind::Alarm: panel.message("ALARM: " + e.text); return;
+      default: panel.message(std::string(to_string(e.kind)) + ": " + e.text); return;
+    }
+  };
+  const std::string title = job.file.filename().string() + " -> " + (c.port == "sim" ? "sim" : ro.port);
+  JobView view;
+  view.title = title;
+  view.total_lines = job.total_lines;
+  ro.on_tick = [&](const transport::RunnerSnapshot& snap) {
+    view.title = title + " (" + snap.profile + ")";
+    view.job_state = protocol::to_string(snap.progress.state);
+    view.line = snap.progress.last_answered_line;
+    view.elapsed_s = snap.now;
+    view.eta_s = eta.remaining(view.line, snap.now);
+    if (snap.status) {
+      view.machine_state = snap.status->state_text;
+      view.wpos = snap.status->wpos;
+      view.mpos = snap.status->mpos;
+    }
+    view.overrides = snap.overrides;
+    if (snap.rx_size > 0) view.buffer_fill = double(snap.rx_in_flight) / double(snap.rx_size);
+    view.show_help = keys && keys->help_shown();
+    panel.update(view, snap.now);
+  };
+
+  transport::StreamRunner runner(ro);
+  g_runner = &runner;
+  auto previous = std::signal(SIGINT, on_sigint);
+  transport::RunResult r;
+  try {
+    keys = std::make_unique<KeyboardControl>(runner);  // restores the terminal when the job ends
+    if (!keys->active()) keys.reset();
+    r = runner.run(job);
+    keys.reset();
+  } catch (...) {
+    keys.reset();
+    g_runner = nullptr;
+    std::signal(SIGINT, previous);
+    throw;
+  }
+  g_runner = nullptr;
+  std::signal(SIGINT, previous);
+  view.job_state = to_string(r.outcome);
+  view.line = r.last_answered_line;
+  view.elapsed_s = r.seconds;
+  view.eta_s = r.outcome == protocol::JobOutcome::Completed ? std::optional<double>(0.0) : std::nullopt;
+  panel.finish(view);
+  std::cout << "outcome: " << to_string(r.outcome) << " (" << r.message << "); " << r.lines_answered
+            << " lines answered, last answered file line " << r.last_answered_line << ", " << r.bytes_written
+            << " bytes in " << format_duration(r.seconds);
+  if (r.job_id) std::cout << "; journal job " << r.job_id;
+  std::cout << std::endl;
+  if (r.outcome == protocol::JobOutcome::Disconnected) {
+    std::cerr << "the controller went away: nothing more will be sent. Check the machine (home it, check the work "
+                 "offset), then continue with: cncstream resume "
+              << (r.job_id ? std::to_string(r.job_id) : std::string("JOB")) << " --from-line " << r.last_answered_line
+              << " PORT\n";
+  }
+  int code = (r.outcome == protocol::JobOutcome::Completed || r.outcome == protocol::JobOutcome::CheckPassed) ? 0 : 1;
+  if (sim) {
+    const auto rep = sim->finish(r.outcome == protocol::JobOutcome::Completed);
+    std::cout << rep.text << std::flush;
+    if (rep.gouged && code == 0) code = 3;
+    if (rep.overflowed) code = 4;
+  }
+  return code;
+}
+
+}  // namespace cncstream::app

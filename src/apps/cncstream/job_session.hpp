@@ -1,0 +1,71 @@
+#pragma once
+// One streaming session as the operator runs it: port (a serial device,
+// `auto`, or `sim` for the built-in simulator), the live display and keys,
+// the journal, and the end-of-job report. Shared by the bare form
+// `cncstream FILE PORT`, `cncstream stream` and `cncstream resume`.
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cncstream/cam/cutter.hpp"
+#include "cncstream/gcode/motion_planner.hpp"
+#include "cncstream/geometry/mesh.hpp"
+#include "cncstream/transport/stream_runner.hpp"
+#include "job_display.hpp"
+
+namespace cncstream::app {
+
+struct ConnectionOptions {
+  std::string port = "auto";
+  std::string serial = "115200";
+  std::string profile, journal;
+  bool no_journal = false, check = false, verbose = false, yes = false;
+  double progress_interval_s = 5;  // plain progress lines without a TTY
+  double timeout_s = 0;            // give up after this long (0: never)
+};
+
+struct SimCliOptions {
+  std::string speed = "max";
+  bool lenient = false;  // strict RX buffer is the default
+  std::string settings;
+  bool no_verify = false;
+  std::string design, tool, png;  // verify a G-code job: design STL (machine coords) + cutter
+  double resolution = 0.1, tolerance = 0.05;
+  std::size_t drop_every = 0, corrupt_every = 0, vanish_after = 0;
+  std::vector<std::string> error_at, alarm_at, stall_at;
+};
+
+// Options after the positional FILE/JOB and PORT.
+void add_connection_options(CLI::App* sub, ConnectionOptions& o);
+void add_sim_options(CLI::App* sub, SimCliOptions& o);
+
+std::filesystem::path journal_path(const ConnectionOptions& o);
+
+// What the simulator should verify the cut against (from an STL job).
+struct VerifyTarget {
+  Mesh design;  // in work = machine coordinates of the sim
+  Cutter cutter;
+};
+
+// Motion limits for a plan shown before connecting: the simulator's settings
+// for `sim`, GRBL's defaults otherwise (the controller's own `$$` replaces
+// them once connected).
+gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOptions& s);
+
+// When each file line's motion ends, for the lines the job sends.
+EtaEstimator estimate_job(const transport::JobInput& job, const gcode::MotionLimits& limits);
+
+// Asks "question [y/N]" on the terminal unless `yes`. Without a TTY and
+// without --yes, refuses (returns false) with a message saying so.
+bool confirm(const std::string& question, bool yes);
+
+// Streams the job; prints the outcome (and the simulator's report). Returns
+// the process exit code: 0 completed / check passed, 1 not completed,
+// 3 the simulator's verify found a gouge, 4 the simulator's RX buffer overflowed.
+int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transport::JobInput& job,
+                std::optional<VerifyTarget> verify, std::optional<EtaEstimator> eta = std::nullopt);
+
+}  // namespace cncstream::app

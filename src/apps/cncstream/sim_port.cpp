@@ -1,0 +1,109 @@
+#include "sim_port.hpp"
+
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+#include "cncstream/cam/deviation.hpp"
+
+namespace cncstream::app {
+
+double parse_sim_speed(const std::string& text) {
+  if (text == "max") return 0;
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !(v > 0))
+    throw std::invalid_argument("--sim-speed '" + text + "': expected 'max' or a positive time scale (1 = real time)");
+  return v;
+}
+
+SimPort::SimPort(SimPortOptions options) : opt_(std::move(options)) {
+  cncsim::MachineOptions mo;
+  if (!opt_.settings_file.empty()) mo.store_path = opt_.settings_file;
+  mo.strict = opt_.strict;
+  mo.faults = opt_.faults;
+  cncsim::PtyOptions po;
+  po.speed = parse_sim_speed(opt_.speed);
+  mo.instant_waits = po.speed <= 0;
+  machine_ = std::make_unique<cncsim::Machine>(mo);
+  if (opt_.design) {
+    if (!opt_.cutter) throw std::invalid_argument("sim verify needs the cutter (--tool)");
+    // Grid nodes exactly on a vertical wall of the design have no single
+    // design height: shift the grid off the part's round coordinates.
+    cncsim::StockBox box = cncsim::stock_box_for(*opt_.design, opt_.resolution);
+    box.lo.x += 0.373 * opt_.resolution;
+    box.lo.y += 0.411 * opt_.resolution;
+    removal_ = std::make_unique<cncsim::MaterialRemoval>(box, *opt_.cutter);
+    removal_->attach(*machine_);
+  }
+  front_ = std::make_unique<cncsim::PtyFrontEnd>(*machine_, po);
+  path_ = front_->slave_path();
+}
+
+void SimPort::start() {
+  if (thread_.joinable() || finished_) return;
+  thread_ = std::thread([this] {
+    try {
+      vanished_ = front_->run(stop_) == cncsim::PtyFrontEnd::Exit::Vanished;
+    } catch (const cncsim::RxOverflowError& e) {
+      fatal_ = std::string("RX buffer overflow (strict): ") + e.what();
+    } catch (const std::exception& e) {
+      fatal_ = e.what();
+    }
+    // Whatever ended the loop, the host must see the port go away.
+    front_.reset();
+  });
+}
+
+SimPort::~SimPort() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+SimPort::Report SimPort::finish(bool let_motion_finish) {
+  Report r;
+  if (finished_) return r;
+  finished_ = true;
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+  if (let_motion_finish && fatal_.empty()) machine_->run_until_idle();
+  std::ostringstream o;
+  o << "sim: " << machine_->lines_received() << " lines received, " << machine_->lines_answered() << " answered, "
+    << machine_->rx_bytes_dropped() << " RX bytes dropped";
+  if (vanished_) o << "; vanished (fault injection)";
+  o << "\n";
+  const auto mpos = machine_->machine_position();
+  const auto wpos = machine_->work_position();
+  char pos[160];
+  std::snprintf(pos, sizeof pos, "sim: final position MPos %.3f,%.3f,%.3f WPos %.3f,%.3f,%.3f, state ", mpos.x, mpos.y,
+                mpos.z, wpos.x, wpos.y, wpos.z);
+  o << pos << machine_->state_name() << "\n";
+  if (!fatal_.empty()) {
+    o << "sim: stopped early: " << fatal_ << "\n";
+    r.overflowed = fatal_.find("overflow") != std::string::npos;
+  }
+  if (machine_->rx_bytes_dropped() > 0) r.overflowed = true;
+  if (removal_) {
+    o << "sim: " << removal_->stock().removed_volume() << " mm^3 removed in " << removal_->segments()
+      << " cutting segments\n";
+    const auto heights = design_heights(*opt_.design, removal_->stock().grid());
+    const auto result = compare_to_design(removal_->stock(), heights, opt_.tolerance);
+    o << "verify (" << removal_->cutter().description() << ", grid " << opt_.resolution << " mm):\n"
+      << result.stats.summary() << "\n";
+    r.gouged = result.stats.gouged > 0;
+    if (result.stats.has_gouge) r.largest_gouge_mm = -result.stats.largest_gouge.value;
+    if (!opt_.png.empty()) {
+      write_deviation_png(opt_.png, result, "cncstream sim verify", removal_->cutter().description());
+      o << "verify: deviation map written to " << opt_.png << "\n";
+    }
+  }
+  r.text = o.str();
+  return r;
+}
+
+}  // namespace cncstream::app

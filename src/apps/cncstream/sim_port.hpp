@@ -1,0 +1,79 @@
+#pragma once
+// `PORT=sim`: the built-in simulator (cncsim's Machine behind its pty front
+// end) served from a thread of this process, so the streamer talks to it
+// exactly as to a USB serial port. Optionally cuts a stock block and, at the
+// end, verifies the machined surface against the design.
+#include <atomic>
+#include <exception>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "cncsim/machine.hpp"
+#include "cncsim/pty_frontend.hpp"
+#include "cncsim/removal.hpp"
+#include "cncstream/cam/cutter.hpp"
+#include "cncstream/geometry/mesh.hpp"
+
+namespace cncstream::app {
+
+struct SimPortOptions {
+  std::string speed = "max";  // "max" or a time scale K (1 = real time)
+  bool strict = true;         // an RX overflow stops the simulator (a streamer bug)
+  std::string settings_file;  // persistent $$ / offsets; empty: defaults
+  cncsim::Faults faults;
+  // Verification: the design in machine coordinates (the sim's G54 is zero,
+  // so machine = work coordinates) and the cutter that cuts it.
+  std::optional<Mesh> design;
+  std::optional<Cutter> cutter;
+  double resolution = 0.1;  // stock grid step, mm
+  double tolerance = 0.05;  // verify tolerance, mm
+  std::string png;          // deviation map written after the job
+};
+
+// Parses "max" or a positive number; throws std::invalid_argument naming the text.
+double parse_sim_speed(const std::string& text);
+
+class SimPort {
+ public:
+  explicit SimPort(SimPortOptions options);
+  ~SimPort();
+  SimPort(const SimPort&) = delete;
+  SimPort& operator=(const SimPort&) = delete;
+
+  // Starts serving the pty. Call it once the host has opened (and flushed)
+  // the port, so the power-on banner reaches the host like a DTR reset's.
+  void start();
+  // The pty slave to open as the serial port.
+  const std::string& path() const { return path_; }
+  // The controller's settings ($$), for planning before connecting.
+  const cncsim::Settings& settings() const { return machine_->settings(); }
+
+  // Stops the simulator (after the job) and describes what it saw: lines,
+  // RX overflow, material removed and, with a design, the verify result.
+  // Writes the deviation PNG if one was asked for.
+  struct Report {
+    std::string text;
+    bool overflowed = false;
+    bool gouged = false;
+    std::optional<double> largest_gouge_mm;  // deepest below-design node
+  };
+  // `let_motion_finish`: the job completed, so let the planner run out (in
+  // virtual time) before the final position and the cut are read.
+  Report finish(bool let_motion_finish);
+
+ private:
+  SimPortOptions opt_;
+  std::unique_ptr<cncsim::Machine> machine_;
+  std::unique_ptr<cncsim::MaterialRemoval> removal_;
+  std::unique_ptr<cncsim::PtyFrontEnd> front_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+  std::string path_;
+  std::string fatal_;  // what ended the simulator early (strict overflow)
+  bool vanished_ = false;
+  bool finished_ = false;
+};
+
+}  // namespace cncstream::app

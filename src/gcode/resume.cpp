@@ -1,0 +1,92 @@
+#include "cncstream/gcode/resume.hpp"
+
+#include <algorithm>
+#include <sstream>
+
+#include "cncstream/gcode/gcode_writer.hpp"
+
+namespace cncstream::gcode {
+
+namespace {
+std::string num(double v) { return format_gcode_number(v, 4); }
+}  // namespace
+
+std::vector<std::string> resume_preamble(const ParserState& at, const ResumeOptions& o) {
+  const ModalState& m = at.modal;
+  std::vector<std::string> out;
+  std::ostringstream l;
+  auto emit = [&] {
+    out.push_back(l.str());
+    l.str({});
+  };
+  const Vec3 p = at.work_position();  // where the tool was, in the program's work coordinates
+  const Vec3 g92 = at.g92;
+  const double safe = std::max(o.safe_z, p.z);
+  l << "G21 G90 G94 G17";
+  emit();
+  if (o.machine_safe_z) {
+    l << "G53 G0 Z" << num(*o.machine_safe_z);
+    emit();
+  }
+  l << "G" << 54 + m.coord_select;
+  emit();
+  // A reset clears G92; moves go in WCS-only coordinates (work + G92) until
+  // G92 is set again from the known position.
+  l << "G92.1";
+  emit();
+  if (m.tool_length_dynamic) l << "G43.1 Z" << num(at.tool_length_offset);
+  else l << "G49";
+  emit();
+  l << "G0 Z" << num(safe + g92.z);
+  emit();
+  l << "G0 X" << num(p.x + g92.x) << " Y" << num(p.y + g92.y);
+  emit();
+  if (g92 != Vec3{}) {
+    l << "G92 X" << num(p.x) << " Y" << num(p.y) << " Z" << num(safe);
+    emit();
+  }
+  if (m.spindle != SpindleState::Off) l << (m.spindle == SpindleState::CW ? "M3" : "M4") << " S" << num(at.spindle_speed);
+  else l << "M5";
+  emit();
+  if (m.mist) {
+    l << "M7";
+    emit();
+  }
+  if (m.flood) {
+    l << "M8";
+    emit();
+  }
+  if (!m.mist && !m.flood) {
+    l << "M9";
+    emit();
+  }
+  if ((m.spindle != SpindleState::Off || m.mist || m.flood) && o.dwell_s > 0) {
+    l << "G4 P" << num(o.dwell_s);
+    emit();
+  }
+  if (p.z < safe) {
+    l << "G1 Z" << num(p.z) << " F" << num(o.plunge_feed);
+    emit();
+  }
+  // The program's own modes last (its units change how F reads).
+  const char* plane = m.plane == Plane::XY ? "G17" : m.plane == Plane::ZX ? "G18" : "G19";
+  l << (m.inches ? "G20" : "G21") << " " << (m.incremental ? "G91" : "G90") << " " << plane << " "
+    << (m.inverse_time ? "G93" : "G94");
+  emit();
+  if (!m.inverse_time && at.feed_rate > 0) {
+    l << "F" << num(m.inches ? at.feed_rate / 25.4 : at.feed_rate);
+    emit();
+  }
+  switch (m.motion) {
+    case MotionMode::Rapid: l << "G0"; break;
+    case MotionMode::Linear: l << "G1"; break;
+    case MotionMode::ArcCW: l << "G2"; break;
+    case MotionMode::ArcCCW: l << "G3"; break;
+    case MotionMode::None: l << "G80"; break;
+    default: break;  // probing is never modal across lines in practice
+  }
+  if (!l.str().empty()) emit();
+  return out;
+}
+
+}  // namespace cncstream::gcode

@@ -1,0 +1,45 @@
+// The operator's main command end to end: STL -> plan -> stream to the
+// built-in simulator (strict RX buffer) -> verify the cut.
+#include <gtest/gtest.h>
+
+#include "app_run.hpp"
+#include "cncstream/transport/journal.hpp"
+
+using namespace apptest;
+
+TEST(MainCommand, PlaqueToTheBuiltInSimulatorCutsWithoutGouge) {
+  const auto r = run_cncstream({plaque(), "sim", "--tool", "ball:3.175", "--stepover", "2", "--sim-resolution", "0.2", "--yes"});
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("tool: 3.175 mm ball-nose end mill")) << r.out;
+  EXPECT_TRUE(r.has("tool tip in work coordinates: X -1.588 .. 121.588")) << r.out;
+  EXPECT_TRUE(r.has("estimated machining time:")) << r.out;
+  EXPECT_TRUE(r.has("outcome: completed")) << r.out;
+  EXPECT_TRUE(r.has(" 0 RX bytes dropped")) << r.out;
+  // Every line answered: the finishing program ends retracted at the last row's end.
+  EXPECT_TRUE(r.has("final position MPos 121.588,101.588,5.000")) << r.out;
+  EXPECT_TRUE(r.has(": 0 gouged,")) << r.out;
+}
+
+TEST(MainCommand, StlWithoutATerminalOrYesIsRefused) {
+  const auto r = run_cncstream({plaque(), "sim", "--tool", "ball:3.175", "--stepover", "3"});
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_TRUE(r.has("pass --yes")) << r.out;
+  EXPECT_FALSE(r.has("outcome:")) << r.out;
+}
+
+TEST(MainCommand, StlWithoutAToolSaysSo) {
+  const auto r = run_cncstream({plaque(), "sim", "--yes"});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.has("--tool")) << r.out;
+}
+
+TEST(MainCommand, SubcommandsStillWork) {
+  const auto info = run_cncstream({"info", plaque()});
+  EXPECT_EQ(info.code, 0) << info.out;
+  EXPECT_TRUE(info.has("plaque.stl")) << info.out;
+  const auto jobs = run_cncstream({"jobs", "--journal", (temp_dir() / "none.sqlite").string()});
+  EXPECT_EQ(jobs.code, 0) << jobs.out;
+  const auto bad = run_cncstream({"no-such-file.nc", "sim"});
+  EXPECT_NE(bad.code, 0);
+  EXPECT_TRUE(bad.has("no-such-file.nc")) << bad.out;
+}
