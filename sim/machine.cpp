@@ -99,8 +99,13 @@ void Machine::run_startup_lines() {
 }
 
 void Machine::soft_reset() {
-  const bool moving = !queue_.empty() || state_ == MachineState::Home ||
-                      (state_ == MachineState::Hold && !queue_.at_rest());
+  // GRBL's mc_reset() alarms in a cycle, homing, jog or while a hold is
+  // still decelerating; a completed hold (Hold:0) clears EXECUTE_HOLD, so a
+  // reset there keeps the position even with blocks left in the planner.
+  const bool held = state_ == MachineState::Hold || state_ == MachineState::Door;
+  const bool moving = (!queue_.empty() && !held) || state_ == MachineState::Home ||
+                      state_ == MachineState::Run || state_ == MachineState::Jog ||
+                      (held && !queue_.at_rest());
   if (moving && !critical_lock_) {
     const int code = state_ == MachineState::Home ? grbl::kAlarmHomingFailReset : grbl::kAlarmAbortCycle;
     state_ = MachineState::Alarm;

@@ -43,3 +43,14 @@ TEST(MainCommand, SubcommandsStillWork) {
   EXPECT_NE(bad.code, 0);
   EXPECT_TRUE(bad.has("no-such-file.nc")) << bad.out;
 }
+
+namespace {
+// Removes the per-process temp folder (journals, programs, logs) at the end.
+struct TempCleanup : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(temp_dir(), ec);
+  }
+};
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new TempCleanup);
+}  // namespace

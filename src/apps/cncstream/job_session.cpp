@@ -190,7 +190,9 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
                   format_duration(eta.total()));
   };
   const bool verbose = c.verbose;
-  ro.on_event = [&panel, verbose](const protocol::Event& e) {
+  transport::StreamRunner* runner_ptr = nullptr;
+  bool interactive = false;
+  ro.on_event = [&panel, verbose, &runner_ptr, &interactive](const protocol::Event& e) {
     using protocol::EventKind;
     switch (e.kind) {
       case EventKind::LineAnswered: return;
@@ -202,7 +204,13 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
         if (verbose) panel.message(e.text);
         return;
       case EventKind::LineError:
-        panel.message("ERROR at " + e.text + "\n  (the job is held: press s or Ctrl-C to stop)");
+        if (interactive) {
+          panel.message("ERROR at " + e.text + "\n  (the job is held: space continues after it, s or Ctrl-C stops)");
+        } else {
+          // Nobody at a terminal can decide: stop (hold, wait, reset).
+          panel.message("ERROR at " + e.text + "\n  (no terminal to decide: stopping the job)");
+          if (runner_ptr) runner_ptr->request_stop();
+        }
         return;
       case EventKind::Alarm: panel.message("ALARM: " + e.text); return;
       default: panel.message(std::string(to_string(e.kind)) + ": " + e.text); return;
@@ -230,12 +238,14 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
   };
 
   transport::StreamRunner runner(ro);
+  runner_ptr = &runner;
   g_runner = &runner;
   auto previous = std::signal(SIGINT, on_sigint);
   transport::RunResult r;
   try {
     keys = std::make_unique<KeyboardControl>(runner);  // restores the terminal when the job ends
     if (!keys->active()) keys.reset();
+    interactive = keys != nullptr;
     r = runner.run(job);
     keys.reset();
   } catch (...) {
