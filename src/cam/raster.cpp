@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -23,14 +24,57 @@ std::size_t intervals(double length, double max_step) {
   return std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(length / max_step - 1e-9)));
 }
 
-// Simplify a profile sampled at (u_k, z_k) and map the kept samples back to
-// points via `to_point`.
-template <class ToPoint>
-Polyline simplified(const std::vector<double>& u, const std::vector<double>& z, double tol, ToPoint to_point) {
-  Polyline out;
-  for (std::size_t k : simplify_profile_above(u, z, tol)) out.push_back(to_point(u[k], z[k]));
-  return out;
+// Positions 0 = s_0 < ... < s_n = length along one axis. Without a lattice
+// (lat = 0) evenly spread with spacing at most max_step. With one: uniform
+// spacing d, the largest lattice multiple not above max_step (at least one
+// lattice step), and a shorter last interval where length is not a multiple
+// of d. `uniform` is how many leading positions are k * d (all of them
+// without a lattice).
+struct AxisSamples {
+  std::vector<double> s;
+  std::size_t uniform = 0;
+  double d = 0;
+};
+
+AxisSamples axis_samples(double length, double max_step, double lat) {
+  AxisSamples a;
+  if (!(length > 0)) {
+    a.s = {0.0};
+    a.uniform = 1;
+    return a;
+  }
+  if (lat <= 0) {
+    const std::size_t n = intervals(length, max_step);
+    a.d = length / double(n);
+    for (std::size_t k = 0; k <= n; ++k) a.s.push_back(k == n ? length : double(k) * a.d);
+    a.uniform = a.s.size();
+    return a;
+  }
+  a.d = std::max(1.0, std::floor(max_step / lat + 1e-9)) * lat;
+  const auto n = static_cast<std::size_t>(std::floor(length / a.d + 1e-9));
+  for (std::size_t k = 0; k <= n; ++k) a.s.push_back(double(k) * a.d);
+  a.uniform = a.s.size();
+  if (length - a.s.back() > 0.5 * lat) a.s.push_back(length);
+  return a;
 }
+
+// Bounds snapped inward onto the lattice through `origin` (unchanged without one).
+std::pair<double, double> snap_inward(double lo, double hi, double origin, double lat) {
+  if (lat <= 0) return {lo, hi};
+  const double a = origin + std::ceil((lo - origin) / lat - 1e-9) * lat;
+  const double b = origin + std::floor((hi - origin) / lat + 1e-9) * lat;
+  return b >= a ? std::pair{a, b} : std::pair{a, a};
+}
+
+// A sample of the CL profile along a pass. stair_z: the move into this
+// sample from the previous one crosses a step narrower than the path can
+// resolve (one lattice step): it is made as a staircase at stair_z (up, across,
+// down) instead of a diagonal that would shave the wall beside the step.
+struct Sample {
+  double u, z;
+  double stair_z = -HUGE_VAL;
+  bool stair() const { return stair_z > -HUGE_VAL; }
+};
 
 // Between two exact CL samples the CL surface can rise above the chord only
 // where it bends down: by at most L^2 / (8 rk) for a chord of length L (the
@@ -42,8 +86,9 @@ Polyline simplified(const std::vector<double>& u, const std::vector<double>& z, 
 struct StepRefiner {
   const ClEngine& engine;
   double rk;
+  double lattice = 0;       // midpoints are snapped to multiples of this (0: exact halves)
   double eps = 1e-4;        // mm of possible chord sag accepted
-  double min_width = 1e-4;  // mm; narrower intervals are left (a sub-micron side nick at most)
+  double min_width = 1e-4;  // mm; narrower intervals are not split (no lattice)
 
   bool suspicious(double du, double dz) const {
     if (rk > 0) return (du * du + dz * dz) / (8 * rk) > eps;
@@ -53,48 +98,73 @@ struct StepRefiner {
     return std::fabs(dz) > 1e-9;
   }
 
-  // Appends refined samples strictly inside (ua, ub) to out, in order.
+  // Distance from the surface point (um, zm) to the chord, measured across
+  // the chord (how deep the cutter would cut): a vertical error on a
+  // near-vertical part of the CL surface is a sideways nick of a fraction of it.
+  bool off_chord(double ua, double za, double ub, double zb, double um, double zm) const {
+    const double slope = (zb - za) / (ub - ua);
+    const double chord = za + slope * (um - ua);
+    return std::fabs(zm - chord) / std::sqrt(1 + slope * slope) > eps;
+  }
+
+  // Appends the samples of (ua, ub], refined, ending with (ub, zb).
   template <class At>
-  void refine(double ua, double za, double ub, double zb, At at, std::vector<std::pair<double, double>>& out,
-              std::size_t& queries) const {
+  void refine(double ua, double za, double ub, double zb, At at, std::vector<Sample>& out, std::size_t& queries) const {
     const double du = ub - ua;
-    if (du < min_width || !suspicious(du, zb - za)) return;
-    const double um = 0.5 * (ua + ub);
+    if (!suspicious(du, zb - za)) {
+      out.push_back({ub, zb});
+      return;
+    }
+    // ua and ub are lattice multiples; so must a kept midpoint be, strictly inside.
+    const double n = lattice > 0 ? std::round(du / lattice) : 0;
+    const bool splittable = lattice > 0 ? n >= 2 : du >= min_width;
+    const double um = !splittable || lattice <= 0 ? 0.5 * (ua + ub) : ua + std::floor(n / 2) * lattice;
     const double zm = at(um);
     ++queries;
-    // Distance from the surface point to the chord, measured across the chord
-    // (how deep the cutter would cut): a vertical error on a near-vertical
-    // part of the CL surface is a sideways nick of a fraction of it.
-    const double slope = (zb - za) / du;
-    if (std::fabs(zm - 0.5 * (za + zb)) / std::sqrt(1 + slope * slope) <= eps) return;
+    if (!off_chord(ua, za, ub, zb, um, zm)) {
+      out.push_back({ub, zb});
+      return;
+    }
+    if (!splittable) {
+      out.push_back({ub, zb, std::max({za, zb, zm})});
+      return;
+    }
     refine(ua, za, um, zm, at, out, queries);
-    out.emplace_back(um, zm);
     refine(um, zm, ub, zb, at, out, queries);
   }
 };
 
 // Exact CL samples along a straight pass (u = distance along it) -> the
-// refined and merged polyline, mapped to points by `to_point`.
+// refined and merged polyline, mapped to points by `to_point`. Runs between
+// staircases are simplified separately (the staircase corners are kept).
 template <class At, class ToPoint>
 Polyline pass_polyline(const std::vector<double>& us_in, const std::vector<double>& zs_in, const StepRefiner& refiner,
                        double tolerance, At at, ToPoint to_point, std::size_t& queries) {
-  std::vector<double> us, zs;
-  us.reserve(us_in.size() + 16);
-  zs.reserve(zs_in.size() + 16);
-  std::vector<std::pair<double, double>> extra;
+  std::vector<Sample> all;
+  all.reserve(us_in.size() + 16);
   for (std::size_t k = 0; k < us_in.size(); ++k) {
-    if (k > 0) {
-      extra.clear();
-      refiner.refine(us.back(), zs.back(), us_in[k], zs_in[k], at, extra, queries);
-      for (const auto& [eu, ez] : extra) {
-        us.push_back(eu);
-        zs.push_back(ez);
-      }
-    }
-    us.push_back(us_in[k]);
-    zs.push_back(zs_in[k]);
+    if (k == 0) all.push_back({us_in[0], zs_in[0]});
+    else refiner.refine(all.back().u, all.back().z, us_in[k], zs_in[k], at, all, queries);
   }
-  return simplified(us, zs, tolerance, to_point);
+  Polyline out;
+  std::vector<double> us, zs;
+  auto flush = [&] {
+    for (std::size_t k : simplify_profile_above(us, zs, tolerance)) out.push_back(to_point(us[k], zs[k]));
+    us.clear();
+    zs.clear();
+  };
+  for (const Sample& smp : all) {
+    if (smp.stair()) {
+      const double ua = us.back(), za = zs.back();
+      flush();
+      if (smp.stair_z > za) out.push_back(to_point(ua, smp.stair_z));
+      if (smp.stair_z > smp.z) out.push_back(to_point(smp.u, smp.stair_z));
+    }
+    us.push_back(smp.u);
+    zs.push_back(smp.z);
+  }
+  flush();
+  return out;
 }
 
 }  // namespace
@@ -105,52 +175,73 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   if (o.check_subdivisions < 1) throw std::invalid_argument("check_subdivisions must be at least 1");
   const double step = o.step > 0 ? o.step : std::min(o.stepover / 4, 0.1);
   if (!(b.x1 >= b.x0) || !(b.y1 >= b.y0)) throw std::invalid_argument("raster bounds are empty");
+  const double lat = o.lattice ? o.lattice->step : 0;
+  if (o.lattice && !(lat > 0)) throw std::invalid_argument("lattice step must be positive");
 
   const bool along_x = o.direction == RasterDirection::X;
   // u runs along the rows, v across them.
-  const double u0 = along_x ? b.x0 : b.y0, u1 = along_x ? b.x1 : b.y1;
-  const double v0 = along_x ? b.y0 : b.x0, v1 = along_x ? b.y1 : b.x1;
-  const std::size_t nrows = intervals(v1 - v0, o.stepover) + 1;
-  const double dv = nrows > 1 ? (v1 - v0) / double(nrows - 1) : 0;
-  const std::size_t nu = intervals(u1 - u0, step) * std::size_t(o.check_subdivisions) + 1;
-  const double du = nu > 1 ? (u1 - u0) / double(nu - 1) : 0;
+  const auto [u0, u1] = snap_inward(along_x ? b.x0 : b.y0, along_x ? b.x1 : b.y1,
+                                    o.lattice ? (along_x ? o.lattice->x0 : o.lattice->y0) : 0, lat);
+  const auto [v0, v1] = snap_inward(along_x ? b.y0 : b.x0, along_x ? b.y1 : b.x1,
+                                    o.lattice ? (along_x ? o.lattice->y0 : o.lattice->x0) : 0, lat);
+  // Without a lattice: nu - 1 = whole steps times subdivisions, evenly spread.
+  const AxisSamples us_axis =
+      lat > 0 ? axis_samples(u1 - u0, step / o.check_subdivisions, lat)
+              : axis_samples(u1 - u0, (u1 - u0) / double(intervals(u1 - u0, step) * std::size_t(o.check_subdivisions)), 0);
+  const AxisSamples vs_axis = axis_samples(v1 - v0, o.stepover, lat);
+  const std::size_t nu = us_axis.s.size(), nrows = vs_axis.s.size();
+  const double du = us_axis.d, dv = vs_axis.d;
 
-  GridSpec spec;
-  spec.nx = along_x ? nu : nrows;
-  spec.ny = along_x ? nrows : nu;
-  spec.x0 = b.x0;
-  spec.y0 = b.y0;
-  spec.dx = along_x ? (du > 0 ? du : 1) : (dv > 0 ? dv : 1);
-  spec.dy = along_x ? (dv > 0 ? dv : 1) : (du > 0 ? du : 1);
-  const ClGrid grid = engine.compute(spec);
+  // Uniform columns and rows come from one CL grid; a shorter last row is a
+  // second one-row grid, and a shorter last column point queries.
+  auto grid_for = [&](double v_first, std::size_t rows, double v_step) {
+    GridSpec spec;
+    spec.nx = along_x ? us_axis.uniform : rows;
+    spec.ny = along_x ? rows : us_axis.uniform;
+    spec.x0 = along_x ? u0 : v_first;
+    spec.y0 = along_x ? v_first : u0;
+    spec.dx = along_x ? (du > 0 ? du : 1) : (v_step > 0 ? v_step : 1);
+    spec.dy = along_x ? (v_step > 0 ? v_step : 1) : (du > 0 ? du : 1);
+    return engine.compute(spec);
+  };
+  const ClGrid grid = grid_for(v0, vs_axis.uniform, dv);
+  std::optional<ClGrid> last_row;
+  if (nrows > vs_axis.uniform) last_row = grid_for(v0 + vs_axis.s.back(), 1, 1);
 
   RasterPath path;
-  path.bounds = b;
+  path.bounds = along_x ? XYBounds{u0, v0, u1, v1} : XYBounds{v0, u0, v1, u1};
   path.stepover = dv;
   path.step = du * o.check_subdivisions;
-  path.samples = grid.z.size();
+  path.samples = nu * nrows;
 
   auto point = [&](double u, double v, double z) { return along_x ? Vec3{u, v, z} : Vec3{v, u, z}; };
-  const StepRefiner refiner{engine, engine.cutter().corner_radius};
+  auto query = [&](double u, double v) {
+    const Vec3 p = point(u, v, 0);
+    return engine.height_at(p.x, p.y);
+  };
+  const StepRefiner refiner{engine, engine.cutter().corner_radius, lat};
   path.rows.resize(nrows);
   std::vector<std::size_t> row_queries(nrows, 0);
   // Rows are independent: refine and merge them in parallel.
   auto do_row = [&](std::size_t r) {
-    const double v = v0 + double(r) * dv;
+    const double v = v0 + vs_axis.s[r];
     const bool forward = r % 2 == 0;
-    std::vector<double> us(nu), zs(nu);
+    auto cl = [&](std::size_t k) {
+      if (k >= us_axis.uniform) return query(u0 + us_axis.s[k], v);
+      const ClGrid& g = r < vs_axis.uniform ? grid : *last_row;
+      const std::size_t gr = r < vs_axis.uniform ? r : 0;
+      return along_x ? g.at(k, gr) : g.at(gr, k);
+    };
+    // s: distance travelled along the row, a lattice multiple like u - u0 and u1 - u.
+    std::vector<double> ss(nu), zs(nu);
     for (std::size_t k = 0; k < nu; ++k) {
       const std::size_t idx = forward ? k : nu - 1 - k;
-      us[k] = double(k) * du;  // distance travelled along the row
-      zs[k] = along_x ? grid.at(idx, r) : grid.at(r, idx);
+      ss[k] = forward ? us_axis.s[idx] : us_axis.s.back() - us_axis.s[idx];
+      zs[k] = cl(idx);
     }
-    auto along = [&](double s) { return forward ? u0 + s : u1 - s; };
+    auto along = [&](double s) { return forward ? u0 + s : u0 + (us_axis.s.back() - s); };
     path.rows[r] = pass_polyline(
-        us, zs, refiner, o.tolerance,
-        [&](double s) {
-          const Vec3 p = point(along(s), v, 0);
-          return engine.height_at(p.x, p.y);
-        },
+        ss, zs, refiner, o.tolerance, [&](double s) { return query(along(s), v); },
         [&](double s, double z) { return point(along(s), v, z); }, row_queries[r]);
   };
   const unsigned nthreads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), 8));
@@ -162,8 +253,11 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
     });
   for (std::size_t r; (r = next++) < nrows;) do_row(r);
   for (auto& th : pool) th.join();
+  const std::size_t steps_per_row =
+      lat > 0 ? std::size_t(std::ceil((u1 - u0) / (du * o.check_subdivisions) - 1e-9)) + 1
+              : (nu - 1) / std::size_t(o.check_subdivisions) + 1;
   for (std::size_t r = 0; r < nrows; ++r) {
-    path.points_before_merge += (nu - 1) / std::size_t(o.check_subdivisions) + 1;
+    path.points_before_merge += steps_per_row;
     path.points_after_merge += path.rows[r].size();
     path.refinement_queries += row_queries[r];
   }
@@ -174,18 +268,12 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   for (std::size_t r = 0; r + 1 < nrows; ++r) {
     const Vec3 a = path.rows[r].back();
     const double u = along_x ? a.x : a.y;
-    const double va = v0 + double(r) * dv;
-    const std::size_t n = intervals(dv, dl) + 1;
-    auto at = [&](double s) {
-      const Vec3 p = point(u, va + s, 0);
-      return engine.height_at(p.x, p.y);
-    };
-    std::vector<double> s(n), z(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      s[k] = dv * double(k) / double(n - 1);
-      z[k] = at(s[k]);
-    }
-    path.samples += n;
+    const double va = v0 + vs_axis.s[r];
+    auto at = [&](double s) { return query(u, va + s); };
+    const std::vector<double> s = axis_samples(vs_axis.s[r + 1] - vs_axis.s[r], dl, lat).s;
+    std::vector<double> z(s.size());
+    for (std::size_t k = 0; k < s.size(); ++k) z[k] = at(s[k]);
+    path.samples += s.size();
     path.links.push_back(pass_polyline(
         s, z, refiner, o.tolerance, at, [&](double sv, double zz) { return point(u, va + sv, zz); },
         path.refinement_queries));

@@ -11,13 +11,16 @@ TEST(MainCommand, PlaqueToTheBuiltInSimulatorCutsWithoutGouge) {
   const auto r = run_cncstream({plaque(), "sim", "--tool", "ball:3.175", "--stepover", "2", "--sim-resolution", "0.2", "--yes"});
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(r.has("tool: 3.175 mm ball-nose end mill")) << r.out;
-  EXPECT_TRUE(r.has("tool tip in work coordinates: X -1.588 .. 121.588")) << r.out;
+  EXPECT_TRUE(r.has("tool tip in work coordinates: X -1.587 .. 121.587")) << r.out;
   EXPECT_TRUE(r.has("estimated machining time:")) << r.out;
   EXPECT_TRUE(r.has("outcome: completed")) << r.out;
   EXPECT_TRUE(r.has(" 0 RX bytes dropped")) << r.out;
   // Every line answered: the finishing program ends retracted at the last row's end.
-  EXPECT_TRUE(r.has("final position MPos 121.588,101.588,5.000")) << r.out;
+  EXPECT_TRUE(r.has("final position MPos 121.587,101.587,5.000")) << r.out;
   EXPECT_TRUE(r.has(": 0 gouged,")) << r.out;
+  // Not even below tolerance: the path's XY are printed exactly and steps
+  // beside walls are crossed by staircases.
+  EXPECT_TRUE(r.has("no gouge: the machined surface is nowhere below the design")) << r.out;
 }
 
 TEST(MainCommand, StlWithoutATerminalOrYesIsRefused) {

@@ -17,6 +17,16 @@ struct XYBounds {
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
 };
 
+// G-code prints coordinates with a fixed number of decimals. Beside a steep
+// wall the CL surface rises almost vertically, so an XY rounded by half a
+// micron there can put the tool tens of microns into the wall. With a lattice
+// every XY of the path lies on origin + k * step (k integer) in each axis, so
+// the printed coordinates are exactly where the CL was computed.
+struct XYLattice {
+  double step = 0.001;     // mm: 10^-decimals of the G-code
+  double x0 = 0, y0 = 0;   // a lattice point: the work origin in model coordinates
+};
+
 struct RasterOptions {
   double stepover = 0.4;        // distance between rows (upper bound; rows are spread evenly)
   double step = 0;              // sampling step along a row; 0 = min(stepover / 4, 0.1)
@@ -24,6 +34,10 @@ struct RasterOptions {
   RasterDirection direction = RasterDirection::X;
   double tolerance = 0.002;     // merged chords stay within this above the CL surface
   std::optional<XYBounds> bounds;  // default: mesh XY box grown by the cutter radius
+  // Without a lattice rows and samples are spread evenly over the bounds; with
+  // one they are spaced by lattice multiples (the last interval may be
+  // shorter) inside the bounds snapped inward to the lattice.
+  std::optional<XYLattice> lattice;
 };
 
 // One pass of the path: a polyline of tool-tip points, cut in order.
@@ -33,7 +47,7 @@ struct RasterPath {
   std::vector<Polyline> rows;   // in cutting order, alternating direction
   std::vector<Polyline> links;  // links[k] joins rows[k] to rows[k+1] (checked against the CL)
   XYBounds bounds;
-  double stepover = 0;          // actual distances used
+  double stepover = 0;          // actual distances used (the last row or sample may be closer)
   double step = 0;
   std::size_t samples = 0;      // CL points computed (including check points)
   std::size_t points_before_merge = 0;

@@ -1,6 +1,7 @@
 #include "toolpath_job.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <sstream>
 
 #include "cncstream/cam/cl_engine.hpp"
@@ -65,18 +66,20 @@ ToolpathResult generate_toolpath(const ToolpathOptions& o) {
     const auto v = parse_bounds(o.bounds);
     b = {v[0], v[1], v[2], v[3]};
   }
-  r.path = build_raster(engine, b, ro);
-  r.seconds_path = seconds_since(t0);
-
-  t0 = std::chrono::steady_clock::now();
   const Box3 box = part.mesh.bounds();
   const XYOrigin xy = o.origin == "center" ? XYOrigin::PartCenter : o.origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
   const ZZero zz = o.z_zero == "bottom" ? ZZero::PartBottom : o.z_zero == "model" ? ZZero::Model : ZZero::PartTop;
   const Vec3 offset = work_offset(box, xy, zz);
+  MachiningParams mp;
+  // Path XY on the G-code's decimal lattice in work coordinates: printed = computed.
+  ro.lattice = XYLattice{std::pow(10.0, -mp.decimals), -offset.x, -offset.y};
+  r.path = build_raster(engine, b, ro);
+  r.seconds_path = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
   r.work_offset = offset;
   r.work_mesh = part.mesh;
   r.work_mesh.translate(offset);
-  MachiningParams mp;
   mp.feed = o.feed;
   mp.plunge_feed = o.plunge_feed;
   mp.rpm = o.rpm;
