@@ -136,11 +136,31 @@ void draw_colour_bar(RgbImage& img, int x, int y, int w, int h, const std::funct
   }
   img.draw_rect(x - 1, y - 1, w + 2, h + 2, kInk);
   const int th = RgbImage::text_height(kTextScale);
+  // Ticks sit at their values; labels whose values are close (a narrow band
+  // of a wide range) are spread apart so no two overlap, in value order.
+  struct Placed {
+    int tick, text;
+    const std::string* label;
+  };
+  std::vector<Placed> placed;
   for (const auto& [t, text] : labels) {
     const int ty = y + static_cast<int>(std::lround((1.0 - std::clamp(t, 0.0, 1.0)) * (h - 1)));
-    img.fill_rect(x + w, ty, 6, 1, kInk);
     // The label's middle (ignoring the descender rows) on the tick.
-    img.draw_text(x + w + 10, ty - (th * 7 / 9) / 2, text, kInk, kTextScale);
+    placed.push_back({ty, ty - (th * 7 / 9) / 2, &text});
+  }
+  std::stable_sort(placed.begin(), placed.end(), [](const Placed& a, const Placed& b) { return a.tick < b.tick; });
+  const int gap = th + 1;
+  for (std::size_t k = 1; k < placed.size(); ++k)
+    placed[k].text = std::max(placed[k].text, placed[k - 1].text + gap);
+  // Pushed past the bar's bottom: shift the stack back up.
+  const int bottom = y + h - (th * 7 / 9) / 2;
+  for (std::size_t k = placed.size(); k-- > 0;) {
+    const int limit = k + 1 < placed.size() ? placed[k + 1].text - gap : bottom;
+    placed[k].text = std::min(placed[k].text, limit);
+  }
+  for (const auto& p : placed) {
+    img.fill_rect(x + w, p.tick, 6, 1, kInk);
+    img.draw_text(x + w + 10, p.text, *p.label, kInk, kTextScale);
   }
 }
 
