@@ -10,6 +10,7 @@ namespace cncstream::protocol {
 namespace {
 
 constexpr double kResetTimeout = 3.0;  // banner expected within this after 0x18
+constexpr double kDrainPollInterval = 0.2;  // status requests while the last moves run out
 
 bool is_active(JobState s) {
   return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping;
@@ -55,6 +56,10 @@ void GrblSession::tick(double now) {
     const auto q = profile_.realtime_byte(Realtime::StatusReport).value_or('?');
     write(std::string(1, static_cast<char>(q)));
     next_poll_ = now + profile_.status_poll_interval_s;
+  }
+  if (draining_ && progress_.state == JobState::Running && !expect_reset_ && now >= drain_poll_at_) {
+    write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::StatusReport).value_or('?'))));
+    drain_poll_at_ = now + kDrainPollInterval;
   }
   if (expect_reset_ && now >= reset_deadline_) {
     emit({EventKind::Warning, "no banner within 3 s after the soft reset; assuming the controller restarted"});
@@ -196,7 +201,12 @@ void GrblSession::maybe_complete() {
   if (next_index_ < program_.lines.size() || in_flight_of(Origin::File) > 0) return;
   if (progress_.state == JobState::HeldOnError) return;  // the operator decides
   if (progress_.mode == JobMode::Run) {
-    finish_job(JobOutcome::Completed, "all " + std::to_string(progress_.total_lines) + " lines answered");
+    if (draining_) return;
+    draining_ = true;
+    idle_reports_ = 0;
+    drain_poll_at_ = now_;  // ask for a status at the next tick
+    emit({EventKind::Info, "all " + std::to_string(progress_.total_lines) +
+                               " lines answered; waiting for the machine to finish its moves"});
   } else if (check_phase_ == CheckPhase::Streaming) {
     // Leaving $C soft-resets the controller: expect a banner.
     check_phase_ = CheckPhase::Leaving;
@@ -255,6 +265,14 @@ void GrblSession::on_status(const StatusReport& raw) {
   const bool hold_unmoved = r.state == MachineState::Hold && r.substate < 0 && r.mpos && last_mpos_ &&
                             *r.mpos == *last_mpos_;
   last_mpos_ = r.mpos;
+  if (draining_ && progress_.state == JobState::Running) {
+    idle_reports_ = r.state == MachineState::Idle ? idle_reports_ + 1 : 0;
+    if (idle_reports_ >= 2) {
+      finish_job(JobOutcome::Completed, "all " + std::to_string(progress_.total_lines) +
+                                            " lines answered and the machine is idle");
+      return;
+    }
+  }
   if (stop_requested_ && !expect_reset_ && progress_.state == JobState::Stopping) {
     // Door:0 ready to resume, Door:1 stopped with the door ajar; 2 and 3 still move.
     const bool still = (r.state == MachineState::Hold && r.substate == 0) || hold_unmoved ||
@@ -339,6 +357,7 @@ void GrblSession::start_job(PreparedProgram program, JobMode mode, double now) {
   progress_.mode = mode;
   progress_.total_lines = program_.lines.size();
   error_seen_ = false;
+  draining_ = false;
   stop_requested_ = false;
   modal_ = ModalState{};
   check_phase_ = CheckPhase::None;
@@ -360,6 +379,7 @@ void GrblSession::set_job_state(JobState s, const std::string& why) {
 
 void GrblSession::finish_job(JobOutcome o, const std::string& text) {
   progress_.outcome = o;
+  draining_ = false;
   if (o == JobOutcome::Completed) progress_.lines_answered = progress_.total_lines;
   stop_requested_ = false;
   progress_.state = JobState::Finished;

@@ -245,6 +245,22 @@ RunResult StreamRunner::run(const JobInput& job) {
         });
       });
 
+  auto report_snapshot = [&](double t) {
+    if (!opt_.on_tick || !engine) return;
+    RunnerSnapshot snap;
+    snap.now = t;
+    snap.profile = engine->profile().id;
+    snap.progress = engine->progress();
+    snap.progress.check_errors.clear();
+    if (auto* g = dynamic_cast<GrblSession*>(engine.get())) {
+      snap.status = g->status().last();
+      snap.overrides = g->status().overrides();
+      snap.rx_in_flight = g->counter().in_flight_bytes();
+      snap.rx_size = engine->profile().rx_buffer_size;
+    }
+    opt_.on_tick(snap);
+  };
+
   boost::asio::steady_timer timer(io);
   timer_cancel = [&] { timer.cancel(); };
   std::function<void()> schedule = [&] {
@@ -279,20 +295,7 @@ RunResult StreamRunner::run(const JobInput& job) {
           }
           engine->tick(t);
           drain();
-          if (opt_.on_tick && engine) {
-            RunnerSnapshot snap;
-            snap.now = t;
-            snap.profile = engine->profile().id;
-            snap.progress = engine->progress();
-            snap.progress.check_errors.clear();
-            if (auto* g = dynamic_cast<GrblSession*>(engine.get())) {
-              snap.status = g->status().last();
-              snap.overrides = g->status().overrides();
-              snap.rx_in_flight = g->counter().in_flight_bytes();
-              snap.rx_size = engine->profile().rx_buffer_size;
-            }
-            opt_.on_tick(snap);
-          }
+          report_snapshot(t);
         }
         if (opt_.max_run_s > 0 && t > opt_.max_run_s && !done) {
           if (engine) engine->disconnected();
@@ -304,6 +307,7 @@ RunResult StreamRunner::run(const JobInput& job) {
   };
   schedule();
   io.run();
+  if (!failure) report_snapshot(now());  // the final state, not the last tick's
   result.bytes_written = port.bytes_written();
   result.seconds = now();
   if (failure) {

@@ -57,3 +57,24 @@ struct TempCleanup : ::testing::Environment {
 };
 const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new TempCleanup);
 }  // namespace
+
+// GRBL answers `ok` when a move is planned, not when it is done: a job is
+// complete only once the controller reports Idle, with the last move run out.
+TEST(MainCommand, CompletionWaitsForTheMachineToStop) {
+  const auto prog = temp_dir() / "long_moves.nc";
+  {
+    std::ofstream f(prog);
+    f << "G21 G90 G94\nG1 X40 F500\nG1 X0 Y10\n";  // 9.6 s of motion at 500 mm/min, 1.9 s at --sim-speed 5
+  }
+  const auto r = run_cncstream({prog.string(), "sim", "--yes", "--sim-speed", "5", "-v"});
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto waiting = r.out.find("waiting for the machine to finish its moves");
+  const auto done = r.out.find("completed: all 3 lines answered and the machine is idle");
+  ASSERT_NE(waiting, std::string::npos) << r.out;
+  ASSERT_NE(done, std::string::npos) << r.out;
+  // While it waited the machine was still moving, and it ended where the program ends.
+  const auto moving = r.out.find("status: Run", waiting);
+  EXPECT_LT(moving, done) << r.out;
+  EXPECT_TRUE(r.has("| completed | Idle |")) << r.out;
+  EXPECT_TRUE(r.has("final position MPos 0.000,10.000,0.000")) << r.out;
+}

@@ -86,10 +86,19 @@ TEST(GrblSession, StreamsWithinBufferAndCompletes) {
   EXPECT_LE(bytes, 127u);
   EXPECT_GT(w.lines.size(), 3u);
   EXPECT_EQ(w.lines[0], "G1X0.123Y4.567F1000");
-  for (int i = 0; i < 200 && s.progress().state == JobState::Running; ++i) {
+  for (int i = 0; i < 200 && s.progress().lines_answered < 40; ++i) {
     s.on_bytes("ok\n", i);
     w.take(s.take_output());
   }
+  // Every line answered, but the planner may still be moving: not complete
+  // until the controller reports Idle twice in a row (the engine asks).
+  EXPECT_EQ(s.progress().state, JobState::Running);
+  s.tick(300);
+  w.take(s.take_output());
+  EXPECT_EQ(w.rt.back(), '?');
+  s.on_bytes("<Run|MPos:1,0,0|FS:1000,0>\n<Idle|MPos:2,0,0|FS:0,0>\n", 300.1);
+  EXPECT_EQ(s.progress().state, JobState::Running);
+  s.on_bytes("<Idle|MPos:2,0,0|FS:0,0>\n", 300.3);
   EXPECT_EQ(s.progress().outcome, JobOutcome::Completed);
   EXPECT_EQ(w.lines.size(), 40u);
   EXPECT_EQ(s.progress().lines_answered, 40u);
@@ -139,7 +148,12 @@ TEST(GrblSession, RandomLinesNeverOverflowTheController) {
         answers += "ok\n";
         ++answered;
       }
+      // Status requests (real-time, never buffered) get Idle once drained.
+      const auto q = std::count(rx.begin(), rx.end(), '?');
+      rx.erase(std::remove(rx.begin(), rx.end(), '?'), rx.end());
+      for (long k = 0; k < q; ++k) answers += rx.empty() ? "<Idle|MPos:0,0,0>\n" : "<Run|MPos:0,0,0>\n";
       s.on_bytes(answers, t += 0.01);
+      s.tick(t);
       ASSERT_LT(t, 1000);
     }
     EXPECT_EQ(answered, lines.size());
@@ -170,6 +184,7 @@ TEST(GrblSession, ErrorHoldsAndReports) {
   s.resume();
   w.take(s.take_output());
   EXPECT_EQ(w.rt, "!~");
+  s.on_bytes("<Idle|MPos:0,0,0>\n<Idle|MPos:0,0,0>\n", 3);
   EXPECT_EQ(s.progress().outcome, JobOutcome::Completed);
 }
 

@@ -90,6 +90,11 @@ class GrblSession final : public ProtocolEngine {
   bool tool_state_reported_ = false;
   bool stop_requested_ = false;
   bool hold_sent_ = false;
+  // Every line answered: the job completes only when the controller reports
+  // Idle twice in a row (its planner still runs up to 15 moves after the last ok).
+  bool draining_ = false;
+  int idle_reports_ = 0;
+  double drain_poll_at_ = 0;
   bool mpg_owned_ = false;
   std::optional<Axes> last_mpos_;
 
