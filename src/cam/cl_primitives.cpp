@@ -1,6 +1,7 @@
 #include "cl_primitives.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace cncstream::cl_detail {
@@ -45,7 +46,47 @@ bool edge_is_redundant(const Mesh& mesh, const CutterShape& cutter, std::uint32_
   return dot(ob - pa, na) >= 0 && dot(oa - pa, nb) >= 0;
 }
 
+// A convex (ridge) edge: each facet's far vertex lies below the other's plane.
+bool edge_is_convex(const Mesh& mesh, std::uint32_t a, std::uint32_t b, const FacetSlot& slot, Vec3& na, Vec3& nb) {
+  if (slot.count != 2 || slot.facet[0] == slot.facet[1]) return false;
+  const Vec3 pa = mesh.vertices[a], pb = mesh.vertices[b];
+  const Vec3 oa = mesh.vertices[slot.opposite[0]], ob = mesh.vertices[slot.opposite[1]];
+  na = upward_normal(pa, pb, oa);
+  nb = upward_normal(pa, pb, ob);
+  if (na.z < kSteepNz || nb.z < kSteepNz) return false;
+  return dot(ob - pa, na) < 0 && dot(oa - pa, nb) < 0;
+}
+
 }  // namespace
+
+EdgeBand edge_band(const Vec3& a, const Vec3& b, const Vec3& na, const Vec3& nb, const CutterShape& c) {
+  const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
+  const double L = std::sqrt(dx * dx + dy * dy), len = std::sqrt(L * L + dz * dz);
+  if (!(L > 1e-12 * (1 + len))) return {};  // (near) vertical edge: no band
+  const double ux = dx / L, uy = dy / L;
+  const double sin_b = dz / len, cos_b = L / len;
+  // In the plane normal to the edge: w horizontal (the direction of d), bv
+  // the upward direction. A contact normal at angle phi from bv has
+  // w-component sin(phi), and the node lies at d = g(sin phi) from the line.
+  const Vec3 w{uy, -ux, 0}, bv{-sin_b * ux, -sin_b * uy, cos_b};
+  const double pa = std::atan2(dot(na, w), dot(na, bv)), pb = std::atan2(dot(nb, w), dot(nb, bv));
+  // A little wider than exact: at the band's ends the edge and facet contacts agree.
+  const double margin = 1e-7;
+  const double k2 = sin_b * sin_b;
+  auto g = [&](double phi) {
+    phi = std::clamp(phi, -0.5 * M_PI, 0.5 * M_PI);
+    const double u = std::sin(phi), au = std::fabs(u);
+    const double q = std::sqrt(au * au + k2 * (1 - au * au));
+    const double d = c.rc > 0 ? (q > 0 ? au * (c.rk + c.rc / q) : c.R) : au * c.rk;
+    return std::copysign(std::min(d, c.R), u);
+  };
+  EdgeBand band{g(std::min(pa, pb) - margin), g(std::max(pa, pb) + margin)};
+  const double pad = 1e-7 * (1 + c.R);
+  band.lo -= pad;
+  band.hi += pad;
+  if (band.lo <= -c.R && band.hi >= c.R) return {};
+  return band;
+}
 
 ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool skip_concave) {
   ClPrimitives out;
@@ -62,6 +103,7 @@ ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool
   std::vector<MeshEdge> all = unique_edges(mesh);  // sorted by (a, b)
   out.edges_total = all.size();
   std::vector<std::uint8_t> drawn(all.size(), 1);
+  std::vector<EdgeBand> bands;
   if (skip_concave && !all.empty()) {
     // Edge lookup by lower vertex: edges are sorted by (a, b).
     std::vector<std::uint32_t> first(nv + 1, 0);
@@ -86,14 +128,28 @@ ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool
         }
       }
     }
-    for (std::size_t e = 0; e < all.size(); ++e)
-      if (all[e].uses == 2 && edge_is_redundant(mesh, cutter, all[e].a, all[e].b, slots[e])) drawn[e] = 0;
+    bands.assign(all.size(), EdgeBand{});
+    for (std::size_t e = 0; e < all.size(); ++e) {
+      if (all[e].uses != 2) continue;
+      if (edge_is_redundant(mesh, cutter, all[e].a, all[e].b, slots[e])) {
+        drawn[e] = 0;
+        continue;
+      }
+      Vec3 na, nb;
+      if (edge_is_convex(mesh, all[e].a, all[e].b, slots[e], na, nb))
+        bands[e] = edge_band(mesh.vertices[all[e].a], mesh.vertices[all[e].b], na, nb, cutter);
+    }
   }
 
   std::vector<std::uint8_t> covered(nv, 0);
+  struct Drawn {
+    std::array<std::uint32_t, 2> ab;
+    EdgeBand band;
+  };
+  std::vector<Drawn> drawn_edges;
   for (std::size_t e = 0; e < all.size(); ++e) {
     if (!drawn[e]) continue;
-    out.edges.push_back({all[e].a, all[e].b});
+    drawn_edges.push_back({{all[e].a, all[e].b}, bands.empty() ? EdgeBand{} : bands[e]});
     covered[all[e].a] = covered[all[e].b] = 1;
   }
   all.clear();
@@ -106,10 +162,18 @@ ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool
   // Highest first: the rasterizer and the point query then meet the
   // primitives most likely to set the envelope early and cull the rest.
   const auto& V = mesh.vertices;
-  std::sort(out.edges.begin(), out.edges.end(), [&](const auto& p, const auto& q) {
+  std::sort(drawn_edges.begin(), drawn_edges.end(), [&](const Drawn& dp, const Drawn& dq) {
+    const auto& p = dp.ab;
+    const auto& q = dq.ab;
     const double zp = std::fmax(V[p[0]].z, V[p[1]].z), zq = std::fmax(V[q[0]].z, V[q[1]].z);
     return zp != zq ? zp > zq : p < q;
   });
+  out.edges.reserve(drawn_edges.size());
+  out.edge_bands.reserve(drawn_edges.size());
+  for (const auto& d : drawn_edges) {
+    out.edges.push_back(d.ab);
+    out.edge_bands.push_back(d.band);
+  }
   std::sort(out.vertices.begin(), out.vertices.end(), [&](std::uint32_t p, std::uint32_t q) {
     return V[p].z != V[q].z ? V[p].z > V[q].z : p < q;
   });

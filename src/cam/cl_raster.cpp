@@ -212,13 +212,40 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
 
   for (const std::uint32_t* p = c.edges.begin(tile); p != c.edges.end(tile); ++p) {
     const auto& ab = c.prims.edges[*p];
-    const EdgeGeom e = make_edge(c.mesh.vertices[ab[0]], c.mesh.vertices[ab[1]]);
-    draw(node_range(e.xmin - R, e.xmax + R, g.x0, g.dx, g.nx), node_range(e.ymin - R, e.ymax + R, g.y0, g.dy, g.ny),
-         e.zmax,
+    const Vec3 va = c.mesh.vertices[ab[0]], vb = c.mesh.vertices[ab[1]];
+    const EdgeGeom e = make_edge(va, vb);
+    const EdgeBand band = c.prims.edge_bands[*p];
+    auto range_x = node_range(e.xmin - R, e.xmax + R, g.x0, g.dx, g.nx);
+    auto range_y = node_range(e.ymin - R, e.ymax + R, g.y0, g.dy, g.ny);
+    if (!band.trimmed() || e.L == 0) {
+      draw(range_x, range_y, e.zmax,
+           [&](double xa, double ya, double xb, double yb, bool exact) {
+             return exact ? rect_segment_distance(e, xa, ya, xb, yb) : rect_segment_distance_lb(e, xa, ya, xb, yb);
+           },
+           [&](double x, double y, double current) { return edge_drop_above(e, c.cutter, x, y, current); });
+      continue;
+    }
+    // A trimmed edge: inside its band the full edge contact, outside only its
+    // end points (see EdgeBand). Blocks wholly outside the band are bounded by
+    // their distance to the end points.
+    auto side = [&](double x, double y) { return (x - e.ax) * e.uy - (y - e.ay) * e.ux; };
+    auto point_rect = [](const Vec3& v, double xa, double ya, double xb, double yb) {
+      const double dx = std::max(0.0, std::max(xa - v.x, v.x - xb)), dy = std::max(0.0, std::max(ya - v.y, v.y - yb));
+      return std::sqrt(dx * dx + dy * dy);
+    };
+    draw(range_x, range_y, e.zmax,
          [&](double xa, double ya, double xb, double yb, bool exact) {
+           const double d0 = side(xa, ya), d1 = side(xb, ya), d2 = side(xa, yb), d3 = side(xb, yb);
+           const double dmin = std::min({d0, d1, d2, d3}), dmax = std::max({d0, d1, d2, d3});
+           if (dmax < band.lo || dmin > band.hi)
+             return std::min(point_rect(va, xa, ya, xb, yb), point_rect(vb, xa, ya, xb, yb));
            return exact ? rect_segment_distance(e, xa, ya, xb, yb) : rect_segment_distance_lb(e, xa, ya, xb, yb);
          },
-         [&](double x, double y, double current) { return edge_drop_above(e, c.cutter, x, y, current); });
+         [&](double x, double y, double current) {
+           const double d = side(x, y);
+           if (d >= band.lo && d <= band.hi) return edge_drop_above(e, c.cutter, x, y, current);
+           return std::max(vertex_drop_above(va, c.cutter, x, y, current), vertex_drop_above(vb, c.cutter, x, y, current));
+         });
   }
   for (const std::uint32_t* p = c.vertices.begin(tile); p != c.vertices.end(tile); ++p) {
     const Vec3 v = c.mesh.vertices[c.prims.vertices[*p]];

@@ -55,6 +55,8 @@ TEST_P(ClRealMesh, NoGougeTouchedAndConcaveEdgesRedundant) {
     const GridSpec spec = GridSpec::covering(b.lo.x - 2, b.lo.y - 2, b.hi.x + 2, b.hi.y + 2, step, step * 1.07);
     const ClEngine engine(m, c);
     const ClGrid g = engine.compute(spec);
+    // Every edge drawn in full, versus valley edges left out and ridge edges
+    // trimmed to their normal-cone band (the default).
     ClOptions every_edge;
     every_edge.skip_concave_edges = false;
     const ClGrid full = ClEngine(m, c, every_edge).compute(spec);

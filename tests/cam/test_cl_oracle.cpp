@@ -128,6 +128,9 @@ TEST(ClOracle, ManifoldTerrainWithPlateausValleysAndCliff) {
   }
 }
 
+// The default engine leaves out valley and coplanar edges and trims ridge
+// edges to the band where their contact normal lies between their facets'
+// normals; `skip_concave_edges = false` draws every edge in full.
 TEST(ClOracle, LeavingOutConcaveEdgesChangesNothing) {
   auto f = [](double x, double y) {
     double z = std::sin(1.3 * x) * std::cos(1.1 * y) + 0.1 * x;
