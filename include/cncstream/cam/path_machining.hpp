@@ -1,0 +1,24 @@
+#pragma once
+// Machines a tool-tip path into a height-field stock with the simulator's own
+// material removal (HeightFieldStock), split into horizontal bands cut in
+// parallel: each band is its own stock and takes the moves that can reach it,
+// so the result equals one stock cut move by move.
+#include <vector>
+
+#include "cncstream/cam/cl_grid.hpp"
+#include "cncstream/cam/cutter.hpp"
+#include "cncstream/cam/raster.hpp"
+
+namespace cncstream {
+
+// `pieces` are cut in order; consecutive pieces are joined by a straight move
+// from one's last point to the next's first (as in a raster: row, link,
+// row...). `heights` (grid.size() values) is the stock before; returns it after.
+// threads = 0: all cores.
+std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
+                                 const Cutter& cutter, unsigned threads = 0);
+
+// A raster's pieces in cutting order: row 0, link 0, row 1, ...
+std::vector<Polyline> raster_pieces(const RasterPath& path);
+
+}  // namespace cncstream
