@@ -34,6 +34,7 @@ double switch_angle(double rc, double dbase);
 // ball and `radiused` a bull-nose of the same radius.
 struct CutterPair {
   Cutter ball, radiused;
+  CutterPair() = default;
   CutterPair(Cutter ball, Cutter radiused);
   double rc() const { return radiused.radius - radiused.corner_radius; }
   double rk() const { return radiused.corner_radius; }

@@ -32,6 +32,8 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry);
 void register_ports(CLI::App& app, CommandRegistry& registry);
 void register_jobs(CLI::App& app, CommandRegistry& registry);
 void register_stream(CLI::App& app, CommandRegistry& registry);
+void register_select(CLI::App& app, CommandRegistry& registry);
+void register_plan(CLI::App& app, CommandRegistry& registry);
 void register_resume(CLI::App& app, CommandRegistry& registry);
 
 }  // namespace cncstream::app
