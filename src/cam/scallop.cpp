@@ -40,6 +40,7 @@ ScallopMap scallops_from_cut(const GridSpec& g, const std::vector<double>& machi
   m.columns = ncol;
   const std::size_t pairs = rows.size() > 1 ? rows.size() - 1 : 0;
   m.pair_scallop.assign(pairs * ncol, std::numeric_limits<double>::quiet_NaN());
+  m.strip.assign(g.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t p = 0; p < pairs; ++p) {
     // Nodes strictly between the two passes.
     const double lo = rows[p], hi = rows[p + 1];
@@ -56,6 +57,9 @@ ScallopMap scallops_from_cut(const GridSpec& g, const std::vector<double>& machi
         if (std::isfinite(r)) worst = std::max(worst, r);
       }
       if (worst > -HUGE_VAL) m.pair_scallop[p * ncol + c] = std::max(0.0, worst);
+      const double v = m.pair_scallop[p * ncol + c];
+      for (std::size_t j = j0 > 0 && std::fabs(a0 + double(j0 - 1) * da - lo) < 1e-9 ? j0 - 1 : j0; j <= j1; ++j)
+        if (std::isfinite(m.residual[node(c, j)])) m.strip[node(c, j)] = v;
     }
   }
   m.stats = scallop_stats(m.pair_scallop);

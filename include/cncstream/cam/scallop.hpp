@@ -21,6 +21,7 @@ struct ScallopMap {
   std::vector<double> residual;      // machined - design per node; NaN off part
   std::size_t columns = 0;           // nodes along the passes
   std::vector<double> pair_scallop;  // (passes - 1) x columns, pass pair major; NaN where no on-part node lies between
+  std::vector<double> strip;         // per node: the scallop of the pass pair it lies in (a pass counts with the pair above it)
   ScallopStats stats;
 };
 

@@ -147,10 +147,10 @@ SelectionResult run_selection(const SelectionOptions& o) {
     run->estimate_2d = scallop_stats(est);
   }
 
-  // The cutter leaving the smaller residual at each simulation node.
+  // The cutter leaving the smaller scallop, per pass pair and column.
   r.min_scallop_choice.assign(sg.size(), static_cast<std::int8_t>(Choice::None));
   for (std::size_t k = 0; k < sg.size(); ++k) {
-    const double a = r.ball.scallops.residual[k], c = r.radiused.scallops.residual[k];
+    const double a = r.ball.scallops.strip[k], c = r.radiused.scallops.strip[k];
     if (!std::isfinite(a) || !std::isfinite(c)) continue;
     r.min_scallop_choice[k] = std::fabs(a - c) <= 1e-3 ? 2 : static_cast<std::int8_t>(a < c ? Choice::Ball : Choice::Radiused);
   }
@@ -318,7 +318,7 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
                                          {"equal within 1 um", category_colour(0)}};
     CategoryMapOptions mo;
     mo.title = "Cutter leaving the smaller scallop";
-    mo.subtitle = "cut simulation of both finishing rasters, stepover " + mm(r.options.stepover, 3) + " mm";
+    mo.subtitle = "scallop between each pair of passes (cut simulation), stepover " + mm(r.options.stepover, 3) + " mm";
     mo.none_label = "off part";
     const fs::path p = dir / "choice_min_scallop.png";
     write_png(p, render_category_map(map_grid(r.design.grid), c, mc, mo));
