@@ -55,6 +55,7 @@ std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heigh
       const double ylo = sub.y0 - R - grid.dy, yhi = sub.y1() + R + grid.dy;
       for (const Move& m : moves) {
         if (std::max(m.a.y, m.b.y) < ylo || std::min(m.a.y, m.b.y) > yhi) continue;
+        if (std::min(m.a.z, m.b.z) >= top) continue;  // above the stock: cuts nothing
         stock.cut_segment(m.a, m.b, cutter);
       }
       std::copy(stock.heights().begin(), stock.heights().end(), heights.begin() + static_cast<std::ptrdiff_t>(j0 * grid.nx));

@@ -24,6 +24,17 @@ Vec3 work_offset(const Box3& part, XYOrigin xy, ZZero z) {
 
 std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& p,
                               ProgramStats* stats) {
+  // One continuous cut: row, link, row, ...
+  Polyline all;
+  for (std::size_t r = 0; r < path.rows.size(); ++r) {
+    all.insert(all.end(), path.rows[r].begin(), path.rows[r].end());
+    if (r < path.links.size()) all.insert(all.end(), path.links[r].begin(), path.links[r].end());
+  }
+  return pieces_program({all}, offset, p, stats);
+}
+
+std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
+                           ProgramStats* stats) {
   if (!(p.feed > 0) || !(p.plunge_feed > 0)) throw std::invalid_argument("feed rates must be positive");
   if (!(p.rpm >= 0)) throw std::invalid_argument("spindle speed must not be negative");
 
@@ -36,9 +47,8 @@ std::string finishing_program(const RasterPath& path, const Vec3& offset, const 
   };
 
   ProgramStats st;
-  for (const auto* set : {&path.rows, &path.links})
-    for (const auto& pl : *set)
-      for (const auto& v : pl) st.work_bounds.add(place(v));
+  for (const auto& pl : pieces)
+    for (const auto& v : pl) st.work_bounds.add(place(v));
   if (st.work_bounds.empty()) throw std::invalid_argument("tool path is empty");
   if (!(p.safe_z > st.work_bounds.hi.z + 0.5))
     throw std::invalid_argument("safe Z " + format_gcode_number(p.safe_z) + " is not at least 0.5 mm above the highest cut point Z" +
@@ -70,16 +80,16 @@ std::string finishing_program(const RasterPath& path, const Vec3& offset, const 
 
   w.rapid(std::nullopt, std::nullopt, p.safe_z);
   at.z = p.safe_z;
-  const Vec3 first = place(path.rows.front().front());
-  rapid_to(first.x, first.y, std::nullopt);
-  have_at = true;
-  feed_to(first, p.plunge_feed);
-  for (std::size_t r = 0; r < path.rows.size(); ++r) {
-    for (const auto& v : path.rows[r]) feed_to(place(v), p.feed);
-    if (r < path.links.size())
-      for (const auto& v : path.links[r]) feed_to(place(v), p.feed);
+  // Each piece: over its start at the safe Z, plunge, cut, retract.
+  for (const auto& pl : pieces) {
+    if (pl.empty()) continue;
+    const Vec3 first = place(pl.front());
+    rapid_to(first.x, first.y, std::nullopt);
+    have_at = true;
+    feed_to(first, p.plunge_feed);
+    for (const auto& v : pl) feed_to(place(v), p.feed);
+    rapid_to(std::nullopt, std::nullopt, p.safe_z);
   }
-  rapid_to(std::nullopt, std::nullopt, p.safe_z);
   if (p.rpm > 0) w.line("M5");
   w.line("M2");
 

@@ -40,4 +40,9 @@ struct ProgramStats {
 std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& params,
                               ProgramStats* stats = nullptr);
 
+// Separate cuts (e.g. clean-up pieces): for each, a rapid over its start at
+// the safe Z, a plunge at the plunge feed, the cut, a retract.
+std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& params,
+                           ProgramStats* stats = nullptr);
+
 }  // namespace cncstream
