@@ -33,6 +33,8 @@ class MaterialRemoval {
 
   const cncstream::HeightFieldStock& stock() const { return stock_; }
   const cncstream::Cutter& cutter() const { return cutter_; }
+  // A tool change: later moves cut with this cutter.
+  void set_cutter(const cncstream::Cutter& cutter) { cutter_ = cutter; }
   std::size_t segments() const { return segments_; }
 
   // Writes the machined surface as a height field (<path> + <path>.txt).
