@@ -204,7 +204,7 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
     spec.dy = along_x ? (v_step > 0 ? v_step : 1) : (du > 0 ? du : 1);
     return engine.compute(spec);
   };
-  const ClGrid grid = grid_for(v0, vs_axis.uniform, dv);
+  ClGrid grid = grid_for(v0, vs_axis.uniform, dv);
   std::optional<ClGrid> last_row;
   if (nrows > vs_axis.uniform) last_row = grid_for(v0 + vs_axis.s.back(), 1, 1);
 
@@ -278,6 +278,7 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
         s, z, refiner, o.tolerance, at, [&](double sv, double zz) { return point(u, va + sv, zz); },
         path.refinement_queries));
   }
+  if (o.keep_grid) path.grid = std::move(grid);
   return path;
 }
 

@@ -107,9 +107,14 @@ double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter&
     const long i1 = std::min(in, static_cast<long>(std::floor((row.hi - g.x0) / g.dx + 1e-9)));
     double* zrow = z_.data() + static_cast<std::size_t>(j) * g.nx;
     const double py = y - a.y;
+    // Every node of this row is at least `ey` from the tip's path (its
+    // distance in y alone), so the cutter's surface stays at or above
+    // zfloor + h(ey) over all of them: nodes already that low are done.
+    const double ey = std::max({0.0, std::min(a.y, b.y) - y, y - std::max(a.y, b.y)});
+    const double zrow_floor = ey < R ? zfloor + sw.h(ey) : zfloor;
     for (long i = i0; i <= i1; ++i) {
       double& z = zrow[i];
-      if (z <= zfloor) continue;  // nothing of the cutter goes below its tip
+      if (z <= zrow_floor) continue;  // the cutter cannot reach below this here
       const double px = g.x(static_cast<std::size_t>(i)) - a.x;
       double cut;
       if (sw.vertical()) {

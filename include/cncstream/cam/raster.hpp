@@ -38,6 +38,7 @@ struct RasterOptions {
   // one they are spaced by lattice multiples (the last interval may be
   // shorter) inside the bounds snapped inward to the lattice.
   std::optional<XYLattice> lattice;
+  bool keep_grid = false;  // keep the CL grid of the rows in RasterPath::grid (for analyses)
 };
 
 // One pass of the path: a polyline of tool-tip points, cut in order.
@@ -53,6 +54,10 @@ struct RasterPath {
   std::size_t points_before_merge = 0;
   std::size_t points_after_merge = 0;
   std::size_t refinement_queries = 0;  // point queries spent on steep intervals
+  // With RasterOptions::keep_grid: the exact CL grid the rows were sampled
+  // from (rows at the stepover, the check step along them; a shorter last
+  // row or column is not in it).
+  ClGrid grid;
 };
 
 XYBounds default_bounds(const Mesh& mesh, const Cutter& cutter);

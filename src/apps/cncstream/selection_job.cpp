@@ -2,7 +2,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <chrono>
+#include <exception>
+#include <functional>
+#include <mutex>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -82,28 +86,27 @@ SelectionResult run_selection(const SelectionOptions& o) {
   const XYBounds b = default_bounds(mesh, r.pair.ball);
   ClOptions clo;
   clo.threads = o.threads;
+  // Both finishing rasters on the G-code's lattice, as `toolpath` makes them;
+  // their CL grids (every CL point of every pass) are where the choice is made.
   t0 = std::chrono::steady_clock::now();
   const ClEngine e_ball(mesh, r.pair.ball, clo), e_rad(mesh, r.pair.radiused, clo);
-  // Analysis grid: the step along the passes, half a stepover across.
-  const double across = o.stepover / 2;
-  const GridSpec ag = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, along_x ? o.step : across, along_x ? across : o.step);
-  const ClGrid g_ball = e_ball.compute(ag), g_rad = e_rad.compute(ag);
-  r.choice = choose_by_removal(r.pair, g_ball, g_rad);
-  r.profile = slope_profile(r.choice, 5);
-  r.timings.push_back({"CL grids + choice", seconds_since(t0)});
-
-  // Both finishing rasters on the G-code's lattice, as `toolpath` makes them.
-  t0 = std::chrono::steady_clock::now();
   RasterOptions ro;
   ro.stepover = o.stepover;
   ro.step = o.step;
   ro.direction = along_x ? RasterDirection::X : RasterDirection::Y;
   ro.lattice = XYLattice{0.001, -r.work_offset.x, -r.work_offset.y};
+  ro.keep_grid = true;
   r.ball.cutter = r.pair.ball;
   r.radiused.cutter = r.pair.radiused;
   r.ball.path = build_raster(e_ball, b, ro);
   r.radiused.path = build_raster(e_rad, b, ro);
-  r.timings.push_back({"raster paths", seconds_since(t0)});
+  r.timings.push_back({"CL grids + raster paths", seconds_since(t0)});
+  t0 = std::chrono::steady_clock::now();
+  const ClGrid& g_ball = r.ball.path.grid;
+  const GridSpec& ag = g_ball.spec;
+  r.choice = choose_by_removal(r.pair, g_ball, r.radiused.path.grid);
+  r.profile = slope_profile(r.choice, 5);
+  r.timings.push_back({"choice", seconds_since(t0)});
 
   // The cut simulation grid over the part: fine across the passes.
   t0 = std::chrono::steady_clock::now();
@@ -264,7 +267,8 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
     files.push_back(p);
   }
 
-  // Pictures.
+  // Pictures: rendered and encoded side by side (they are independent).
+  std::vector<std::function<void()>> pictures;
   const std::vector<MapCategory> cats = {{"ball " + ball + " removes more", category_colour(1)},
                                          {"radiused " + rad + " removes more", category_colour(2)}};
   auto choice_png = [&](const std::vector<Choice>& ch, const char* name, const std::string& title) {
@@ -275,7 +279,9 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
     mo.subtitle = "d = ball centre z - corner centre z; radiused where d > d_base";
     mo.none_label = "off part";
     const fs::path p = dir / name;
-    write_png(p, render_category_map(map_grid(r.choice.grid), c, cats, mo));
+    pictures.push_back([&r, &cats, p, c = std::move(c), mo] {
+      write_png(p, render_category_map(map_grid(r.choice.grid), c, cats, mo));
+    });
     files.push_back(p);
   };
   choice_png(r.choice.by_volume, "choice_volume.png", "Cutter removing more material (volume criterion)");
@@ -308,7 +314,9 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
     ho.z_max = top > 0 ? top : 1.0;
     ho.vertical_exaggeration = 0;
     const fs::path p = dir / ("scallop_" + safe(run->cutter.spec()) + ".png");
-    write_png(p, render_height_map(map_grid(r.design.grid), v, invalid, ho));
+    pictures.push_back([&r, p, v = std::move(v), invalid = std::move(invalid), ho] {
+      write_png(p, render_height_map(map_grid(r.design.grid), v, invalid, ho));
+    });
     files.push_back(p);
   }
   {
@@ -321,9 +329,29 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
     mo.subtitle = "scallop between each pair of passes (cut simulation), stepover " + mm(r.options.stepover, 3) + " mm";
     mo.none_label = "off part";
     const fs::path p = dir / "choice_min_scallop.png";
-    write_png(p, render_category_map(map_grid(r.design.grid), c, mc, mo));
+    pictures.push_back([&r, p, c = std::move(c), mc, mo] {
+      write_png(p, render_category_map(map_grid(r.design.grid), c, mc, mo));
+    });
     files.push_back(p);
   }
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&] {
+    for (std::size_t k; (k = next++) < pictures.size();) {
+      try {
+        pictures[k]();
+      } catch (...) {
+        std::lock_guard lock(error_mutex);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < std::max(1u, std::thread::hardware_concurrency()); ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
   return files;
 }
 
