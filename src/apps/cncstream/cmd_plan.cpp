@@ -77,7 +77,10 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
       ->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("-o,--output", o->out, "Folder for the G-code files and plan.json")->capture_default_str();
   registry.add(sub, [o] {
-    const SelectionOptions& so = o->sel;
+    SelectionOptions so = o->sel;
+    // The clean-up is placed from the simulated residual: sample it finely
+    // along the passes too (no speed target here, unlike the report).
+    if (so.sim_along <= 0) so.sim_along = std::min(so.stepover, std::max(so.step, 0.2));
     const SelectionResult r = run_selection(so);
     std::cout << r.table();
     const bool along_x = so.direction != "y";

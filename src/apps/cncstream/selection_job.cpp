@@ -114,7 +114,8 @@ SelectionResult run_selection(const SelectionOptions& o) {
   // fall on every pass and on the cusps between them (on level ground);
   // along, one column per stepover: a scallop changes along a pass only as
   // the surface does, so this samples the pass pairs on a square pattern.
-  const double along = std::max(o.step, r.ball.path.stepover), fine = r.ball.path.stepover / 8;
+  const double along = o.sim_along > 0 ? o.sim_along : std::max(o.step, r.ball.path.stepover);
+  const double fine = r.ball.path.stepover / 8;
   const double first = along_x ? r.ball.path.rows.front().front().y : r.ball.path.rows.front().front().x;
   const double lo_across = along_x ? box.lo.y : box.lo.x;
   const double start = first - std::ceil((first - lo_across) / fine - 1e-9) * fine;

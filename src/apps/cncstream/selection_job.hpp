@@ -25,6 +25,7 @@ struct SelectionOptions {
   double step = 0.05;      // along the passes
   std::string direction = "x";
   double scallop_tol = 0.01;
+  double sim_along = 0;    // cut simulation column spacing along the passes; 0: one per stepover
   double feed = 1000, plunge_feed = 300, rpm = 18000;
   double max_rate = 500, accel = 10;  // for predicted times ($110-$112, $120-$122)
   unsigned threads = 0;
