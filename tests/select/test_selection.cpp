@@ -19,6 +19,26 @@ constexpr double kDeg = M_PI / 180;
 
 // Ball and bull-nose of 6 mm with rc = rk = R / 2, as in the thesis.
 CutterPair thesis_pair() { return CutterPair(Cutter::ball(6), Cutter::bull(6, 1.5)); }
+
+// An X raster over [-10, 10]^2 at stepover s, machined on `sim` from a stock
+// at `top`; the scallops and the passes' y.
+struct Scallops {
+  ScallopMap map;
+  std::vector<double> rows;
+};
+Scallops raster_scallops(const Mesh& mesh, const Cutter& cut, double s, const GridSpec& sim, const DesignHeights& design,
+                         double top) {
+  const ClEngine e(mesh, cut);
+  RasterOptions o;
+  o.stepover = s;
+  o.step = 0.1;
+  const RasterPath path = build_raster(e, {-10, -10, 10, 10}, o);
+  const auto machined = machine_path(sim, std::vector<double>(sim.size(), top), raster_pieces(path), cut);
+  Scallops out;
+  for (const auto& r : path.rows) out.rows.push_back(r.front().y);
+  out.map = scallops_from_cut(sim, machined, design, out.rows, true);
+  return out;
+}
 }  // namespace
 
 TEST(Selection, SwitchAnglesOfTheCorrectedFormulas) {
@@ -119,15 +139,9 @@ TEST(Selection, CutSimulationScallopsOnTheSphere) {
   const DesignHeights design = design_heights(sphere, sim);
   for (const Cutter& cut : {c.ball, c.radiused}) {
     SCOPED_TRACE(cut.spec());
-    const ClEngine e(sphere, cut);
-    RasterOptions o;
-    o.stepover = s;
-    o.step = 0.1;
-    const RasterPath path = build_raster(e, {-10, -10, 10, 10}, o);
-    const auto machined = machine_path(sim, std::vector<double>(sim.size(), 40.0), raster_pieces(path), cut);
-    std::vector<double> rows;
-    for (const auto& r : path.rows) rows.push_back(r.front().y);
-    const ScallopMap m = scallops_from_cut(sim, machined, design, rows, true);
+    const Scallops sc = raster_scallops(sphere, cut, s, sim, design, 40.0);
+    const ScallopMap& m = sc.map;
+    const std::vector<double>& rows = sc.rows;
     ASSERT_GT(m.stats.samples, 100u);
     // Near the apex (slope < 2 degrees within 1.2 mm of the top) compare with the 2-D estimate.
     const double flat = scallop_2d(cut, s, 0);
@@ -158,15 +172,7 @@ TEST(Selection, NoScallopOnAFlatForTheRadiusedCutter) {
   const GridSpec sim = GridSpec::covering(-6, -6, 6, 6, 0.1, s / 10);
   const DesignHeights design = design_heights(flat, sim);
   for (const Cutter& cut : {c.ball, c.radiused}) {
-    const ClEngine e(flat, cut);
-    RasterOptions o;
-    o.stepover = s;
-    o.step = 0.1;
-    const RasterPath path = build_raster(e, {-10, -10, 10, 10}, o);
-    const auto machined = machine_path(sim, std::vector<double>(sim.size(), 5.0), raster_pieces(path), cut);
-    std::vector<double> rows;
-    for (const auto& r : path.rows) rows.push_back(r.front().y);
-    const ScallopMap m = scallops_from_cut(sim, machined, design, rows, true);
+    const ScallopMap m = raster_scallops(flat, cut, s, sim, design, 5.0).map;
     ASSERT_GT(m.stats.samples, 100u);
     const double expect = cut.type == CutterType::Ball ? 3 - std::sqrt(9 - s * s / 4) : 0.0;
     EXPECT_NEAR(m.stats.max, expect, 2e-3) << cut.spec();
