@@ -12,8 +12,9 @@ echo "== Release tests"
 ctest --test-dir build/release --output-on-failure -j"$jobs" --timeout 900 --repeat until-pass:2
 
 echo "== ASan+UBSan build"
-cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCNCSTREAM_WERROR=ON \
-  -DCNCSTREAM_SANITIZE=ON -DCNCSTREAM_BUILD_TOOLS=OFF
+# -O1 -g1 with assertions on: line-level stack traces, half the compile time of -O2 -g.
+cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" \
+  -DCNCSTREAM_WERROR=ON -DCNCSTREAM_SANITIZE=ON -DCNCSTREAM_BUILD_TOOLS=OFF
 cmake --build build/asan -j"$jobs"
 echo "== ASan+UBSan tests"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

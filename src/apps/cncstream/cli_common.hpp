@@ -2,6 +2,7 @@
 // Options and loading steps shared by the subcommands that read a part.
 #include <CLI/CLI.hpp>
 
+#include <chrono>
 #include <string>
 
 #include "cncstream/cam/cutter.hpp"
@@ -21,5 +22,9 @@ StlLoadResult load_part(const PartOptions& o);
 
 // "X0,Y0,X1,Y1" -> four numbers, with a clear error.
 std::array<double, 4> parse_bounds(const std::string& text);
+
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 }  // namespace cncstream::app

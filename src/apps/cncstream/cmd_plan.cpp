@@ -18,6 +18,7 @@
 #include "cncstream/gcode/finishing_program.hpp"
 #include "cncstream/gcode/program.hpp"
 #include "commands.hpp"
+#include "job_display.hpp"
 #include "selection_job.hpp"
 
 namespace cncstream::app {
@@ -48,13 +49,6 @@ Option evaluate(const std::string& name, const std::vector<std::string>& program
   }
   o.share_above_tol = on ? double(above) / double(on) : 0;
   return o;
-}
-
-std::string hms(double s) {
-  const long t = std::lround(s);
-  std::ostringstream o;
-  o << t / 3600 << ":" << std::setw(2) << std::setfill('0') << (t / 60) % 60 << ":" << std::setw(2) << t % 60;
-  return o.str();
 }
 
 }  // namespace
@@ -166,7 +160,7 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
               << " mm/s^2 per axis):\n";
     std::cout << "  option                                              time      largest residual   nodes above tol\n";
     for (const auto& op : options)
-      std::cout << "  " << std::left << std::setw(50) << op.name << std::right << std::setw(9) << hms(op.seconds) << "   "
+      std::cout << "  " << std::left << std::setw(50) << op.name << std::right << std::setw(9) << format_duration(op.seconds) << "   "
                 << std::fixed << std::setprecision(4) << std::setw(10) << op.max_residual << " mm   " << std::setprecision(2)
                 << std::setw(10) << 100 * op.share_above_tol << " %\n";
     std::cout << std::defaultfloat;

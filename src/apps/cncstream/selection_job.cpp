@@ -38,10 +38,6 @@ void add_selection_options(CLI::App* sub, SelectionOptions& o) {
 
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 CutterPair parse_pair(const std::string& tools) {
   std::vector<Cutter> cs;
   std::stringstream ss(tools);

@@ -6,6 +6,7 @@
 
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/gcode/gcode_writer.hpp"
+#include "job_display.hpp"
 
 namespace cncstream::app {
 
@@ -30,18 +31,6 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
       ->check(CLI::IsMember({"top", "bottom", "model"}))->capture_default_str();
   sub->add_option("--threads", o.threads, "Worker threads (0: all cores)");
 }
-
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-std::string hms(double s) {
-  const long t = static_cast<long>(s + 0.5);
-  std::ostringstream o;
-  o << t / 3600 << "h " << (t / 60) % 60 << "m " << t % 60 << "s";
-  return o.str();
-}
-}  // namespace
 
 ToolpathResult generate_toolpath(const ToolpathOptions& o) {
   ToolpathResult r;
@@ -112,7 +101,7 @@ std::string ToolpathResult::report() const {
       << " % fewer lines";
   o << ")\n";
   o << "G-code: " << stats.lines << " lines, cut " << format_gcode_number(stats.cut_length / 1000, 2) << " m, feed time "
-    << hms(stats.feed_time_s) << " (no acceleration)\n";
+    << format_duration(stats.feed_time_s) << " (no acceleration)\n";
   o << "tool tip in work coordinates: X " << format_gcode_number(b.lo.x) << " .. " << format_gcode_number(b.hi.x) << ", Y "
     << format_gcode_number(b.lo.y) << " .. " << format_gcode_number(b.hi.y) << ", Z " << format_gcode_number(b.lo.z) << " .. "
     << format_gcode_number(b.hi.z) << "\n";
