@@ -89,4 +89,55 @@ std::vector<std::string> resume_preamble(const ParserState& at, const ResumeOpti
   return out;
 }
 
+namespace {
+
+double distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double len2 = dot(ab, ab);
+  const double t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+  return norm(p - (a + ab * t));
+}
+
+// The 0-based source lines that move the tool, in order, before 1-based line `upto`.
+std::vector<std::size_t> motion_lines_before(const ProgramTrace& trace, std::size_t upto) {
+  std::vector<std::size_t> lines;
+  for (const auto& s : trace.segments) {
+    if (s.source_line >= upto) break;
+    if (lines.empty() || lines.back() != s.source_line) lines.push_back(s.source_line);
+  }
+  return lines;
+}
+
+}  // namespace
+
+ResumeChoice choose_resume_line(const ProgramTrace& trace, std::size_t last_answered,
+                                const std::optional<LastSeen>& seen, std::size_t planner_lines, double tolerance) {
+  planner_lines = std::max<std::size_t>(planner_lines, 1);
+  if (seen && seen->answered > 0 && seen->answered <= last_answered) {
+    const auto lines = motion_lines_before(trace, seen->answered);
+    if (!lines.empty()) {
+      const std::size_t first = lines[lines.size() - std::min(lines.size(), planner_lines)];
+      for (const auto& s : trace.segments) {
+        if (s.source_line < first) continue;
+        if (s.source_line >= seen->answered) break;
+        if (distance_to_segment(seen->work, s.work_from(), s.work_to()) <= tolerance) {
+          std::ostringstream why;
+          why << "the controller last reported the tool at X" << num(seen->work.x) << " Y" << num(seen->work.y)
+              << " Z" << num(seen->work.z) << ", on line " << s.source_line + 1;
+          return {s.source_line, why.str()};
+        }
+      }
+    }
+  }
+  const auto lines = motion_lines_before(trace, last_answered);
+  if (lines.empty()) return {last_answered, "no motion before the last answered line"};
+  const std::size_t back = lines[lines.size() - std::min(lines.size(), planner_lines)];
+  std::ostringstream why;
+  why << (seen ? "the last reported position is on none of the lines the controller had queued"
+               : "no position report was journaled")
+      << "; backing off " << std::min(lines.size(), planner_lines)
+      << " motion lines from the last answered one (the planner may have held them unmade)";
+  return {back, why.str()};
+}
+
 }  // namespace cncstream::gcode

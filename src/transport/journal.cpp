@@ -120,6 +120,14 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " at TEXT NOT NULL, lines_ok INTEGER NOT NULL, last_line INTEGER NOT NULL, reason TEXT NOT NULL,"
          " units TEXT, distance TEXT, plane TEXT, wcs TEXT, motion TEXT, feed REAL, spindle_speed REAL,"
          " spindle TEXT, coolant TEXT, tool INTEGER, wco_x REAL, wco_y REAL, wco_z REAL)");
+    for (const char* add : {"ALTER TABLE progress ADD COLUMN status_x REAL", "ALTER TABLE progress ADD COLUMN status_y REAL",
+                            "ALTER TABLE progress ADD COLUMN status_z REAL",
+                            "ALTER TABLE progress ADD COLUMN status_line INTEGER",
+                            "ALTER TABLE progress ADD COLUMN machine_state TEXT"}) {
+      if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
+          std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
+        throw JournalError(path.string() + ": cannot upgrade the progress table: " + sqlite3_errmsg(db_));
+    }
     exec("CREATE INDEX IF NOT EXISTS progress_job ON progress(job_id, id)");
   } catch (...) {
     sqlite3_close(db_);
@@ -176,7 +184,8 @@ std::int64_t Journal::begin_job(const std::string& file, const std::string& sha2
 void Journal::record_progress(const ProgressRecord& p) {
   Stmt s(db_, path_,
          "INSERT INTO progress(job_id, at, lines_ok, last_line, reason, units, distance, plane, wcs, motion, feed,"
-         " spindle_speed, spindle, coolant, tool, wco_x, wco_y, wco_z) VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+         " spindle_speed, spindle, coolant, tool, wco_x, wco_y, wco_z, status_x, status_y, status_z, status_line,"
+         " machine_state) VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
   const auto& m = p.modal;
   s.bind(1, p.job_id).bind(2, p.at.empty() ? now_iso8601() : p.at).bind(3, p.lines_ok).bind(4, p.last_line);
   s.bind(5, p.reason).bind(6, m.units).bind(7, m.distance).bind(8, m.plane).bind(9, m.wcs).bind(10, m.motion);
@@ -184,6 +193,9 @@ void Journal::record_progress(const ProgressRecord& p) {
   s.bind(15, static_cast<std::int64_t>(m.tool));
   if (m.wco) s.bind(16, (*m.wco)[0]).bind(17, (*m.wco)[1]).bind(18, (*m.wco)[2]);
   else s.bind_null(16).bind_null(17).bind_null(18);
+  if (p.status_work_pos) s.bind(19, (*p.status_work_pos)[0]).bind(20, (*p.status_work_pos)[1]).bind(21, (*p.status_work_pos)[2]);
+  else s.bind_null(19).bind_null(20).bind_null(21);
+  s.bind(22, p.status_line).bind(23, p.machine_state);
   s.step();
 }
 
@@ -212,7 +224,8 @@ std::optional<JobRecord> Journal::job(std::int64_t id) const {
 std::optional<ProgressRecord> Journal::last_progress(std::int64_t job_id) const {
   Stmt s(db_, path_,
          "SELECT job_id, at, lines_ok, last_line, reason, units, distance, plane, wcs, motion, feed, spindle_speed,"
-         " spindle, coolant, tool, wco_x, wco_y, wco_z FROM progress WHERE job_id=? ORDER BY id DESC LIMIT 1");
+         " spindle, coolant, tool, wco_x, wco_y, wco_z, status_x, status_y, status_z, status_line, machine_state"
+         " FROM progress WHERE job_id=? ORDER BY id DESC LIMIT 1");
   s.bind(1, job_id);
   if (!s.step()) return std::nullopt;
   ProgressRecord p;
@@ -235,6 +248,9 @@ std::optional<ProgressRecord> Journal::last_progress(std::int64_t job_id) const 
   m.flood = coolant.find("M8") != std::string::npos;
   m.tool = static_cast<int>(s.i64(14));
   if (!s.is_null(15)) m.wco = protocol::Axes{s.f64(15), s.f64(16), s.f64(17), 0, 0, 0};
+  if (!s.is_null(18)) p.status_work_pos = std::array<double, 3>{s.f64(18), s.f64(19), s.f64(20)};
+  if (!s.is_null(21)) p.status_line = s.i64(21);
+  if (!s.is_null(22)) p.machine_state = s.text(22);
   return p;
 }
 

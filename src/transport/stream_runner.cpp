@@ -74,6 +74,12 @@ RunResult StreamRunner::run(const JobInput& job) {
   bool dirty = false;
   double last_row = -1;
   std::string pending_after_id;  // bytes that arrived after the identification answer
+  // The last status report's work position (mm), state, and the last answered
+  // line when it came: where the machine really was, for resume.
+  std::optional<std::array<double, 3>> status_work_pos;
+  std::int64_t status_line = 0;
+  std::string machine_state;
+  bool report_inches = false;  // $13=1
 
   auto record = [&](const std::string& reason) {
     if (!journal || !engine) return;
@@ -84,6 +90,9 @@ RunResult StreamRunner::run(const JobInput& job) {
     p.reason = reason;
     if (auto* g = dynamic_cast<GrblSession*>(engine.get())) p.modal = g->modal();
     else if (auto* m = dynamic_cast<MarlinSession*>(engine.get())) p.modal = m->modal();
+    p.status_work_pos = status_work_pos;
+    p.status_line = status_line;
+    p.machine_state = machine_state;
     journal->record_progress(p);
     last_row = now();
     dirty = false;
@@ -112,6 +121,14 @@ RunResult StreamRunner::run(const JobInput& job) {
     port.write(engine->take_output());
     for (auto& e : engine->take_events()) {
       if (e.kind == EventKind::LineAnswered) dirty = true;
+      if (e.kind == EventKind::Status && e.status) {
+        machine_state = e.status->state_text;
+        status_line = engine->progress().last_answered_line;
+        if (const auto& w = e.status->wpos) {
+          const double k = report_inches ? 25.4 : 1.0;
+          status_work_pos = std::array<double, 3>{(*w)[0] * k, (*w)[1] * k, (*w)[2] * k};
+        }
+      }
       else if (e.kind != EventKind::Status && e.kind != EventKind::Info && e.kind != EventKind::Warning &&
                e.kind != EventKind::CommandAnswered)
         record(reason_for(e));
@@ -144,6 +161,7 @@ RunResult StreamRunner::run(const JobInput& job) {
     settings_phase = SettingsPhase::Done;
     if (!why.empty()) log("warning: controller settings ($$) not read: " + why);
     else if (opt_.on_settings) opt_.on_settings(settings);
+    if (const auto it = settings.find(13); it != settings.end()) report_inches = it->second == 1;
   };
   auto on_settings_line = [&](std::string_view line) {
     while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);

@@ -109,7 +109,7 @@ TEST(Faults, VanishingPortIsADisconnectRecordedAtTheLastAnsweredLineAndNeverResu
   EXPECT_EQ(o.run.code, 1) << o.run.out;
   EXPECT_TRUE(o.run.has("outcome: disconnected")) << o.run.out;
   EXPECT_TRUE(o.run.has("nothing more will be sent")) << o.run.out;
-  EXPECT_TRUE(o.run.has("cncstream resume 1 --from-line")) << o.run.out;
+  EXPECT_TRUE(o.run.has("cncstream resume 1 PORT")) << o.run.out;
   EXPECT_EQ(o.journal_outcome, "disconnected");
   // 200 answers: $$, $I and 198 file lines.
   EXPECT_EQ(o.reported_last_line, 198) << o.run.out;

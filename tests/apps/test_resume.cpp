@@ -3,6 +3,7 @@
 // ends at the same place and in the same modes as running straight through.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -136,7 +137,10 @@ TEST(Resume, CliResumesADisconnectedJobAndLinksIt) {
   ASSERT_TRUE(cut.has("outcome: disconnected")) << cut.out;
   const auto resumed = run_cncstream({"resume", "1", "sim", "--journal", db, "--yes", "--dwell", "0.2"});
   ASSERT_EQ(resumed.code, 0) << resumed.out;
-  EXPECT_TRUE(resumed.has("continue after line 38 of 104")) << resumed.out;
+  // The controller answered up to line 38, but its planner may not have run
+  // the last moves: resume goes back to the line it was last seen cutting.
+  EXPECT_TRUE(resumed.has("(last answered: 38)")) << resumed.out;
+  EXPECT_TRUE(resumed.has("the controller last reported the tool at")) << resumed.out;
   auto final_pos = [](const std::string& out) {
     const auto at = out.find("WPos", out.find("final position"));
     return out.substr(at, out.find(',', out.find(',', at) + 1) - at);  // "WPos x,y"
@@ -146,7 +150,27 @@ TEST(Resume, CliResumesADisconnectedJobAndLinksIt) {
   const auto job = j.job(2);
   ASSERT_TRUE(job);
   EXPECT_EQ(job->resumed_from, 1);
-  EXPECT_EQ(job->from_line, 38);
+  EXPECT_TRUE(resumed.has("continue after line " + std::to_string(job->from_line) + " of 104")) << resumed.out;
+  // The journal kept the controller's last reported position and the line
+  // answered when it came; the resumed line is one the planner could still
+  // hold then, and its path passes through that position.
+  const auto seen = j.last_progress(1);
+  ASSERT_TRUE(seen && seen->status_work_pos);
+  EXPECT_GT(seen->status_line, 0);
+  EXPECT_LE(seen->status_line, 38);
+  EXPECT_LT(job->from_line, seen->status_line);
+  EXPECT_GE(job->from_line + 17, seen->status_line);
+  std::string text;
+  for (const auto& l : modal_program()) text += l + "\n";
+  const Vec3 p{(*seen->status_work_pos)[0], (*seen->status_work_pos)[1], (*seen->status_work_pos)[2]};
+  double nearest = 1e9;
+  for (const auto& s : cncstream::gcode::trace_program(text).segments) {
+    if (s.source_line != static_cast<std::size_t>(job->from_line)) continue;
+    const Vec3 a = s.work_from(), ab = s.work_to() - a;
+    const double t = std::clamp(cncstream::dot(p - a, ab) / std::max(cncstream::dot(ab, ab), 1e-300), 0.0, 1.0);
+    nearest = std::min(nearest, cncstream::norm(p - (a + ab * t)));
+  }
+  EXPECT_LT(nearest, 0.01) << "the resumed line does not pass through the last reported position";
   EXPECT_EQ(job->outcome.value_or(""), "completed");
   EXPECT_EQ(j.last_progress(2)->last_line, 104);
   // A changed file is refused.

@@ -56,6 +56,9 @@ TEST(Journal, RoundTrip) {
     p.last_line = 518;
     p.reason = "error";
     p.modal = m;
+    p.status_work_pos = std::array<double, 3>{12.5, -3.25, -0.75};
+    p.status_line = 511;
+    p.machine_state = "Hold:0";
     j.record_progress(p);
     j.end_job(id, "error", "error:22 on line 519");
     EXPECT_THROW(j.end_job(id + 100, "x", "y"), JournalError);
@@ -84,7 +87,48 @@ TEST(Journal, RoundTrip) {
   EXPECT_EQ(last->modal.tool, 2);
   ASSERT_TRUE(last->modal.wco);
   EXPECT_DOUBLE_EQ((*last->modal.wco)[2], 3.25);
+  ASSERT_TRUE(last->status_work_pos);
+  EXPECT_DOUBLE_EQ((*last->status_work_pos)[0], 12.5);
+  EXPECT_DOUBLE_EQ((*last->status_work_pos)[2], -0.75);
+  EXPECT_EQ(last->status_line, 511);
+  EXPECT_EQ(last->machine_state, "Hold:0");
   EXPECT_FALSE(j.last_progress(id + 1));
+}
+
+TEST(Journal, AnOlderJournalGainsTheNewColumns) {
+  const auto path = temp_db("old.sqlite");
+  {
+    // The progress table as the first version wrote it.
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+    const char* old_schema =
+        "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT, file TEXT NOT NULL, file_sha256 TEXT NOT NULL,"
+        " profile TEXT NOT NULL, port TEXT NOT NULL, mode TEXT NOT NULL, total_lines INTEGER NOT NULL,"
+        " started_at TEXT NOT NULL, ended_at TEXT, outcome TEXT, message TEXT NOT NULL DEFAULT '');"
+        "CREATE TABLE progress (id INTEGER PRIMARY KEY AUTOINCREMENT, job_id INTEGER NOT NULL REFERENCES jobs(id),"
+        " at TEXT NOT NULL, lines_ok INTEGER NOT NULL, last_line INTEGER NOT NULL, reason TEXT NOT NULL,"
+        " units TEXT, distance TEXT, plane TEXT, wcs TEXT, motion TEXT, feed REAL, spindle_speed REAL,"
+        " spindle TEXT, coolant TEXT, tool INTEGER, wco_x REAL, wco_y REAL, wco_z REAL);"
+        "INSERT INTO jobs(file, file_sha256, profile, port, mode, total_lines, started_at)"
+        " VALUES('/old.nc', 'ab', 'grbl-1.1', 'sim', 'run', 10, '2026-01-01T00:00:00.000Z');"
+        "INSERT INTO progress(job_id, at, lines_ok, last_line, reason) VALUES(1, 'x', 4, 4, 'periodic');";
+    ASSERT_EQ(sqlite3_exec(db, old_schema, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    sqlite3_close(db);
+  }
+  Journal j(path);
+  const auto old_row = j.last_progress(1);
+  ASSERT_TRUE(old_row);
+  EXPECT_EQ(old_row->last_line, 4);
+  EXPECT_FALSE(old_row->status_work_pos);
+  ProgressRecord p;
+  p.job_id = 1;
+  p.last_line = 6;
+  p.reason = "end";
+  p.status_work_pos = std::array<double, 3>{1, 2, 3};
+  p.status_line = 5;
+  j.record_progress(p);
+  ASSERT_TRUE(j.last_progress(1)->status_work_pos);
+  EXPECT_EQ(j.last_progress(1)->status_line, 5);
 }
 
 TEST(Journal, UnwritablePathNamesIt) {

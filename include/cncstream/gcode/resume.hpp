@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cncstream/gcode/interpreter.hpp"
+#include "cncstream/gcode/program.hpp"
 
 namespace cncstream::gcode {
 
@@ -25,5 +26,26 @@ struct ResumeOptions {
 // GRBL 1.1 accepts; coordinates are work coordinates in mm (G21) until the
 // last lines restore the program's units.
 std::vector<std::string> resume_preamble(const ParserState& at, const ResumeOptions& options);
+
+// Which line to continue after when the operator does not say. An `ok` only
+// means the controller planned a line: GRBL's planner holds up to 15 moves
+// it has not made yet, so the last answered line is not where the cut
+// stopped. With the controller's last reported work position and the last
+// answered line when that report came, the line being cut is the earliest of
+// the last `planner_lines` motion lines whose path passes within `tolerance`
+// of that position; without a usable report, back off `planner_lines` motion
+// lines from the last answered one. Either way some moves may be cut twice
+// (harmless: they cut air), none is skipped.
+struct ResumeChoice {
+  std::size_t after_line = 0;  // continue after this 1-based line (0: from the start)
+  std::string reason;          // for the operator
+};
+struct LastSeen {
+  Vec3 work;                  // work position from the last status report, mm
+  std::size_t answered = 0;   // last answered 1-based line when it came
+};
+ResumeChoice choose_resume_line(const ProgramTrace& trace, std::size_t last_answered,
+                                const std::optional<LastSeen>& seen, std::size_t planner_lines = 16,
+                                double tolerance = 0.01);
 
 }  // namespace cncstream::gcode

@@ -3,6 +3,7 @@
 // job and its progress so that, after a crash, a disconnect or a kill, the
 // operator knows exactly which lines the controller answered and the modal
 // state at that line. Every write is its own committed transaction.
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -44,6 +45,13 @@ struct ProgressRecord {
   std::int64_t last_line = 0;  // 1-based file line of the last answer
   std::string reason;          // "periodic", "error", "alarm", "stop", "end", ...
   protocol::ModalState modal;
+  // The controller's last status report before this row: its work position
+  // (mm) and state, and the last answered file line when it came. The machine
+  // was then on a line at most one planner queue before that one, so resume
+  // can find the line it was cutting instead of trusting the last `ok`.
+  std::optional<std::array<double, 3>> status_work_pos;
+  std::int64_t status_line = 0;
+  std::string machine_state;
 };
 
 class Journal {

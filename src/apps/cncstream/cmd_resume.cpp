@@ -1,5 +1,6 @@
 // `cncstream resume JOB [PORT] [--from-line N]`: continue a journaled job after
-// line N (default: the last line the controller answered). The file must be
+// line N (default: the line the machine was cutting when the job ended, from
+// the journaled status report; see choose_resume_line). The file must be
 // the one the job streamed (same SHA-256). The modal state at line N comes
 // from the program itself through the G-code interpreter; a preamble brings
 // the controller there safely, then the file continues with line N+1. Never
@@ -32,7 +33,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
   auto* sub = app.add_subcommand("resume", "Continue a journaled job after line N (after homing / a disconnect)");
   sub->add_option("job", o->job, "Journal job id (see `cncstream jobs`)")->required();
   sub->add_option("port", o->conn.port, "Serial port, 'auto' or 'sim'")->capture_default_str();
-  sub->add_option("--from-line", o->from_line, "Continue after this file line (default: the last answered line)")
+  sub->add_option("--from-line", o->from_line, "Continue after this file line (default: before the line the machine was last seen cutting)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--safe-z-machine", o->machine_safe_z, "Retract first with G53 G0 Z<this> (machine coordinates)");
   sub->add_option("--safe-z", o->safe_z, "Travel height in work coordinates (default: the program's highest point)");
@@ -62,13 +63,25 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
                                   " streamed it (SHA-256 " + sha.substr(0, 16) + "..., journal " +
                                   rec->file_sha256.substr(0, 16) + "...): refusing to resume a different program");
     const transport::JobInput whole = transport::job_from_file(file);
-    const long n = o->from_line >= 0 ? o->from_line : (last ? static_cast<long>(last->last_line) : 0);
+    std::string text;
+    for (const auto& l : whole.lines) text.append(l).push_back('\n');
+    const auto trace = gcode::trace_program(text);
+    std::string why = "--from-line";
+    long n = o->from_line;
+    if (n < 0) {
+      std::optional<gcode::LastSeen> seen;
+      if (last && last->status_work_pos)
+        seen = gcode::LastSeen{{(*last->status_work_pos)[0], (*last->status_work_pos)[1], (*last->status_work_pos)[2]},
+                               static_cast<std::size_t>(last->status_line)};
+      const auto choice =
+          gcode::choose_resume_line(trace, last ? static_cast<std::size_t>(last->last_line) : 0, seen);
+      n = static_cast<long>(choice.after_line);
+      why = choice.reason;
+    }
     if (n >= whole.total_lines)
       throw std::invalid_argument("--from-line " + std::to_string(n) + ": " + file.string() + " has only " +
                                   std::to_string(whole.total_lines) + " lines; nothing left to run");
 
-    std::string text;
-    for (const auto& l : whole.lines) text.append(l).push_back('\n');
     const gcode::ParserState at = gcode::state_before_line(text, static_cast<std::size_t>(n));
     gcode::ResumeOptions ro;
     ro.machine_safe_z = o->machine_safe_z;
@@ -78,7 +91,6 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
       ro.safe_z = *o->safe_z;
     } else {
       // The program's own highest point (its retract height) clears everything it cuts.
-      const auto trace = gcode::trace_program(text);
       double top = at.work_position().z;
       for (const auto& s : trace.segments) top = std::max({top, s.work_from().z, s.work_to().z});
       ro.safe_z = top;
@@ -105,6 +117,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     std::cout << "resume job " << rec->id << " (" << rec->outcome.value_or("interrupted") << "): " << file.string()
               << "\n  continue after line " << n << " of " << whole.total_lines << " (last answered: "
               << (last ? std::to_string(last->last_line) : std::string("none")) << ")\n"
+              << "  why line " << n << ": " << why << "\n"
               << "  tool at line " << n << ": X" << format_gcode_number(p.x) << " Y" << format_gcode_number(p.y)
               << " Z" << format_gcode_number(p.z) << " (work), " << gcode::format_modes(at) << "\n"
               << "  the controller must be homed with the same work offset as before\n"

@@ -269,8 +269,10 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
   if (r.outcome == protocol::JobOutcome::Disconnected) {
     std::cerr << "the controller went away: nothing more will be sent. Check the machine (home it, check the work "
                  "offset), then continue with: cncstream resume "
-              << (r.job_id ? std::to_string(r.job_id) : std::string("JOB")) << " --from-line " << r.last_answered_line
-              << " PORT\n";
+              << (r.job_id ? std::to_string(r.job_id) : std::string("JOB"))
+              << " PORT (it goes back to the line the machine was last seen cutting; the controller had answered up "
+                 "to line "
+              << r.last_answered_line << ", but may not have run the last moves it had queued)\n";
   }
   int code = (r.outcome == protocol::JobOutcome::Completed || r.outcome == protocol::JobOutcome::CheckPassed) ? 0 : 1;
   if (sim) {
