@@ -441,6 +441,7 @@ bool Machine::soft_limit_violated(const Vec3& t) const {
 
 void Machine::queue_actions(const gc::BlockResult& r) {
   const bool check = state_ == MachineState::Check;
+  const int previous_tool = parser_.tool;
   parser_ = r.state;
   auto add_block = [&](const Vec3& from, const Vec3& to, double feed, bool rapid) -> bool {
     if (soft_limit_violated(to)) {
@@ -455,6 +456,10 @@ void Machine::queue_actions(const gc::BlockResult& r) {
     return true;
   };
   auto add_sync = [&] { if (!check) steps_.push_back({Step::Sync, {}, 0, {}, {}, false, 0}); };
+  if (parser_.tool != previous_tool && tool_observer_ && !check) {
+    add_sync();
+    steps_.push_back({Step::Apply, {}, 0, {}, [this, t = parser_.tool] { if (tool_observer_) tool_observer_(t); }, false, 0});
+  }
   for (const gc::Action& a : r.actions) {
     if (const auto* m = std::get_if<gc::LinearMove>(&a)) {
       if (!add_block(m->from, m->to, m->feed, m->rapid)) return;

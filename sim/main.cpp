@@ -1,5 +1,6 @@
 // cncsim: a GRBL 1.1h router on a pseudo-terminal.
 //   cncsim [--link PATH] [--speed K|max] [--settings FILE] [--strict] [faults] [stock]
+//          (with --design: verify the cut at exit; --result writes it as .f32 and .stl)
 //   cncsim verify --design part.stl --result RESULT.f32 [--tolerance T] [--png MAP.png]
 #include <CLI/CLI.hpp>
 
@@ -75,7 +76,13 @@ int main(int argc, char** argv) {
   app.add_option("--design", design_path, "design STL: the stock is its bounding box");
   app.add_option("--resolution", resolution, "stock grid step, mm")->check(CLI::PositiveNumber);
   app.add_option("--tool", tool_spec, "cutter spec, e.g. ball:3.175, flat:6, bull:6:1");
-  app.add_option("--result", result_path, "write the machined height field here on exit (.f32 + .f32.txt)");
+  app.add_option("--result", result_path, "write the machined surface here on exit (.f32 + .f32.txt, and .stl)");
+  std::string tool_table_text, png_path;
+  double tolerance = 0.05;
+  app.add_option("--tool-table", tool_table_text,
+                 "tools by T number, e.g. 1=ball:3.175,2=bull:3.175:0.79, or a file of N=SPEC lines");
+  app.add_option("--png", png_path, "with --design: write the deviation map of the verify at exit");
+  app.add_option("--tolerance", tolerance, "with --design: verify tolerance, mm")->check(CLI::PositiveNumber);
 
   auto* verify = app.add_subcommand("verify", "compare a machined result with the design");
   std::string v_design, v_result, v_png;
@@ -112,18 +119,22 @@ int main(int argc, char** argv) {
         throw std::invalid_argument("--speed '" + speed_text + "': expected a positive number or 'max'");
     }
 
-    cncsim::Machine machine(options);
     std::unique_ptr<cncsim::MaterialRemoval> removal;
-    if (!stock_text.empty() || !design_path.empty()) {
+    std::optional<cncstream::Mesh> design;
+    if (!design_path.empty()) design = cncstream::load_stl(design_path).mesh;
+    if (!stock_text.empty() || design) {
       const cncstream::Cutter cutter = cncstream::parse_cutter_spec(tool_spec);
-      const cncsim::StockBox box = !stock_text.empty()
-                                       ? cncsim::parse_stock_box(stock_text, resolution)
-                                       : cncsim::stock_box_for(cncstream::load_stl(design_path).mesh, resolution);
+      const cncsim::StockBox box = !stock_text.empty() ? cncsim::parse_stock_box(stock_text, resolution)
+                                                       : cncsim::stock_box_for(*design, resolution);
       removal = std::make_unique<cncsim::MaterialRemoval>(box, cutter);
-      removal->attach(machine);
-    } else if (!result_path.empty()) {
-      throw std::invalid_argument("--result needs a stock (--stock or --design)");
+      if (!tool_table_text.empty()) removal->set_tool_table(cncsim::parse_tool_table(tool_table_text));
+      // A probe (G38.x) without --probe-z touches the stock's top.
+      if (!options.probe_surface_z) options.probe_surface_z = box.hi.z;
+    } else if (!result_path.empty() || !tool_table_text.empty() || !png_path.empty()) {
+      throw std::invalid_argument("--result, --tool-table and --png need a stock (--stock or --design)");
     }
+    cncsim::Machine machine(options);
+    if (removal) removal->attach(machine);
 
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
@@ -138,11 +149,29 @@ int main(int argc, char** argv) {
       std::cerr << "cncsim: fatal (--strict): " << e.what() << "\n";
       code = 2;
     }
-    if (removal && !result_path.empty()) removal->write_result(result_path);
     std::cerr << "cncsim: " << machine.lines_received() << " lines received, " << machine.lines_answered()
               << " answered, " << machine.rx_bytes_dropped() << " RX bytes dropped";
     if (removal) std::cerr << ", " << removal->stock().removed_volume() << " mm^3 removed";
     std::cerr << "\n";
+    if (removal) {
+      for (int t : removal->unknown_tools())
+        std::cerr << "cncsim: warning: T" << t << " is not in the tool table; the cutter was kept\n";
+      if (!result_path.empty()) {
+        const auto stl = removal->write_result(result_path);
+        std::cerr << "cncsim: machined surface written to " << result_path << " and " << stl.string() << "\n";
+      }
+    }
+    if (removal && design) {
+      // The end-of-run verify: the machined stock against the design.
+      const auto heights = cncstream::design_heights(*design, removal->stock().grid());
+      const auto result = cncstream::compare_to_design(removal->stock(), heights, tolerance);
+      std::cerr << "cncsim verify against " << design_path << ":\n" << result.stats.summary() << std::endl;
+      if (!png_path.empty()) {
+        cncstream::write_deviation_png(png_path, result, "cncsim verify", design_path);
+        std::cerr << "cncsim: deviation map written to " << png_path << "\n";
+      }
+      if (code == 0 && result.stats.gouged > 0) code = 3;
+    }
     return code;
   } catch (const std::exception& e) {
     std::cerr << "cncsim: error: " << e.what() << "\n";

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <stdexcept>
 
 #include "cncstream/cam/height_field_io.hpp"
+#include "cncstream/cam/height_field_mesh.hpp"
 
 namespace cncsim {
 
@@ -36,8 +38,54 @@ MaterialRemoval::MaterialRemoval(const StockBox& box, const cncstream::Cutter& c
       cutter_(cutter),
       bottom_(box.lo.z) {}
 
+ToolTable parse_tool_table(const std::string& text) {
+  ToolTable table;
+  auto trim = [](const std::string& s) {
+    const auto first = s.find_first_not_of(" \t\r");
+    return first == std::string::npos ? std::string() : s.substr(first, s.find_last_not_of(" \t\r") - first + 1);
+  };
+  auto add = [&](std::string entry, const std::string& where) {
+    const auto hash = entry.find('#');
+    if (hash != std::string::npos) entry.erase(hash);
+    entry = trim(entry);
+    if (entry.empty()) return;
+    const auto eq = entry.find('=');
+    int tool = -1;
+    char tail = 0;
+    if (eq == std::string::npos || std::sscanf(trim(entry.substr(0, eq)).c_str(), "%d%c", &tool, &tail) != 1 ||
+        tool < 0)
+      throw std::invalid_argument(where + "'" + entry + "': expected N=SPEC, e.g. 1=ball:3.175");
+    try {
+      table[tool] = cncstream::parse_cutter_spec(trim(entry.substr(eq + 1)));
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(where + "tool " + std::to_string(tool) + ": " + e.what());
+    }
+  };
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(text, ec)) {
+    std::ifstream in(text);
+    if (!in) throw std::invalid_argument("tool table " + text + ": cannot read it");
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) add(line, "tool table " + text + " line " + std::to_string(n) + ": ");
+  } else {
+    std::size_t at = 0;
+    while (at <= text.size()) {
+      const auto comma = std::min(text.find(',', at), text.size());
+      add(text.substr(at, comma - at), "tool table entry ");
+      at = comma + 1;
+    }
+  }
+  if (table.empty()) throw std::invalid_argument("tool table '" + text + "' holds no tools");
+  return table;
+}
+
 void MaterialRemoval::attach(Machine& machine) {
   machine.set_motion_observer([this](const Vec3& a, const Vec3& b, bool) { cut(a, b); });
+  machine.set_tool_observer([this](int tool) {
+    if (tools_.empty()) return;  // one cutter for the whole run
+    if (const auto it = tools_.find(tool); it != tools_.end()) cutter_ = it->second;
+    else unknown_tools_.insert(tool);
+  });
 }
 
 void MaterialRemoval::cut(const Vec3& from, const Vec3& to) {
@@ -47,8 +95,15 @@ void MaterialRemoval::cut(const Vec3& from, const Vec3& to) {
   ++segments_;
 }
 
-void MaterialRemoval::write_result(const std::filesystem::path& path) const {
+std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path& path) const {
   cncstream::write_height_field(path, stock_.grid(), stock_.heights());
+  auto stl = path;
+  stl.replace_extension(".stl");
+  // A cut through the stock's bottom still gives a closed solid.
+  double bottom = bottom_;
+  for (double z : stock_.heights()) bottom = std::min(bottom, z - 1.0);
+  cncstream::write_height_field_stl(stl, stock_.grid(), stock_.heights(), bottom);
+  return stl;
 }
 
 cncstream::HeightFieldStock stock_from_heights(const cncstream::GridSpec& grid, const std::vector<float>& heights) {

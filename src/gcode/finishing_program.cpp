@@ -57,6 +57,7 @@ std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offs
   GcodeWriter w(p.decimals);
   for (const auto& c : p.header_comments) w.comment(c);
   w.line("G21 G90 G17 G94");  // mm, absolute, XY plane, units/min feed
+  if (p.tool > 0) w.line(std::string("T").append(std::to_string(p.tool)));
   if (p.rpm > 0) {
     w.line("M3 S" + format_gcode_number(p.rpm, 0));
     if (p.dwell_s > 0) w.line("G4 P" + format_gcode_number(p.dwell_s, 2));

@@ -83,12 +83,16 @@ TEST(Plan, PredictedResidualMatchesTheSimulatorAfterBothFiles) {
   mo.instant_waits = true;
   cncsim::Machine m(mo);
   const double res = 0.1;
-  cncsim::MaterialRemoval removal(cncsim::stock_box_for(work, res), parse_cutter_spec("bull:6:1.5"));
+  // The files select T1 and T2; the simulator's tool table mounts the cutters.
+  cncsim::MaterialRemoval removal(cncsim::stock_box_for(work, res), parse_cutter_spec("flat:1"));
+  removal.set_tool_table(cncsim::parse_tool_table("1=bull:6:1.5,2=ball:6"));
   removal.attach(m);
   m.take_output();
   run_file(m, f1);
-  removal.set_cutter(parse_cutter_spec("ball:6"));
+  EXPECT_EQ(removal.cutter().spec(), "bull:6:1.5");
   run_file(m, f2);
+  EXPECT_EQ(removal.cutter().spec(), "ball:6");
+  EXPECT_TRUE(removal.unknown_tools().empty());
 
   const DesignHeights design = design_heights(work, removal.stock().grid());
   double measured = 0;
@@ -102,4 +106,37 @@ TEST(Plan, PredictedResidualMatchesTheSimulatorAfterBothFiles) {
   EXPECT_GT(measured, 0.0);
   EXPECT_NEAR(predicted, measured, 0.05 + 0.1 * measured) << "predicted " << predicted << " measured " << measured;
   std::cout << "combined plan: predicted largest residual " << predicted << " mm, simulator " << measured << " mm\n";
+}
+
+TEST(Plan, StreamedFileCutsWithTheToolItSelects) {
+  // A plate with a bump; one plan file streamed to PORT=sim with a tool table:
+  // the file's T1 mounts the radiused cutter, and the cut is written out.
+  const Mesh part = cl_test::terrain(0, 0, 20, 80, [](double x, double y) {
+    const double r = std::hypot(x - 10, y - 10);
+    return 2 + std::max(0.0, 3 - r / 2);
+  });
+  const fs::path dir = temp_dir() / "plan-stream";
+  fs::create_directories(dir);
+  write_stl_binary(dir / "bump.stl", part, "bump");
+  const auto r = run_cncstream({"plan", (dir / "bump.stl").string(), "--tools", "ball:4,bull:4:1", "--stepover", "1",
+                                "--step", "0.25", "-o", (dir / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.out;
+  const fs::path f1 = dir / "out" / "bump-1-bull_4_1.nc";
+  ASSERT_TRUE(fs::exists(f1)) << r.out;
+  Mesh work = part;
+  const Box3 b = part.bounds();
+  work.translate({-b.lo.x, -b.lo.y, -b.hi.z});
+  write_stl_binary(dir / "bump-work.stl", work, "bump");
+  const fs::path result = dir / "cut.f32";
+  const auto s = run_cncstream({f1.string(), "sim", "--yes", "--no-journal", "--sim-design", (dir / "bump-work.stl").string(),
+                                "--sim-tool", "flat:1", "--sim-tool-table", "1=bull:4:1,2=ball:4", "--sim-result",
+                                result.string()});
+  ASSERT_EQ(s.code, 0) << s.out;
+  EXPECT_TRUE(s.has("verify (4 mm bull-nose")) << s.out;  // the cutter in the spindle at the end: T1
+  EXPECT_TRUE(s.has("largest gouge 0.0000 mm")) << s.out;
+  EXPECT_TRUE(fs::exists(result) && fs::exists(dir / "cut.stl")) << s.out;
+  // Without a cut to simulate the flags are refused, with a reason.
+  const auto refused = run_cncstream({f1.string(), "sim", "--yes", "--no-journal", "--sim-result", result.string()});
+  EXPECT_NE(refused.code, 0);
+  EXPECT_TRUE(refused.has("need a cut to simulate")) << refused.out;
 }

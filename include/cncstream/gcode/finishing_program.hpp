@@ -25,6 +25,9 @@ struct MachiningParams {
   double safe_z = 5;         // work coordinates
   int decimals = 3;
   std::vector<std::string> header_comments;
+  // T number written after the header (0: none). GRBL accepts T and ignores
+  // it; it names the tool for the operator and for a simulator's tool table.
+  int tool = 0;
 };
 
 struct ProgramStats {

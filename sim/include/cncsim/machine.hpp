@@ -61,6 +61,9 @@ class RxOverflowError : public std::runtime_error {
 
 // Called for every straight piece of tool motion (machine coordinates).
 using MotionObserver = std::function<void(const cncstream::Vec3& from, const cncstream::Vec3& to, bool rapid)>;
+// Called when a newly selected tool (T word) is in the spindle: after the
+// motion queued before it has run (GRBL has no M6; the swap is physical).
+using ToolObserver = std::function<void(int tool)>;
 
 class Machine {
  public:
@@ -96,6 +99,7 @@ class Machine {
   bool stalled() const;  // inside a --stall-at fault (time must pass for real)
 
   void set_motion_observer(MotionObserver observer) { observer_ = std::move(observer); }
+  void set_tool_observer(ToolObserver observer) { tool_observer_ = std::move(observer); }
   // A limit switch closes: ALARM:1, motion stops dead, locked until reset.
   void inject_hard_limit();
 
@@ -150,6 +154,7 @@ class Machine {
   std::deque<Step> steps_;
   std::string out_;
   MotionObserver observer_;
+  ToolObserver tool_observer_;
 
   MachineState state_ = MachineState::Idle;
   double now_ = 0;

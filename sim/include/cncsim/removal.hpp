@@ -3,6 +3,8 @@
 // coordinates) cut by every piece of tool motion with the exact swept cutter.
 #include <cstddef>
 #include <filesystem>
+#include <map>
+#include <set>
 #include <string>
 
 #include "cncsim/machine.hpp"
@@ -23,12 +25,23 @@ StockBox parse_stock_box(const std::string& text, double resolution);
 // The XY bounding box of a design with its top at the design's highest point.
 StockBox stock_box_for(const cncstream::Mesh& design, double resolution);
 
+// Tool number -> cutter. `text` is "1=ball:3.175,2=bull:3.175:0.79" or the
+// path of a file with one "N=SPEC" per line ('#' starts a comment). Errors
+// name the entry (and the file and line).
+using ToolTable = std::map<int, cncstream::Cutter>;
+ToolTable parse_tool_table(const std::string& text);
+
 class MaterialRemoval {
  public:
   MaterialRemoval(const StockBox& box, const cncstream::Cutter& cutter);
 
-  // Routes the machine's motion into the stock (replaces its observer).
+  // Routes the machine's motion into the stock (replaces its observers); a
+  // T word then switches to that tool of the table, once the motion queued
+  // before it has run.
   void attach(Machine& machine);
+  void set_tool_table(ToolTable table) { tools_ = std::move(table); }
+  // T numbers selected that the table does not hold (the cutter was kept).
+  const std::set<int>& unknown_tools() const { return unknown_tools_; }
   void cut(const cncstream::Vec3& from, const cncstream::Vec3& to);
 
   const cncstream::HeightFieldStock& stock() const { return stock_; }
@@ -37,14 +50,18 @@ class MaterialRemoval {
   void set_cutter(const cncstream::Cutter& cutter) { cutter_ = cutter; }
   std::size_t segments() const { return segments_; }
 
-  // Writes the machined surface as a height field (<path> + <path>.txt).
-  void write_result(const std::filesystem::path& path) const;
+  // Writes the machined surface as a height field (<path> + <path>.txt) and
+  // as a closed STL solid down to the stock's bottom (<path> with .stl).
+  // Returns the STL's path.
+  std::filesystem::path write_result(const std::filesystem::path& path) const;
 
  private:
   cncstream::HeightFieldStock stock_;
   cncstream::Cutter cutter_;
   double bottom_;
   std::size_t segments_ = 0;
+  ToolTable tools_;
+  std::set<int> unknown_tools_;
 };
 
 // Rebuilds a stock whose surface equals `heights` (a result file read back):

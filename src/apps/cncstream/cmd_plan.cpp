@@ -114,15 +114,16 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
     }
     const std::vector<double> combined = machine_path(sg, first.machined, sim_pieces, second.cutter, so.threads);
 
-    auto header = [&](const Cutter& c, const std::string& what) {
+    auto header = [&](const Cutter& c, const std::string& what, int tool) {
       MachiningParams p = mp;
+      p.tool = tool;
       p.header_comments = {"cncstream plan: " + what, "part: " + so.part.stl, "tool: " + c.description() + " [" + c.spec() + "]",
                            "work origin: XY at the part's min, Z0 at the part's top"};
       return p;
     };
-    const std::string prog_first = finishing_program(first.path, r.work_offset, header(first.cutter, "1 of 2, finishing"));
+    const std::string prog_first = finishing_program(first.path, r.work_offset, header(first.cutter, "1 of 2, finishing", 1));
     const std::string prog_second =
-        pieces.empty() ? std::string() : pieces_program(pieces, r.work_offset, header(second.cutter, "2 of 2, clean-up"));
+        pieces.empty() ? std::string() : pieces_program(pieces, r.work_offset, header(second.cutter, "2 of 2, clean-up", 2));
     const std::string prog_ball = first.cutter.type == CutterType::Ball ? prog_first : finishing_program(r.ball.path, r.work_offset, mp);
     const std::string prog_rad =
         first.cutter.type == CutterType::Bull ? prog_first : finishing_program(r.radiused.path, r.work_offset, mp);

@@ -76,6 +76,10 @@ void add_sim_options(CLI::App* sub, SimCliOptions& o) {
   sub->add_option("--sim-design", o.design, "Design STL to verify a G-code job against (machine coordinates)")->group(g);
   sub->add_option("--sim-tool", o.tool, "Cutter for --sim-design, e.g. ball:3.175")->group(g);
   sub->add_option("--sim-png", o.png, "Write the verify deviation map (PNG) here")->group(g);
+  sub->add_option("--sim-tool-table", o.tool_table,
+                  "Tools by T number for the cut, e.g. 1=ball:3.175,2=bull:3.175:0.79 (or a file of N=SPEC lines)")
+      ->group(g);
+  sub->add_option("--sim-result", o.result, "Write the machined surface here (.f32 height field, and .stl)")->group(g);
   sub->add_option("--sim-resolution", o.resolution, "Stock grid step for the verify, mm")->check(CLI::PositiveNumber)->group(g);
   sub->add_option("--sim-tolerance", o.tolerance, "Verify tolerance, mm")->check(CLI::PositiveNumber)->group(g);
   sub->add_option("--sim-drop-every", o.drop_every, "Fault: drop every Nth byte received")->group(g);
@@ -146,6 +150,11 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
       so.resolution = s.resolution;
       so.tolerance = s.tolerance;
       so.png = s.png;
+      if (!s.tool_table.empty()) so.tools = cncsim::parse_tool_table(s.tool_table);
+      so.result = s.result;
+    } else if (!s.tool_table.empty() || !s.result.empty()) {
+      throw std::invalid_argument("--sim-tool-table and --sim-result need a cut to simulate: an STL job, or --sim-design "
+                                  "with --sim-tool (and not --no-sim-verify)");
     }
     sim = std::make_unique<SimPort>(so);
     ro.port = sim->path();

@@ -33,6 +33,7 @@ struct SimCliOptions {
   std::string settings;
   bool no_verify = false;
   std::string design, tool, png;  // verify a G-code job: design STL (machine coords) + cutter
+  std::string tool_table, result;
   double resolution = 0.1, tolerance = 0.05;
   std::size_t drop_every = 0, corrupt_every = 0, vanish_after = 0;
   std::vector<std::string> error_at, alarm_at, stall_at;

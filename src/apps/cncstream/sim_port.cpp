@@ -39,6 +39,7 @@ SimPort::SimPort(SimPortOptions options) : opt_(std::move(options)) {
     box.lo.x += 0.373 * opt_.resolution;
     box.lo.y += 0.411 * opt_.resolution;
     removal_ = std::make_unique<cncsim::MaterialRemoval>(box, *opt_.cutter);
+    if (opt_.tools) removal_->set_tool_table(*opt_.tools);
     removal_->attach(*machine_);
   }
   front_ = std::make_unique<cncsim::PtyFrontEnd>(*machine_, po);
@@ -91,6 +92,12 @@ SimPort::Report SimPort::finish(bool let_motion_finish) {
   if (removal_) {
     o << "sim: " << removal_->stock().removed_volume() << " mm^3 removed in " << removal_->segments()
       << " cutting segments\n";
+    for (int t : removal_->unknown_tools())
+      o << "sim: warning: the program selected T" << t << ", which the tool table does not hold; the cutter was kept\n";
+    if (!opt_.result.empty()) {
+      const auto stl = removal_->write_result(opt_.result);
+      o << "sim: machined surface written to " << opt_.result << " (+ .txt) and " << stl.string() << "\n";
+    }
     const auto heights = design_heights(*opt_.design, removal_->stock().grid());
     const auto result = compare_to_design(removal_->stock(), heights, opt_.tolerance);
     o << "verify (" << removal_->cutter().description() << ", grid " << opt_.resolution << " mm):\n"

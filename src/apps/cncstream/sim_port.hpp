@@ -30,6 +30,8 @@ struct SimPortOptions {
   double resolution = 0.1;  // stock grid step, mm
   double tolerance = 0.05;  // verify tolerance, mm
   std::string png;          // deviation map written after the job
+  std::optional<cncsim::ToolTable> tools;  // T number -> cutter (else `cutter` throughout)
+  std::string result;       // machined surface written here (.f32 + .txt, and .stl)
 };
 
 // Parses "max" or a positive number; throws std::invalid_argument naming the text.
