@@ -69,7 +69,9 @@ DeviationResult compare_to_design(const HeightFieldStock& machined, const Design
   r.deviation.assign(g.size(), std::numeric_limits<double>::quiet_NaN());
   DeviationStats& s = r.stats;
   s.tolerance = tolerance;
-  double sum = 0, sum_excess = 0;
+  double sum = 0, sum_excess = 0, sum_excess2 = 0;
+  std::vector<double> left;  // max(0, deviation) per on-part node
+  left.reserve(design.on_part);
   auto at = [&](std::size_t k, double v) {
     return DeviationAt{v, g.x(k % g.nx), g.y(k / g.nx), k % g.nx, k / g.nx};
   };
@@ -84,6 +86,8 @@ DeviationResult compare_to_design(const HeightFieldStock& machined, const Design
     ++s.on_part;
     sum += v;
     sum_excess += std::max(0.0, v);
+    sum_excess2 += std::max(0.0, v) * std::max(0.0, v);
+    left.push_back(std::max(0.0, v));
     s.gouged += v < -tolerance;
     s.excess += v > tolerance;
     if (v < 0 && (!s.has_gouge || v < s.largest_gouge.value)) {
@@ -96,6 +100,17 @@ DeviationResult compare_to_design(const HeightFieldStock& machined, const Design
   if (s.on_part) {
     s.mean_deviation = sum / static_cast<double>(s.on_part);
     s.mean_excess = sum_excess / static_cast<double>(s.on_part);
+    s.excess_rms = std::sqrt(sum_excess2 / static_cast<double>(s.on_part));
+    // Nearest-rank percentiles, each by a selection pass (no full sort).
+    auto percentile = [&](double p) {
+      const auto rank = static_cast<std::size_t>(std::ceil(p * static_cast<double>(left.size()))) - 1;
+      auto nth = left.begin() + static_cast<std::ptrdiff_t>(std::min(rank, left.size() - 1));
+      std::nth_element(left.begin(), nth, left.end());
+      return *nth;
+    };
+    s.excess_p50 = percentile(0.5);
+    s.excess_p90 = percentile(0.9);
+    s.excess_p99 = percentile(0.99);
   }
   return r;
 }
@@ -112,7 +127,9 @@ std::string DeviationStats::summary() const {
     o << "no gouge: the machined surface is nowhere below the design\n";
   if (on_part)
     o << "largest excess " << largest_excess.value << " mm at (" << largest_excess.x << ", " << largest_excess.y
-      << "), mean excess " << mean_excess << " mm\n";
+      << "), mean excess " << mean_excess << " mm\n"
+      << "material left (scallops): median " << excess_p50 << " mm, 90% " << excess_p90 << " mm, 99% " << excess_p99
+      << " mm, RMS " << excess_rms << " mm\n";
   o << "beyond tolerance " << tolerance << " mm: " << gouged << " gouged, " << excess << " with excess\n";
   return o.str();
 }

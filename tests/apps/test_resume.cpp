@@ -132,7 +132,9 @@ TEST(Resume, CliResumesADisconnectedJobAndLinksIt) {
   const auto db = (temp_dir() / "resume.sqlite").string();
   const auto whole = run_cncstream({prog.string(), "sim", "--journal", db, "--no-journal"});
   ASSERT_EQ(whole.code, 0) << whole.out;
-  const auto cut = run_cncstream({prog.string(), "sim", "--journal", db, "--sim-vanish-after", "40"});
+  // At 10 x real time the controller reports its position while the lines run.
+  const auto cut =
+      run_cncstream({prog.string(), "sim", "--journal", db, "--sim-vanish-after", "40", "--sim-speed", "10"});
   ASSERT_EQ(cut.code, 1) << cut.out;
   ASSERT_TRUE(cut.has("outcome: disconnected")) << cut.out;
   const auto resumed = run_cncstream({"resume", "1", "sim", "--journal", db, "--yes", "--dwell", "0.2"});
@@ -140,7 +142,6 @@ TEST(Resume, CliResumesADisconnectedJobAndLinksIt) {
   // The controller answered up to line 38, but its planner may not have run
   // the last moves: resume goes back to the line it was last seen cutting.
   EXPECT_TRUE(resumed.has("(last answered: 38)")) << resumed.out;
-  EXPECT_TRUE(resumed.has("the controller last reported the tool at")) << resumed.out;
   auto final_pos = [](const std::string& out) {
     const auto at = out.find("WPos", out.find("final position"));
     return out.substr(at, out.find(',', out.find(',', at) + 1) - at);  // "WPos x,y"
@@ -155,22 +156,30 @@ TEST(Resume, CliResumesADisconnectedJobAndLinksIt) {
   // answered when it came; the resumed line is one the planner could still
   // hold then, and its path passes through that position.
   const auto seen = j.last_progress(1);
-  ASSERT_TRUE(seen && seen->status_work_pos);
-  EXPECT_GT(seen->status_line, 0);
-  EXPECT_LE(seen->status_line, 38);
-  EXPECT_LT(job->from_line, seen->status_line);
-  EXPECT_GE(job->from_line + 17, seen->status_line);
-  std::string text;
-  for (const auto& l : modal_program()) text += l + "\n";
-  const Vec3 p{(*seen->status_work_pos)[0], (*seen->status_work_pos)[1], (*seen->status_work_pos)[2]};
-  double nearest = 1e9;
-  for (const auto& s : cncstream::gcode::trace_program(text).segments) {
-    if (s.source_line != static_cast<std::size_t>(job->from_line)) continue;
-    const Vec3 a = s.work_from(), ab = s.work_to() - a;
-    const double t = std::clamp(cncstream::dot(p - a, ab) / std::max(cncstream::dot(ab, ab), 1e-300), 0.0, 1.0);
-    nearest = std::min(nearest, cncstream::norm(p - (a + ab * t)));
+  ASSERT_TRUE(seen);
+  if (!seen->status_work_pos) {
+    // Under heavy load the 40 lines may all be answered before the first
+    // status poll: then resume backs off one planner queue (lines 23..38 move).
+    EXPECT_TRUE(resumed.has("no position report was journaled")) << resumed.out;
+    EXPECT_EQ(job->from_line, 38 - 16);
+  } else {
+    EXPECT_TRUE(resumed.has("the controller last reported the tool at")) << resumed.out;
+    EXPECT_GT(seen->status_line, 0);
+    EXPECT_LE(seen->status_line, 38);
+    EXPECT_LT(job->from_line, seen->status_line);
+    EXPECT_GE(job->from_line + 17, seen->status_line);
+    std::string text;
+    for (const auto& l : modal_program()) text += l + "\n";
+    const Vec3 p{(*seen->status_work_pos)[0], (*seen->status_work_pos)[1], (*seen->status_work_pos)[2]};
+    double nearest = 1e9;
+    for (const auto& s : cncstream::gcode::trace_program(text).segments) {
+      if (s.source_line != static_cast<std::size_t>(job->from_line)) continue;
+      const Vec3 a = s.work_from(), ab = s.work_to() - a;
+      const double t = std::clamp(cncstream::dot(p - a, ab) / std::max(cncstream::dot(ab, ab), 1e-300), 0.0, 1.0);
+      nearest = std::min(nearest, cncstream::norm(p - (a + ab * t)));
+    }
+    EXPECT_LT(nearest, 0.01) << "the resumed line does not pass through the last reported position";
   }
-  EXPECT_LT(nearest, 0.01) << "the resumed line does not pass through the last reported position";
   EXPECT_EQ(job->outcome.value_or(""), "completed");
   EXPECT_EQ(j.last_progress(2)->last_line, 104);
   // A changed file is refused.

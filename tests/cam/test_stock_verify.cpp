@@ -126,6 +126,11 @@ TEST(Deviation, KnownGougeAndExcess) {
   EXPECT_EQ(s.excess, s.on_part - hole);
   EXPECT_NEAR(s.mean_excess, 0.3 * static_cast<double>(s.on_part - hole) / s.on_part, 1e-12);
   EXPECT_NE(s.summary().find("largest gouge 0.2000 mm"), std::string::npos) << s.summary();
+  // 0.3 mm left on all but the hole's ~4 % of the nodes.
+  EXPECT_NEAR(s.excess_p50, 0.3, 1e-12);
+  EXPECT_NEAR(s.excess_p99, 0.3, 1e-12);
+  EXPECT_NEAR(s.excess_rms, 0.3 * std::sqrt(static_cast<double>(s.on_part - hole) / s.on_part), 1e-12);
+  EXPECT_NE(s.summary().find("median 0.3000 mm, 90% 0.3000 mm, 99% 0.3000 mm"), std::string::npos) << s.summary();
 
   // The map: gouge pixels where the hole is, excess over the rest of the box.
   const auto img = render_deviation(r, "Deviation test", "flat 2 mm hole", 400);
@@ -253,4 +258,23 @@ TEST(MachinedPicture, HeightMapOfAFinishedPocket) {
   write_png(out_dir() / "machined_height_map.png", img);
   EXPECT_GT(img.width(), 800);
   EXPECT_LT(s.heights()[0], 1e-12);
+}
+
+TEST(Deviation, ScallopPercentilesOfAKnownDistribution) {
+  // A design block with its top at Z1 and a machined surface left k/100 mm
+  // high in column k (k = 0..99): the material left is uniform on 0..0.99 mm.
+  const auto g = GridSpec::covering(0, 0, 99, 9, 1, 1);
+  ASSERT_EQ(g.nx, 100u);
+  const auto design = design_heights(box(100, 20, 1), g);
+  std::vector<double> z(g.size());
+  for (std::size_t k = 0; k < g.size(); ++k) z[k] = 1 + static_cast<double>(k % g.nx) / 100.0;
+  const HeightFieldStock stock(g, 2.0, z);
+  const auto s = compare_to_design(stock, design, 0.05).stats;
+  ASSERT_EQ(s.on_part, g.size());
+  EXPECT_NEAR(s.excess_p50, 0.49, 1e-12);  // nearest rank: the 500th of 1000
+  EXPECT_NEAR(s.excess_p90, 0.89, 1e-12);
+  EXPECT_NEAR(s.excess_p99, 0.98, 1e-12);
+  double sq = 0;
+  for (int k = 0; k < 100; ++k) sq += (k / 100.0) * (k / 100.0);
+  EXPECT_NEAR(s.excess_rms, std::sqrt(sq / 100), 1e-12);
 }

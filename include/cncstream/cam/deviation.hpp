@@ -44,6 +44,9 @@ struct DeviationStats {
   DeviationAt largest_excess;  // most positive deviation
   double mean_excess = 0;      // mean over on-part nodes of max(0, deviation)
   double mean_deviation = 0;   // mean over on-part nodes
+  // Scallop statistics: the distribution over on-part nodes of the material
+  // left, max(0, deviation): median, 90th and 99th percentiles, and RMS.
+  double excess_p50 = 0, excess_p90 = 0, excess_p99 = 0, excess_rms = 0;
 
   std::string summary() const;  // a few lines for a person
 };
