@@ -8,6 +8,7 @@ const char* to_string(EventKind k) {
     case EventKind::Info: return "info";
     case EventKind::LineAnswered: return "line-answered";
     case EventKind::LineError: return "line-error";
+    case EventKind::CheckError: return "check-error";
     case EventKind::Alarm: return "alarm";
     case EventKind::Status: return "status";
     case EventKind::Reset: return "reset";

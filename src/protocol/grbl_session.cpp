@@ -102,8 +102,12 @@ void GrblSession::on_line(std::string_view line, double now) {
       emit({EventKind::Info, r.line});
       return;
     case ResponseKind::StartupEcho:
-      emit({r.body.find("error") != std::string::npos ? EventKind::Warning : EventKind::Info,
-            "startup line executed: " + r.line});
+      if (r.code > 0)
+        emit({EventKind::Warning, "startup line '" + r.body + "' failed: " +
+                                      describe(profile_.error_info(r.code), "error:") +
+                                      " (fix or clear it with $N0= / $N1=)"});
+      else
+        emit({EventKind::Info, "startup line executed: " + r.line});
       return;
     default: break;
   }
@@ -128,6 +132,15 @@ void GrblSession::on_answer(bool ok, int code, double) {
   in_flight_origin_.pop_front();
   switch (origin) {
     case Origin::File: {
+      if (!is_active(progress_.state)) {
+        // Lines still in the controller's buffer when an alarm ended the job
+        // get error:9 (locked) or the like: they ran nowhere, so they are
+        // not progress and not new errors.
+        emit({EventKind::Info, "file line " + std::to_string(line->source_line) + " answered '" +
+                                   (ok ? std::string("ok") : "error:" + std::to_string(code)) +
+                                   "' after the job had ended; not counted"});
+        break;
+      }
       progress_.last_answered_line = line->source_line;
       if (ok) {
         ++progress_.lines_answered;
@@ -147,6 +160,7 @@ void GrblSession::on_answer(bool ok, int code, double) {
       e.code = code;
       e.info = info;
       if (progress_.mode == JobMode::Check) {
+        e.kind = EventKind::CheckError;
         progress_.check_errors.push_back(e);
         error_seen_ = true;
         emit(std::move(e));
@@ -221,14 +235,23 @@ void GrblSession::on_banner() {
   counter_.clear();
   in_flight_origin_.clear();
   jog_dir_.reset();
-  const bool expected = expect_reset_;
+  const bool leaving_check = check_phase_ == CheckPhase::Leaving;
+  const bool expected = expect_reset_ || leaving_check;
   expect_reset_ = false;
   hold_sent_ = false;
-  emit({EventKind::Reset, expected ? "controller restarted after our soft reset"
-                                   : "controller restarted unexpectedly (reset button, power or a crash)"});
+  emit({EventKind::Reset, leaving_check ? "controller restarted on leaving check mode ($C), as GRBL does"
+                          : expected    ? "controller restarted after our soft reset"
+                                        : "controller restarted unexpectedly (reset button, power or a crash)"});
   if (check_phase_ == CheckPhase::Leaving) {
     check_phase_ = CheckPhase::None;
     const auto n = progress_.check_errors.size();
+    if (n == 0 && run_after_check_ && progress_.state == JobState::Running) {
+      emit({EventKind::JobState, "check pass found no errors: streaming the job"});
+      PreparedProgram program = std::move(program_);
+      progress_.state = JobState::None;
+      start_job(std::move(program), JobMode::Run, now_);
+      return;
+    }
     finish_job(n == 0 ? JobOutcome::CheckPassed : JobOutcome::CheckFailed,
                n == 0 ? "check pass found no errors" : "check pass found " + std::to_string(n) + " error(s)");
     return;
@@ -354,6 +377,8 @@ void GrblSession::start_job(PreparedProgram program, JobMode mode, double now) {
   program_ = std::move(program);
   next_index_ = 0;
   progress_ = JobProgress{};
+  run_after_check_ = mode == JobMode::CheckThenRun;
+  if (mode == JobMode::CheckThenRun) mode = JobMode::Check;
   progress_.mode = mode;
   progress_.total_lines = program_.lines.size();
   error_seen_ = false;
@@ -393,6 +418,20 @@ void GrblSession::pause() {
   write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::FeedHold).value_or('!'))));
   hold_sent_ = true;
   set_job_state(JobState::Paused, "feed hold");
+}
+
+void GrblSession::toggle_pause() {
+  if (progress_.state == JobState::Paused || progress_.state == JobState::HeldOnError) return resume();
+  // M0/M1, a pendant or the door put the machine in Hold while the job runs:
+  // space is cycle start then, not a second hold.
+  const auto& st = tracker_.last();
+  if (progress_.state == JobState::Running && st && st->state == MachineState::Hold) {
+    write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::CycleStart).value_or('~'))));
+    hold_sent_ = false;
+    emit({EventKind::JobState, "cycle start: the machine was holding (program pause or pendant)"});
+    return;
+  }
+  pause();
 }
 
 void GrblSession::resume() {

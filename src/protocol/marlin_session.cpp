@@ -216,7 +216,7 @@ void MarlinSession::pump() {
 void MarlinSession::start_job(PreparedProgram program, JobMode mode, double now) {
   now_ = now;
   if (is_active(progress_.state)) throw std::logic_error("a job is already running");
-  if (mode == JobMode::Check) throw std::invalid_argument("Marlin has no check mode ($C)");
+  if (mode != JobMode::Run) throw std::invalid_argument("Marlin has no check mode ($C)");
   if (!program.errors.empty()) {
     std::string all = "the program cannot be sent:";
     for (const auto& e : program.errors) all += "\n  " + e;

@@ -121,10 +121,20 @@ Response parse_response(std::string_view raw) {
     }
     return r;
   }
+  // Startup-line reports: ">G54G20:ok", or ">G1X1:error:22" when the line failed.
   if (line.front() == '>' && line.size() >= 4 && line.substr(line.size() - 3) == ":ok") {
     r.kind = ResponseKind::StartupEcho;
     r.body = std::string(line.substr(1, line.size() - 4));
     return r;
+  }
+  if (const auto err = line.rfind(":error:"); line.front() == '>' && err != std::string_view::npos) {
+    long n = 0;
+    if (to_int(line.substr(err + 7), n)) {
+      r.kind = ResponseKind::StartupEcho;
+      r.body = std::string(line.substr(1, err - 1));
+      r.code = static_cast<int>(n);
+      return r;
+    }
   }
   if (starts_with(line, "Resend:") || starts_with(line, "rs ")) {
     r.kind = ResponseKind::Resend;

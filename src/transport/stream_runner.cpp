@@ -23,6 +23,7 @@ namespace {
 std::string reason_for(const Event& e) {
   switch (e.kind) {
     case EventKind::LineError: return "error";
+    case EventKind::CheckError: return "check-error";
     case EventKind::Alarm: return "alarm";
     case EventKind::JobState: return "state";
     case EventKind::JobFinished: return "end";
@@ -81,12 +82,15 @@ RunResult StreamRunner::run(const JobInput& job) {
   std::string machine_state;
   bool report_inches = false;  // $13=1
 
+  bool journal_closed = false;  // the end row is written: the job's record is final
   auto record = [&](const std::string& reason) {
-    if (!journal || !engine) return;
+    if (!journal || !engine || journal_closed) return;
     ProgressRecord p;
     p.job_id = job_id;
-    p.lines_ok = static_cast<std::int64_t>(engine->progress().lines_answered);
-    p.last_line = engine->progress().last_answered_line;
+    // A check pass moves nothing: its lines are not progress a resume could skip.
+    const bool checking = engine->progress().mode == JobMode::Check;
+    p.lines_ok = checking ? 0 : static_cast<std::int64_t>(engine->progress().lines_answered);
+    p.last_line = checking ? 0 : engine->progress().last_answered_line;
     p.reason = reason;
     if (auto* g = dynamic_cast<GrblSession*>(engine.get())) p.modal = g->modal();
     else if (auto* m = dynamic_cast<MarlinSession*>(engine.get())) p.modal = m->modal();
@@ -111,6 +115,7 @@ RunResult StreamRunner::run(const JobInput& job) {
     if (journal && job_id) {
       record("end");
       journal->end_job(job_id, to_string(o), msg);
+      journal_closed = true;
     }
     timer_cancel();
     port.close_when_flushed();  // the loop ends when the last byte is out
@@ -126,7 +131,10 @@ RunResult StreamRunner::run(const JobInput& job) {
         status_line = engine->progress().last_answered_line;
         if (const auto& w = e.status->wpos) {
           const double k = report_inches ? 25.4 : 1.0;
-          status_work_pos = std::array<double, 3>{(*w)[0] * k, (*w)[1] * k, (*w)[2] * k};
+          const std::array<double, 3> p{(*w)[0] * k, (*w)[1] * k, (*w)[2] * k};
+          // A long move answers no lines: the moving position alone is worth a row.
+          if (status_work_pos != p && job_id) dirty = true;
+          status_work_pos = p;
         }
       }
       else if (e.kind != EventKind::Status && e.kind != EventKind::Info && e.kind != EventKind::Warning &&
@@ -193,7 +201,7 @@ RunResult StreamRunner::run(const JobInput& job) {
     if (opt_.journal_path) {
       journal = std::make_unique<Journal>(*opt_.journal_path);
       job_id = journal->begin_job(std::filesystem::absolute(gcode_path).string(), job.file_sha256, profile.id,
-                                  opt_.port, opt_.mode == JobMode::Check ? "check" : "run", job.total_lines,
+                                  opt_.port, opt_.mode == JobMode::Check ? "check" : opt_.mode == JobMode::CheckThenRun ? "check+run" : "run", job.total_lines,
                                   job.resumed_from, job.from_line);
       result.job_id = job_id;
     }
@@ -305,6 +313,7 @@ RunResult StreamRunner::run(const JobInput& job) {
           for (const auto& q : reqs) {
             if (q.kind == Request::Pause) engine->pause();
             else if (q.kind == Request::Resume) engine->resume();
+            else if (q.kind == Request::TogglePause) engine->toggle_pause();
             else if (auto* g = dynamic_cast<GrblSession*>(engine.get()); !g || !g->realtime(q.realtime)) {
               Event w{EventKind::Warning, std::string("real-time command '") + realtime_key(q.realtime) +
                                               "' is not available on " + engine->profile().id};

@@ -50,7 +50,11 @@ Outcome run_with(std::vector<std::string> extra) {
   EXPECT_EQ(jobs.size(), 1u) << "exactly one job, never an automatic second one";
   if (!jobs.empty()) {
     o.journal_outcome = jobs[0].outcome.value_or("interrupted");
-    if (const auto p = j.last_progress(jobs[0].id)) o.journal_last_line = p->last_line;
+    if (const auto p = j.last_progress(jobs[0].id)) {
+      o.journal_last_line = p->last_line;
+      // Once the job has ended nothing more is journaled: the end row is last.
+      EXPECT_EQ(p->reason, "end") << o.run.out;
+    }
   }
   o.sim_received = number_after(o.run.out, "sim: ");
   o.reported_last_line = number_after(o.run.out, "last answered file line ");
@@ -81,6 +85,10 @@ TEST(Faults, AlarmEndsTheJobWithAdvice) {
   EXPECT_EQ(o.journal_outcome, "alarm");
   EXPECT_EQ(o.journal_last_line, o.reported_last_line);
   EXPECT_LE(o.sim_received, 100 + 6) << o.run.out;
+  // The alarm came with received line 100 (file line 98); the lines behind it
+  // were refused (error:9) and count neither as answered nor as new errors.
+  EXPECT_LE(o.reported_last_line, 98) << o.run.out;
+  EXPECT_FALSE(o.run.has("ERROR at line")) << o.run.out;
 }
 
 TEST(Faults, DroppedAndCorruptedBytesAreReportedAsLineErrors) {
@@ -123,13 +131,31 @@ TEST(Faults, CheckModeReportsEveryErrorWithoutMoving) {
     f << "G21 G90\nG1 X1 Y1\nG0 Z5\nG5 X1\nG0 X2\nM2\n";  // line 2: no feed; line 4: unsupported
   }
   const auto db = (temp_dir() / "check.sqlite").string();
+  // --check: every error with its line, the pass runs to the end, nothing moves.
   const auto r = run_cncstream({bad.string(), "sim", "--check", "--journal", db, "--timeout", "20"});
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_TRUE(r.has("outcome: check-failed")) << r.out;
-  EXPECT_TRUE(r.has("line 2")) << r.out;
-  EXPECT_TRUE(r.has("line 4")) << r.out;
+  EXPECT_TRUE(r.has("check: line 2 'G1X1Y1': error:22")) << r.out;
+  EXPECT_TRUE(r.has("check: line 4 'G5X1': error:20")) << r.out;
+  EXPECT_FALSE(r.has("stopping the job")) << r.out;
+  EXPECT_FALSE(r.has("unexpectedly")) << r.out;
+  EXPECT_TRUE(r.has("final position MPos 0.000,0.000,0.000")) << r.out;
+  // --check-only on a good file: passes, moves nothing.
+  const auto only = run_cncstream({short_program(), "sim", "--check-only", "--journal", db, "--timeout", "20"});
+  EXPECT_EQ(only.code, 0) << only.out;
+  EXPECT_TRUE(only.has("outcome: check-passed")) << only.out;
+  EXPECT_TRUE(only.has("final position MPos 0.000,0.000,0.000")) << only.out;
+  // --check on a good file: the pass, then the job itself.
   const auto good = run_cncstream({short_program(), "sim", "--check", "--journal", db, "--timeout", "20"});
   EXPECT_EQ(good.code, 0) << good.out;
-  EXPECT_TRUE(good.has("outcome: check-passed")) << good.out;
-  EXPECT_TRUE(good.has("final position MPos 0.000,0.000,0.000")) << good.out;  // nothing moved
+  EXPECT_TRUE(good.has("check pass found no errors: streaming the job")) << good.out;
+  EXPECT_TRUE(good.has("outcome: completed")) << good.out;
+  EXPECT_TRUE(good.has("final position MPos 34.300,9.900,5.000")) << good.out;
+  Journal j(db);
+  const auto jobs = j.jobs();
+  ASSERT_EQ(jobs.size(), 3u);
+  EXPECT_EQ(jobs[0].mode, "check+run");
+  EXPECT_EQ(j.last_progress(jobs[0].id)->last_line, 606);
+  EXPECT_EQ(jobs[1].mode, "check");
+  EXPECT_EQ(j.last_progress(jobs[1].id)->last_line, 0);  // a check pass is no progress to resume from
 }

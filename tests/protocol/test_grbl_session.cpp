@@ -309,6 +309,38 @@ TEST(GrblSession, CheckModeCollectsEveryError) {
   EXPECT_EQ(s.progress().check_errors[1].code, 33);
 }
 
+TEST(GrblSession, CheckThenRunStreamsOnlyAfterACleanPass) {
+  GrblSession s(grbl(), no_poll());
+  s.start_job(program({"G21", "G1 X1 F100"}), JobMode::CheckThenRun, 0);
+  Wire w;
+  w.take(s.take_output());
+  EXPECT_EQ(s.progress().mode, JobMode::Check);
+  s.on_bytes("[MSG:Enabled]\nok\n", 1);
+  w.take(s.take_output());
+  s.on_bytes("ok\nok\n", 1.5);
+  w.take(s.take_output());
+  EXPECT_EQ(w.lines.back(), "$C");
+  s.on_bytes("[MSG:Disabled]\nok\nGrbl 1.1h ['$' for help]\n", 2);
+  w.take(s.take_output());
+  EXPECT_EQ(s.progress().mode, JobMode::Run);
+  EXPECT_EQ(s.progress().state, JobState::Running);
+  EXPECT_EQ(w.lines, (std::vector<std::string>{"$C", "G21", "G1X1F100", "$C", "G21", "G1X1F100"}));
+  s.on_bytes("ok\nok\n<Idle|MPos:1,0,0>\n<Idle|MPos:1,0,0>\n", 3);
+  EXPECT_EQ(s.progress().outcome, JobOutcome::Completed);
+  // An error in the pass: nothing is streamed.
+  GrblSession f(grbl(), no_poll());
+  f.start_job(program({"G1 X1"}), JobMode::CheckThenRun, 0);
+  f.take_output();
+  f.on_bytes("ok\n", 1);
+  f.take_output();
+  f.on_bytes("error:22\n", 1.5);
+  EXPECT_EQ(count(f.take_events(), EventKind::CheckError), 1u);
+  f.take_output();
+  f.on_bytes("ok\nGrbl 1.1h ['$' for help]\n", 2);
+  EXPECT_EQ(f.progress().outcome, JobOutcome::CheckFailed);
+  EXPECT_TRUE(f.take_output().empty());
+}
+
 TEST(GrblSession, JogKeepsTwoSegmentsAndCancelsOnRelease) {
   GrblSession s(grbl(), no_poll());
   s.jog_start(JogDirection{{1, 1, 0}}, 600);
@@ -357,4 +389,66 @@ TEST(GrblSession, PollsStatusAtProfileInterval) {
   EXPECT_EQ(h.take_output(), "");  // pendant owns the stream
   h.on_bytes("<Idle|MPos:0,0,0|MPG:0>\n", 1);
   EXPECT_EQ(h.take_output(), "G0X1\n");
+}
+
+TEST(GrblSession, OneKeyPausesResumesAndStartsAProgramPause) {
+  GrblSession s(grbl(), no_poll());
+  s.start_job(program({"G1X1F100", "M0", "G1X2"}), JobMode::Run, 0);
+  s.take_output();
+  s.toggle_pause();
+  EXPECT_EQ(s.progress().state, JobState::Paused);
+  s.toggle_pause();
+  EXPECT_EQ(s.progress().state, JobState::Running);
+  EXPECT_EQ(s.take_output(), "!~");
+  // M0 holds the machine while the job runs: the key is cycle start, once.
+  s.on_bytes("ok\nok\n<Hold:0|MPos:1,0,0>\n", 1);
+  s.take_output();
+  s.toggle_pause();
+  EXPECT_EQ(s.take_output(), "~");
+  EXPECT_EQ(s.progress().state, JobState::Running);
+  // After an error hold, one press continues.
+  GrblSession e(grbl(), no_poll());
+  e.start_job(program({"G1X1", "G1X2F100"}), JobMode::Run, 0);
+  e.take_output();
+  e.on_bytes("error:22\n", 1);
+  ASSERT_EQ(e.progress().state, JobState::HeldOnError);
+  e.take_output();
+  e.toggle_pause();
+  EXPECT_EQ(e.progress().state, JobState::Running);
+  EXPECT_EQ(e.take_output().substr(0, 1), "~");
+}
+
+TEST(GrblSession, LinesRefusedAfterAnAlarmAreNeitherProgressNorErrors) {
+  GrblSession s(grbl(), no_poll());
+  s.start_job(program({"G1X1F100", "G1X2", "G1X3", "G1X4"}), JobMode::Run, 0);
+  s.take_output();
+  s.on_bytes("ok\nALARM:1\n", 1);
+  ASSERT_EQ(s.progress().outcome, JobOutcome::Alarm);
+  s.take_events();
+  s.on_bytes("error:9\nerror:9\nerror:9\n", 1.1);
+  EXPECT_EQ(s.progress().last_answered_line, 1);
+  EXPECT_EQ(s.progress().lines_answered, 1u);
+  EXPECT_EQ(count(s.take_events(), EventKind::LineError), 0u);
+}
+
+TEST(GrblSession, LeavingCheckModeIsAnExpectedResetAndAFailedStartupLineWarns) {
+  GrblSession s(grbl(), no_poll());
+  s.start_job(program({"G21"}), JobMode::Check, 0);
+  s.take_output();
+  s.on_bytes("[MSG:Enabled]\nok\nok\n", 1);
+  s.take_output();
+  s.take_events();
+  s.on_bytes("[MSG:Disabled]\nok\nGrbl 1.1h ['$' for help]\n>G1X1:error:22\n", 2);
+  EXPECT_EQ(s.progress().outcome, JobOutcome::CheckPassed);
+  bool reset_seen = false, startup_warned = false;
+  for (const auto& e : s.take_events()) {
+    if (e.kind == EventKind::Reset) {
+      reset_seen = true;
+      EXPECT_EQ(e.text.find("unexpectedly"), std::string::npos) << e.text;
+    }
+    if (e.kind == EventKind::Warning && e.text.find("startup line 'G1X1' failed: error:22") != std::string::npos)
+      startup_warned = true;
+  }
+  EXPECT_TRUE(reset_seen);
+  EXPECT_TRUE(startup_warned);
 }

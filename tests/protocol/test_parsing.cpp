@@ -22,6 +22,10 @@ TEST(Response, Classifies) {
   EXPECT_EQ(parse_response("[OPT:V,15,128]").kind, ResponseKind::Options);
   EXPECT_EQ(parse_response("[G54:0.000,0.000,0.000]").kind, ResponseKind::Feedback);
   EXPECT_EQ(parse_response(">G54G20:ok").kind, ResponseKind::StartupEcho);
+  const auto failed = parse_response(">G1X1:error:22");
+  EXPECT_EQ(failed.kind, ResponseKind::StartupEcho);
+  EXPECT_EQ(failed.body, "G1X1");
+  EXPECT_EQ(failed.code, 22);
   EXPECT_EQ(parse_response("Grbl 1.1h ['$' for help]").kind, ResponseKind::Other);
   auto rs = parse_response("Resend: 42");
   EXPECT_EQ(rs.kind, ResponseKind::Resend);

@@ -19,6 +19,7 @@ enum class EventKind {
   Info,          // controller messages worth showing ([MSG:..], echo:)
   LineAnswered,  // a file line got `ok`
   LineError,     // a file line got `error:N` / was rejected
+  CheckError,    // the check pass ($C) rejected a file line (nothing moved; the pass goes on)
   Alarm,         // ALARM:N
   Status,        // a parsed status report
   Reset,         // the controller restarted (banner seen)
@@ -40,7 +41,9 @@ struct Event {
   std::optional<StatusReport> status;
 };
 
-enum class JobMode { Run, Check };
+// CheckThenRun: a check pass ($C) first; the job streams only if it found no
+// error (progress().mode is Check during the pass, Run after).
+enum class JobMode { Run, Check, CheckThenRun };
 enum class JobState { None, Running, Paused, HeldOnError, Stopping, Finished };
 const char* to_string(JobState s);
 
@@ -71,6 +74,12 @@ class ProtocolEngine {
   virtual void start_job(PreparedProgram program, JobMode mode, double now) = 0;
   virtual void pause() = 0;
   virtual void resume() = 0;
+  // The operator's one key: resume if the job (or the machine) is holding,
+  // else pause.
+  virtual void toggle_pause() {
+    if (progress().state == JobState::Paused || progress().state == JobState::HeldOnError) resume();
+    else pause();
+  }
   virtual void stop() = 0;  // controlled stop: hold, wait for motion to stop, reset
   // An operator command line (e.g. "$X", "$H", "G0 X0"); queued behind the job.
   virtual void send_command(const std::string& line) = 0;

@@ -31,6 +31,7 @@ class GrblSession final : public ProtocolEngine {
   void start_job(PreparedProgram program, JobMode mode, double now) override;
   void pause() override;
   void resume() override;
+  void toggle_pause() override;
   void stop() override;
   void send_command(const std::string& line) override;
   void disconnected() override;
@@ -80,6 +81,7 @@ class GrblSession final : public ProtocolEngine {
   std::size_t next_index_ = 0;
   JobProgress progress_;
   CheckPhase check_phase_ = CheckPhase::None;
+  bool run_after_check_ = false;
   bool error_seen_ = false;
 
   std::deque<std::pair<PreparedLine, Origin>> commands_;

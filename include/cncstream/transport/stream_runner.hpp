@@ -93,11 +93,12 @@ class StreamRunner {
   // the identified firmware does not have is reported as a warning event.
   void request_pause() { enqueue(Request{Request::Pause, {}}); }
   void request_resume() { enqueue(Request{Request::Resume, {}}); }
+  void request_toggle_pause() { enqueue(Request{Request::TogglePause, {}}); }
   void request_realtime(protocol::Realtime r) { enqueue(Request{Request::RealtimeByte, r}); }
 
  private:
   struct Request {
-    enum Kind { Pause, Resume, RealtimeByte } kind;
+    enum Kind { Pause, Resume, TogglePause, RealtimeByte } kind;
     protocol::Realtime realtime;
   };
   void enqueue(Request r) {

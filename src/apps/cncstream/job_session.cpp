@@ -57,7 +57,9 @@ std::string limits_text(const gcode::MotionLimits& m) {
 void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
   sub->add_option("--serial", o.serial, "Baud and frame, e.g. 115200 or 115200,8N1");
   sub->add_option("--profile", o.profile, "Force a firmware profile (grbl-1.1, grblhal, fluidnc, marlin)");
-  sub->add_flag("--check", o.check, "Check-mode pass ($C): report every G-code error without moving");
+  sub->add_flag("--check", o.check,
+                "Run the file through check mode ($C) first; stream it only if no line has an error");
+  sub->add_flag("--check-only", o.check_only, "Check mode ($C) only: report every G-code error, move nothing");
   sub->add_option("--journal", o.journal, "Journal database (default: $XDG_STATE_HOME/cncstream/journal.sqlite)");
   sub->add_flag("--no-journal", o.no_journal, "Do not journal this job");
   sub->add_flag("-v,--verbose", o.verbose, "Print controller messages and status");
@@ -175,7 +177,9 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
   ro.serial = transport::parse_serial_settings(c.serial);
   ro.profiles_dir = protocol::default_profiles_dir();
   if (!c.profile.empty()) ro.force_profile = c.profile;
-  ro.mode = c.check ? protocol::JobMode::Check : protocol::JobMode::Run;
+  ro.mode = c.check_only ? protocol::JobMode::Check
+            : c.check  ? protocol::JobMode::CheckThenRun
+                       : protocol::JobMode::Run;
   if (!c.no_journal) ro.journal_path = journal_path(c);
   ro.max_run_s = c.timeout_s;
 
@@ -221,6 +225,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
           if (runner_ptr) runner_ptr->request_stop();
         }
         return;
+      case EventKind::CheckError: panel.message("check: " + e.text); return;
       case EventKind::Alarm: panel.message("ALARM: " + e.text); return;
       default: panel.message(std::string(to_string(e.kind)) + ": " + e.text); return;
     }

@@ -22,7 +22,7 @@ struct ConnectionOptions {
   std::string port = "auto";
   std::string serial = "115200";
   std::string profile, journal;
-  bool no_journal = false, check = false, verbose = false, yes = false;
+  bool no_journal = false, check = false, check_only = false, verbose = false, yes = false;
   double progress_interval_s = 5;  // plain progress lines without a TTY
   double timeout_s = 0;            // give up after this long (0: never)
 };

@@ -39,11 +39,7 @@ void KeyboardControl::loop() {
     char c = 0;
     if (::read(STDIN_FILENO, &c, 1) != 1) continue;
     switch (c) {
-      case ' ':
-        if (paused_) runner_.request_resume();
-        else runner_.request_pause();
-        paused_ = !paused_;
-        break;
+      case ' ': runner_.request_toggle_pause(); break;
       case 's': case 'S': runner_.request_stop(); break;
       case '+': runner_.request_realtime(Realtime::FeedOvPlus10); break;
       case '-': runner_.request_realtime(Realtime::FeedOvMinus10); break;

@@ -25,7 +25,6 @@ class KeyboardControl {
   transport::StreamRunner& runner_;
   std::atomic<bool> running_{true};
   bool active_ = false;
-  bool paused_ = false;
   std::atomic<bool> show_help_{false};
   std::thread thread_;
 };
