@@ -2,6 +2,7 @@
 
 #include <libserialport.h>
 
+#include <cctype>
 #include <cstdio>
 #include <stdexcept>
 
@@ -32,6 +33,14 @@ std::string match_known_board(std::optional<std::uint16_t> vid, std::optional<st
   if (!vid) return {};
   for (const auto& b : known_boards())
     if (b.vid == *vid && (!b.pid || (pid && *b.pid == *pid))) return b.name;
+  return {};
+}
+
+std::string match_board_by_name(const PortInfo& p) {
+  std::string text = p.product + " | " + p.manufacturer + " | " + p.description;
+  for (char& ch : text) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  for (const char* word : {"grblhal", "grbl", "fluidnc", "marlin", "cnc"})
+    if (text.find(word) != std::string::npos) return std::string("controller by name ('") + word + "' in its USB description)";
   return {};
 }
 
@@ -67,6 +76,7 @@ std::vector<PortInfo> list_ports() {
       default: info.transport = "native"; break;
     }
     info.board = match_known_board(info.vid, info.pid);
+    if (info.board.empty()) info.board = match_board_by_name(info);
     out.push_back(std::move(info));
   }
   sp_free_port_list(ports);
@@ -100,7 +110,7 @@ AutoChoice choose_auto_port(const std::vector<PortInfo>& ports) {
     return c;
   }
   if (known.empty()) {
-    c.message = "no serial port with a known controller USB ID was found";
+    c.message = "no serial port with a known controller USB ID or name was found";
     if (!ports.empty()) {
       c.message += "; ports present:";
       for (const auto& p : ports) c.message += "\n  " + format_port(p);

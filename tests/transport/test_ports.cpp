@@ -43,6 +43,25 @@ TEST(Ports, AutoPicksTheOnlyKnownBoard) {
   EXPECT_NE(c.message.find("/dev/ttyS0"), std::string::npos);
 }
 
+TEST(Ports, BoardsNamedInTheirDescriptionCount) {
+  PortInfo p;
+  p.path = "/dev/ttyACM0";
+  p.transport = "usb";
+  p.vid = 0x1234;
+  p.pid = 0x5678;
+  p.product = "GrblHAL CNC Controller";
+  EXPECT_NE(match_board_by_name(p).find("grblhal"), std::string::npos);
+  p.product = "USB Keyboard";
+  EXPECT_TRUE(match_board_by_name(p).empty());
+  p.description = "FluidNC ESP32-S3";
+  EXPECT_NE(match_board_by_name(p).find("fluidnc"), std::string::npos);
+  PortInfo mouse = usb("/dev/ttyUSB1", 0x046D, 0xC077);
+  p.board = match_board_by_name(p);
+  const auto c = choose_auto_port({mouse, p});
+  ASSERT_TRUE(c.port);
+  EXPECT_EQ(c.port->path, "/dev/ttyACM0");
+}
+
 TEST(Ports, ListingDoesNotThrow) { EXPECT_NO_THROW(list_ports()); }
 
 TEST(SerialSettings, Parse) {

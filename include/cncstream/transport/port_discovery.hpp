@@ -25,6 +25,10 @@ struct KnownBoard {
 const std::vector<KnownBoard>& known_boards();
 // The board name for a VID:PID, or empty.
 std::string match_known_board(std::optional<std::uint16_t> vid, std::optional<std::uint16_t> pid);
+// A port whose USB IDs are unknown (a new board, a native USB firmware) may
+// still name itself: "grbl", "fluidnc", "marlin", "cnc" in its product,
+// manufacturer or description (case-insensitive). Empty if none.
+std::string match_board_by_name(const PortInfo& port);
 
 std::vector<PortInfo> list_ports();  // throws std::runtime_error if enumeration fails
 
