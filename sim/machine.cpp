@@ -443,7 +443,8 @@ void Machine::queue_actions(const gc::BlockResult& r) {
   const bool check = state_ == MachineState::Check;
   const int previous_tool = parser_.tool;
   parser_ = r.state;
-  auto add_block = [&](const Vec3& from, const Vec3& to, double feed, bool rapid) -> bool {
+  auto add_block = [&](const Vec3& from, const Vec3& to, double feed, bool rapid,
+                       bool no_feed_override = false) -> bool {
     if (soft_limit_violated(to)) {
       raise_critical_alarm(grbl::kAlarmSoftLimit);
       return false;
@@ -451,7 +452,7 @@ void Machine::queue_actions(const gc::BlockResult& r) {
     if (check) return true;
     Step s;
     s.kind = Step::Block;
-    s.block = {from, to, feed, rapid, parser_.line_number, lines_received_};
+    s.block = {from, to, feed, rapid, parser_.line_number, lines_received_, no_feed_override};
     steps_.push_back(s);
     return true;
   };
@@ -500,7 +501,7 @@ void Machine::queue_actions(const gc::BlockResult& r) {
           contact = true;
         }
       }
-      if (!add_block(pr->from, stop, pr->feed, false)) return;
+      if (!add_block(pr->from, stop, pr->feed, false, true)) return;
       add_sync();
       const bool error_on_fail = pr->error_on_fail;
       Step end;
@@ -600,7 +601,7 @@ void Machine::process_system(const std::string& line) {
     parser_.position = r.state.position;
     Step s;
     s.kind = Step::Block;
-    s.block = {jog.from, jog.to, jog.feed, false, 0, lines_received_};
+    s.block = {jog.from, jog.to, jog.feed, false, 0, lines_received_, true};
     s.jog = true;
     steps_.push_back(s);
     return reply(0);

@@ -33,7 +33,7 @@ void MotionQueue::set_position(const Vec3& p) { position_ = p; }
 
 double MotionQueue::nominal(const Planned& b) const {
   if (b.src.rapid) return b.rapid_rate * rapid_override_;
-  return std::min(b.src.feed / 60.0 * feed_override_, b.rapid_rate);
+  return std::min(b.src.feed / 60.0 * (b.src.no_feed_override ? 1.0 : feed_override_), b.rapid_rate);
 }
 
 bool MotionQueue::push(const MotionBlock& block) {

@@ -207,6 +207,37 @@ TEST(Machine, OverridesDwellAndProgramEnd) {
   EXPECT_EQ(send(m, "M30"), "[MSG:Pgm End]\r\nok\r\n");
 }
 
+TEST(Machine, JogsAndProbesIgnoreTheFeedOverride) {
+  // Acceleration high enough that every move here runs at its nominal speed.
+  auto fs_feed = [](const std::string& report) {
+    const auto at = report.find("|FS:");
+    return at == std::string::npos ? -1.0 : std::stod(report.substr(at + 4));
+  };
+  MachineOptions o;
+  o.probe_surface_z = -50;
+  Machine m(o);
+  m.take_output();
+  send(m, "$120=2000");
+  send(m, "$121=2000");
+  send(m, "$122=2000");
+  for (int k = 0; k < 5; ++k) m.receive(std::string(1, '\x91'));  // feed override 150 %
+  m.advance(0.01);
+  send(m, "G1 X20 F100");
+  m.advance(1);
+  EXPECT_NEAR(fs_feed(m.status_report()), 150, 1) << "a feed move follows the override";
+  m.run_until_idle();
+  send(m, "$J=G91 X10 F100");
+  m.advance(1);
+  EXPECT_NEAR(fs_feed(m.status_report()), 100, 1) << "a jog runs at its own feed";
+  m.run_until_idle();
+  m.receive("G38.2 Z-100 F100\n");  // answered only once the probe ends: do not wait for it
+  m.advance(1);
+  const std::string report = m.status_report();
+  EXPECT_NEAR(fs_feed(report), 100, 1) << "a probe runs at its own feed: " << report;
+  m.run_until_idle();
+  EXPECT_NE(m.take_output().find("[PRB:30.000,0.000,-50.000:1]"), std::string::npos);
+}
+
 TEST(Machine, M0PausesUntilCycleStart) {
   Machine m;
   m.take_output();

@@ -31,6 +31,9 @@ struct MotionBlock {
   bool rapid = false;
   std::int32_t line_number = 0;
   std::uint64_t tag = 0;  // caller's id (e.g. the source line index)
+  // Jogs and probe moves run at their programmed feed: GRBL exempts them from
+  // the feed override (PL_COND_FLAG_NO_FEED_OVERRIDE).
+  bool no_feed_override = false;
 };
 
 class MotionQueue {
