@@ -74,6 +74,35 @@ void check_regexes(const std::filesystem::path& path, const toml::node& n, const
   }
 }
 
+void read_messages(const std::filesystem::path& path, const toml::node& n,
+                   std::vector<FirmwareProfile::MessageInfo>& out) {
+  const auto* arr = n.as_array();
+  if (!arr) fail(path, n, "'messages' must be an array of tables ([[messages]])");
+  for (const auto& e : *arr) {
+    const auto* t = e.as_table();
+    if (!t) fail(path, e, "each 'messages' entry must be a table");
+    FirmwareProfile::MessageInfo m;
+    for (const auto& [k, v] : *t) {
+      const std::string name(k.str());
+      if (name == "pattern") m.pattern = get_string(path, v, "pattern");
+      else if (name == "name") m.info.name = get_string(path, v, "name");
+      else if (name == "text") m.info.text = get_string(path, v, "text");
+      else if (name == "action") m.info.action = get_string(path, v, "action");
+      else if (name == "position_lost") {
+        auto b = v.value<bool>();
+        if (!b) fail(path, v, "'position_lost' must be true or false");
+        m.info.position_lost = *b;
+      } else {
+        fail(path, v, "unknown key '" + name + "' in messages entry");
+      }
+    }
+    if (m.pattern.empty() || m.info.text.empty() || m.info.action.empty())
+      fail(path, e, "messages entry needs 'pattern', 'text' and 'action'");
+    check_regexes(path, e, {m.pattern});
+    out.push_back(std::move(m));
+  }
+}
+
 void read_codes(const std::filesystem::path& path, const toml::node& n, const char* key,
                 std::map<int, CodeInfo>& out) {
   const auto* arr = n.as_array();
@@ -200,6 +229,7 @@ FirmwareProfile load_impl(const std::filesystem::path& path, std::set<std::strin
       }
     } else if (key == "errors") read_codes(path, v, "errors", p.errors);
     else if (key == "alarms") read_codes(path, v, "alarms", p.alarms);
+    else if (key == "messages") read_messages(path, v, p.messages);
     else fail(path, v, "unknown key '" + key + "'");
   }
   if (p.family.empty()) throw ProfileError(path.string() + ": missing 'family'");
@@ -239,6 +269,12 @@ CodeInfo FirmwareProfile::error_info(int code) const {
   c.text = "error:" + std::to_string(code) + " is not in the " + id + " table.";
   c.action = "Look the code up in the controller's documentation; check the line for unsupported G-code.";
   return c;
+}
+
+std::optional<CodeInfo> FirmwareProfile::message_info(std::string_view text) const {
+  for (const auto& m : messages)
+    if (matches_any_pattern({m.pattern}, text)) return m.info;
+  return std::nullopt;
 }
 
 CodeInfo FirmwareProfile::alarm_info(int code) const {

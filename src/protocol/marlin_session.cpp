@@ -108,6 +108,12 @@ void MarlinSession::on_line(std::string_view line, double now) {
       }
       Event e{EventKind::Alarm, "controller error: " + r.body};
       e.source_line = progress_.last_answered_line;
+      if (auto info = profile_.message_info(r.body)) {
+        e.text += " (" + info->name + "): " + info->text + " What to do: " + info->action;
+        e.info = std::move(info);
+      } else {
+        e.text += " (not in the " + profile_.id + " message table: see the firmware's documentation)";
+      }
       emit(std::move(e));
       if (is_active(progress_.state))
         finish_job(JobOutcome::Error, "controller reported '" + r.body + "' after file line " +
@@ -158,10 +164,22 @@ void MarlinSession::on_ok(const Response& r) {
     e.line_text = s.line.text;
     emit(std::move(e));
   }
-  if (progress_.state == JobState::Stopping && outstanding_.empty()) {
-    finish_job(JobOutcome::Stopped, "stopped after file line " + std::to_string(progress_.last_answered_line) +
-                                        " was answered (the controller's queue has drained)");
+  if (progress_.state == JobState::Stopping && outstanding_.empty()) quick_stop();
+}
+
+// Marlin has no feed hold: a stop sends M410 (quick stop), which the
+// emergency parser acts on as the bytes arrive, discarding every queued move;
+// without an emergency parser it runs once it reaches the queue's head.
+void MarlinSession::quick_stop() {
+  if (!quick_stop_sent_) {
+    quick_stop_sent_ = true;
+    PreparedLine l;
+    l.text = "M410";
+    send_numbered(std::move(l), false);
+    return;
   }
+  finish_job(JobOutcome::Stopped, "stopped after file line " + std::to_string(progress_.last_answered_line) +
+                                      " was answered; M410 aborted the moves the controller had queued");
 }
 
 void MarlinSession::send_numbered(PreparedLine line, bool file) {
@@ -249,9 +267,9 @@ void MarlinSession::stop() {
   if (!is_active(progress_.state) || progress_.state == JobState::Stopping) return;
   progress_.state = JobState::Stopping;
   resend_queue_.clear();
-  emit({EventKind::JobState, "stopping: no more lines are sent; waiting for the queue to drain"});
-  if (outstanding_.empty()) finish_job(JobOutcome::Stopped, "stopped after file line " +
-                                                                std::to_string(progress_.last_answered_line));
+  quick_stop_sent_ = false;
+  emit({EventKind::JobState, "stopping: no more file lines; M410 (quick stop) aborts the queued moves"});
+  if (outstanding_.empty()) quick_stop();
 }
 
 void MarlinSession::send_command(const std::string& line) {

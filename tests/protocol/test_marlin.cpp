@@ -71,15 +71,26 @@ TEST(Marlin, FatalErrorEndsJobAndStopDrains) {
   s.tick(0);
   s.on_bytes("ok\n", 0);
   s.start_job(program({"G1 X1", "G1 X2"}), JobMode::Run, 0);
+  s.take_events();
   s.on_bytes("Error:Printer halted. kill() called!\n", 1);
   EXPECT_EQ(s.progress().outcome, JobOutcome::Error);
+  bool explained = false;
+  for (const auto& e : s.take_events())
+    if (e.kind == EventKind::Alarm && e.info && e.info->position_lost &&
+        e.text.find("reset the board") != std::string::npos)
+      explained = true;
+  EXPECT_TRUE(explained) << "a Marlin error gets its meaning and advice from the profile";
   MarlinSession t(marlin());
   t.tick(0);
   t.on_bytes("ok\n", 0);
   t.start_job(program({"G1 X1", "G1 X2"}), JobMode::Run, 0);
+  t.take_output();
   t.stop();
   EXPECT_EQ(t.progress().state, JobState::Stopping);
-  t.on_bytes("ok\n", 1);
+  t.on_bytes("ok\n", 1);  // line 1 answered: then M410, numbered like any line
+  EXPECT_EQ(t.take_output(), marlin_frame(2, "M410") + "\n");
+  EXPECT_EQ(t.progress().state, JobState::Stopping);
+  t.on_bytes("ok\n", 1.1);
   EXPECT_EQ(t.progress().outcome, JobOutcome::Stopped);
   EXPECT_EQ(t.progress().last_answered_line, 1);
   EXPECT_THROW(t.start_job(program({"G1 X1"}), JobMode::Check, 2), std::invalid_argument);

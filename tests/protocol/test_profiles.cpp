@@ -68,7 +68,25 @@ TEST(Profiles, ErrorsNameFileAndLine) {
   EXPECT_THROW(load_firmware_profile(dir / "bad2.toml"), ProfileError);
   { std::ofstream(dir / "bad3.toml") << "family = \"grbl\"\nbanner_patterns = ['x']\n[realtime]\nwarp = 3\n"; }
   EXPECT_THROW(load_firmware_profile(dir / "bad3.toml"), ProfileError);
+  {
+    std::ofstream(dir / "bad4.toml") << "family = \"marlin\"\nbanner_patterns = ['x']\n[[messages]]\n"
+                                        "pattern = 'halted'\ntext = 'no advice given'\n";
+  }
+  try {
+    load_firmware_profile(dir / "bad4.toml");
+    FAIL();
+  } catch (const ProfileError& e) {
+    EXPECT_NE(std::string(e.what()).find("'pattern', 'text' and 'action'"), std::string::npos) << e.what();
+  }
   std::filesystem::remove_all(dir);
+}
+
+TEST(Profiles, MarlinExplainsItsTextErrors) {
+  const auto m = load_firmware_profile(CNCSTREAM_SOURCE_DIR "/firmware-profiles/marlin.toml");
+  ASSERT_TRUE(m.message_info("Printer halted. kill() called!"));
+  EXPECT_TRUE(m.message_info("Printer halted. kill() called!")->position_lost);
+  EXPECT_EQ(m.message_info("Homing Failed")->name, "Homing failed");
+  EXPECT_FALSE(m.message_info("something new"));
 }
 
 namespace {

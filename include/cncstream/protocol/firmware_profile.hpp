@@ -63,6 +63,13 @@ struct FirmwareProfile {
   std::map<Realtime, std::uint8_t> realtime;
   std::map<int, CodeInfo> errors;
   std::map<int, CodeInfo> alarms;
+  // Firmwares that report errors as text (Marlin's "Error:..."): the first
+  // entry whose regex matches the text gives its meaning and advice.
+  struct MessageInfo {
+    std::string pattern;
+    CodeInfo info;
+  };
+  std::vector<MessageInfo> messages;
   // Marlin: resend window and keepalive.
   int send_window = 1;
   double busy_timeout_s = 10.0;
@@ -71,6 +78,7 @@ struct FirmwareProfile {
   // Meaning of error:N / ALARM:N; an unknown code gets a generic entry.
   CodeInfo error_info(int code) const;
   CodeInfo alarm_info(int code) const;
+  std::optional<CodeInfo> message_info(std::string_view text) const;
 };
 
 class ProfileError : public std::runtime_error {

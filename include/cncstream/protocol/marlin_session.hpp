@@ -50,6 +50,7 @@ class MarlinSession final : public ProtocolEngine {
   };
   void pump();
   void send_numbered(PreparedLine line, bool file);
+  void quick_stop();
   void on_ok(const Response& r);
   void finish_job(JobOutcome o, const std::string& text);
 
@@ -63,6 +64,7 @@ class MarlinSession final : public ProtocolEngine {
   std::map<long, Sent> history_;       // recent lines by number, for resends
   std::deque<Sent> resend_queue_;      // lines to send again, in order
   bool swallow_next_ok_ = false;       // the ok that follows "Resend: n"
+  bool quick_stop_sent_ = false;       // M410 of a stop is on its way
   std::size_t resends_ = 0;
   std::optional<int> planner_free_;
 
