@@ -35,7 +35,10 @@ std::string finishing_program(const RasterPath& path, const Vec3& offset, const 
 
 std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
                            ProgramStats* stats) {
-  if (!(p.feed > 0) || !(p.plunge_feed > 0)) throw std::invalid_argument("feed rates must be positive");
+  // Feeds are written with one decimal: anything below 0.1 mm/min would print as F0, which GRBL rejects.
+  if (!(p.feed >= 0.1) || !(p.plunge_feed >= 0.1) || !std::isfinite(p.feed) || !std::isfinite(p.plunge_feed))
+    throw std::invalid_argument("feed " + format_gcode_number(p.feed, 6) + " and plunge feed " +
+                                format_gcode_number(p.plunge_feed, 6) + " mm/min must each be at least 0.1");
   if (!(p.rpm >= 0)) throw std::invalid_argument("spindle speed must not be negative");
 
   // Z is rounded up to the output resolution so rounding never gouges.

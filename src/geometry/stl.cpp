@@ -3,6 +3,7 @@
 #include <bit>
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -202,8 +203,11 @@ class AsciiReader {
     auto [p, ec] = std::from_chars(b, e, v);
     if (ec != std::errc() || p != e) {
       if (ec == std::errc::result_out_of_range && p == e) {
-        v = 0;  // underflow to a denormal: treat as zero
-        return v;
+        // from_chars does not tell overflow from underflow: strtod does.
+        const double big = std::strtod(std::string(t->text).c_str(), nullptr);
+        if (!std::isfinite(big) || std::fabs(big) > 1.0)
+          error(t->line, std::string("infinite value in ") + what + " ('" + std::string(t->text) + "' overflows)");
+        return 0;  // underflow to a denormal: treat as zero
       }
       error(t->line, std::string("expected ") + what + ", found '" + std::string(t->text) + "'");
     }
@@ -239,7 +243,10 @@ StlLoadResult parse_ascii(const std::string& bytes, const std::string& name, dou
     if (!t) in.error(in.line(), "unexpected end of file: expected 'facet' or 'endsolid'");
     if (AsciiReader::iequals(t->text, "endsolid")) {
       const std::string end_name = in.rest_of_line();
-      if (!end_name.empty() && !solid_name.empty() && end_name != solid_name)
+      // Exporters often shorten the name at `endsolid` ("solid part v2" ...
+      // "endsolid part"): only a different first word is a mismatch.
+      auto first_word = [](const std::string& n) { return n.substr(0, n.find_first_of(" \t")); };
+      if (!end_name.empty() && !solid_name.empty() && first_word(end_name) != first_word(solid_name))
         in.error(t->line, "'endsolid " + end_name + "' does not match 'solid " + solid_name + "'");
       auto extra = in.next();
       if (!extra) break;

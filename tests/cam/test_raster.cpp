@@ -242,6 +242,11 @@ TEST(Raster, SafeZBelowThePathIsRefused) {
   const RasterPath path = build_raster(engine, default_bounds(mesh, engine.cutter()), o);
   MachiningParams mp;
   mp.safe_z = 0.2;  // Z0 at the top: the path reaches 0
-  EXPECT_THROW(finishing_program(path, work_offset(mesh.bounds(), XYOrigin::PartMin, ZZero::PartTop), mp),
-               std::invalid_argument);
+  const Vec3 off = work_offset(mesh.bounds(), XYOrigin::PartMin, ZZero::PartTop);
+  EXPECT_THROW(finishing_program(path, off, mp), std::invalid_argument);
+  // A feed that would print as F0 (GRBL: error 22) is refused too.
+  mp.safe_z = 5;
+  EXPECT_NO_THROW(finishing_program(path, off, mp));
+  mp.plunge_feed = 0.00001;
+  EXPECT_THROW(finishing_program(path, off, mp), std::invalid_argument);
 }

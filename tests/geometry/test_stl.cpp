@@ -39,6 +39,9 @@ TEST(Stl, EveryGoodFixtureLoads) {
                            "stl-models_polytopes_tetrahedron.min.ascii.stl",
                            "stl-models_polytopes_tetrahedronMinusZero.bin.stl",
                            "stl-models_misc_multiWordName.ascii.stl",
+                           "stl-models_polytopes_tetrahedronIrregular.ascii.stl",
+                           "stl-models_polytopes_tetrahedronIrregular.bin.stl",
+                           "stl-models_polytopes_cubeLarge.ascii.stl",
                            "stl-models_misc_namelessSolid.ascii.stl", "stl-models_misc_faceless.ascii.stl",
                            "stl-models_polytopes_triangle.ascii.stl", "stl-models_polytopes_triangle.bin.stl",
                            "openscad_empty2.stl"}) {
@@ -112,6 +115,23 @@ TEST(Stl, NanAndTruncationInBinary) {
     EXPECT_NE(std::string(e.what()).find("mem.stl:byte 112"), std::string::npos) << e.what();
   }
   EXPECT_THROW(parse_stl(good.substr(0, good.size() - 3), "mem.stl"), StlError);
+}
+
+TEST(Stl, AsciiOverflowIsAnErrorAndUnderflowIsZero) {
+  auto ascii = [](const std::string& z) {
+    return "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 " + z +
+           "\nendloop\nendfacet\nendsolid t\n";
+  };
+  try {
+    parse_stl(ascii("1e400"), "big.stl");
+    ADD_FAILURE() << "1e400 read as a number";
+  } catch (const StlError& e) {
+    EXPECT_NE(std::string(e.what()).find("big.stl:line 6"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("infinite"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_stl(ascii("-1e400"), "big.stl"), StlError);
+  const auto tiny = parse_stl(ascii("1e-400"), "tiny.stl");
+  EXPECT_EQ(tiny.mesh.bounds().hi.z, 0.0);
 }
 
 TEST(Stl, UnitsAndScale) {
