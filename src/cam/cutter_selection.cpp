@@ -95,9 +95,21 @@ SlopeProfile slope_profile(const RemovalChoice& c, double bin_deg) {
   }
   // A bin counts once it holds a meaningful sample of the part.
   const std::size_t min_nodes = std::max<std::size_t>(20, c.on_part / 2000);
+  // The slope where the radiused share crosses one half: linear between the
+  // centres of the last radiused-majority bin and the first ball-majority bin.
   auto first_ball_bin = [&](auto radiused_of) {
-    for (const auto& b : p.bins)
-      if (b.nodes >= min_nodes && 2 * radiused_of(b) < b.nodes) return 0.5 * (b.lo_deg + b.hi_deg);
+    double prev_centre = kNaN, prev_share = kNaN;
+    for (const auto& b : p.bins) {
+      if (b.nodes < min_nodes) continue;
+      const double centre = 0.5 * (b.lo_deg + b.hi_deg);
+      const double share = double(radiused_of(b)) / double(b.nodes);
+      if (share < 0.5) {
+        if (!std::isfinite(prev_share) || prev_share == share) return centre;
+        return prev_centre + (centre - prev_centre) * (prev_share - 0.5) / (prev_share - share);
+      }
+      prev_centre = centre;
+      prev_share = share;
+    }
     return kNaN;
   };
   p.switch_deg_volume = first_ball_bin([](const SlopeBin& b) { return b.radiused_by_volume; });

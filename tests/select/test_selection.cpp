@@ -111,7 +111,7 @@ TEST(Selection, SphereAndTorusSwitchAtTheAngle) {
     EXPECT_GE(double(below_ok), 0.995 * double(below)) << below_ok << " of " << below;
     EXPECT_GE(double(above_ok), 0.98 * double(above)) << above_ok << " of " << above;
     const SlopeProfile p = slope_profile(ch, 5);
-    EXPECT_NEAR(p.switch_deg_volume, sw, 5.0);
+    EXPECT_NEAR(p.switch_deg_volume, sw, 2.5);
   }
 }
 

@@ -56,8 +56,9 @@ struct RemovalChoice {
 RemovalChoice choose_by_removal(const CutterPair& cutters, const ClGrid& ball, const ClGrid& radiused);
 
 // Where the choice switches on the part: per slope bin (width bin_deg) the
-// share of on-part nodes where the radiused cutter wins, and the first bin
-// centre where the ball wins the majority (NaN if it never does).
+// share of on-part nodes where the radiused cutter wins, and the slope where
+// that share falls through one half, interpolated between bin centres (NaN if
+// the ball never wins the majority).
 struct SlopeBin {
   double lo_deg = 0, hi_deg = 0;
   std::size_t nodes = 0, radiused_by_volume = 0, radiused_by_area = 0;
