@@ -34,6 +34,9 @@ void add_selection_options(CLI::App* sub, SelectionOptions& o) {
   sub->add_option("--scallop-tol", o.scallop_tol, "Scallop height accepted, mm (the plan cleans up above it)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--threads", o.threads, "Worker threads (0: all cores)");
+  sub->add_flag("--nodes-csv", o.nodes_csv,
+                "Also write nodes.csv: every CL point of the passes with both tip heights, d, slope and both choices "
+                "(about 60 bytes a node)");
 }
 
 namespace {
@@ -237,6 +240,39 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
     const fs::path p = dir / "selection.json";
     std::ofstream f(p);
     f << j.dump(2) << "\n";
+    if (!f) throw std::runtime_error("cannot write " + p.string());
+    files.push_back(p);
+  }
+  if (r.options.nodes_csv) {
+    // Per node of the passes' CL grid (model coordinates): the raw numbers
+    // behind the choice maps.
+    const fs::path p = dir / "nodes.csv";
+    std::ofstream f(p);
+    f << "x,y,z_ball,z_radiused,d,slope_deg,by_volume,by_area\n";
+    const GridSpec& g = r.choice.grid;
+    const auto& zb = r.ball.path.grid.z;
+    const auto& zr = r.radiused.path.grid.z;
+    auto name = [](Choice c) { return c == Choice::Ball ? "ball" : c == Choice::Radiused ? "radiused" : ""; };
+    std::string out;
+    char* at = nullptr;
+    char line[256];
+    auto num = [&](double v, int digits) {  // empty where NaN
+      if (std::isfinite(v)) at += std::snprintf(at, 40, "%.*f", digits, v);
+      *at++ = ',';
+    };
+    for (std::size_t k = 0; k < g.size(); ++k) {
+      at = line;
+      num(g.x(k % g.nx), 4);
+      num(g.y(k / g.nx), 4);
+      num(zb[k], 5);
+      num(zr[k], 5);
+      num(r.choice.d[k], 5);
+      num(r.choice.slope_deg[k], 2);
+      at += std::snprintf(at, 24, "%s,%s\n", name(r.choice.by_volume[k]), name(r.choice.by_area[k]));
+      out.append(line, static_cast<std::size_t>(at - line));
+      if (out.size() > (1u << 20)) f << std::exchange(out, {});
+    }
+    f << out;
     if (!f) throw std::runtime_error("cannot write " + p.string());
     files.push_back(p);
   }

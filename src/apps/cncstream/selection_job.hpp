@@ -29,6 +29,7 @@ struct SelectionOptions {
   double feed = 1000, plunge_feed = 300, rpm = 18000;
   double max_rate = 500, accel = 10;  // for predicted times ($110-$112, $120-$122)
   unsigned threads = 0;
+  bool nodes_csv = false;  // also write every CL point's heights, d and choices (large)
 };
 
 void add_selection_options(CLI::App* sub, SelectionOptions& o);
