@@ -125,21 +125,21 @@ RunResult StreamRunner::run(const JobInput& job) {
     if (!engine) return;
     port.write(engine->take_output());
     for (auto& e : engine->take_events()) {
-      if (e.kind == EventKind::LineAnswered) dirty = true;
-      if (e.kind == EventKind::Status && e.status) {
-        machine_state = e.status->state_text;
+      if (e.kind == EventKind::LineAnswered) {
+        dirty = true;  // journaled at most every progress_interval_s (below)
+      } else if (e.kind == EventKind::Status) {
+        if (e.status) machine_state = e.status->state_text;
         status_line = engine->progress().last_answered_line;
-        if (const auto& w = e.status->wpos) {
+        if (const auto& w = e.status ? e.status->wpos : std::nullopt) {
           const double k = report_inches ? 25.4 : 1.0;
           const std::array<double, 3> p{(*w)[0] * k, (*w)[1] * k, (*w)[2] * k};
           // A long move answers no lines: the moving position alone is worth a row.
           if (status_work_pos != p && job_id) dirty = true;
           status_work_pos = p;
         }
-      }
-      else if (e.kind != EventKind::Status && e.kind != EventKind::Info && e.kind != EventKind::Warning &&
-               e.kind != EventKind::CommandAnswered)
+      } else if (e.kind != EventKind::Info && e.kind != EventKind::Warning && e.kind != EventKind::CommandAnswered) {
         record(reason_for(e));
+      }
       if (opt_.on_event) opt_.on_event(e);
       if (e.kind == EventKind::JobFinished) finish(engine->progress().outcome, e.text);
     }

@@ -37,6 +37,7 @@ struct Outcome {
   long journal_last_line = -1;
   long sim_received = -1;
   long reported_last_line = -1;
+  long journal_rows = -1;
 };
 
 Outcome run_with(std::vector<std::string> extra) {
@@ -50,6 +51,7 @@ Outcome run_with(std::vector<std::string> extra) {
   EXPECT_EQ(jobs.size(), 1u) << "exactly one job, never an automatic second one";
   if (!jobs.empty()) {
     o.journal_outcome = jobs[0].outcome.value_or("interrupted");
+    o.journal_rows = static_cast<long>(j.progress_count(jobs[0].id));
     if (const auto p = j.last_progress(jobs[0].id)) {
       o.journal_last_line = p->last_line;
       // Once the job has ended nothing more is journaled: the end row is last.
@@ -110,6 +112,9 @@ TEST(Faults, StallIsRiddenOutAndTheJobCompletes) {
   EXPECT_EQ(o.run.code, 0) << o.run.out;
   EXPECT_EQ(o.journal_outcome, "completed");
   EXPECT_EQ(o.journal_last_line, 606);
+  // Rows come every 0.1 s at most (plus one per event), not one per line:
+  // each is an fsync, and one per line would make the journal the bottleneck.
+  EXPECT_LT(o.journal_rows, 100) << o.run.out;
 }
 
 TEST(Faults, VanishingPortIsADisconnectRecordedAtTheLastAnsweredLineAndNeverResumed) {
