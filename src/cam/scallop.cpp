@@ -25,14 +25,43 @@ ScallopStats scallop_stats(const std::vector<double>& values) {
 }
 
 ScallopMap scallops_from_cut(const GridSpec& g, const std::vector<double>& machined, const DesignHeights& design,
-                             const std::vector<double>& rows, bool along_x) {
-  if (machined.size() != g.size() || design.z.size() != g.size())
+                             const std::vector<double>& rows, bool along_x, const std::vector<double>* reach) {
+  if (machined.size() != g.size() || design.z.size() != g.size() || (reach && reach->size() != g.size()))
     throw std::invalid_argument("scallops_from_cut: grid sizes differ");
   ScallopMap m;
   m.grid = g;
-  m.residual.assign(g.size(), std::numeric_limits<double>::quiet_NaN());
-  for (std::size_t k = 0; k < g.size(); ++k)
-    if (!design.off_part[k]) m.residual[k] = machined[k] - design.z[k];
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  m.residual.assign(g.size(), nan);
+  m.unreachable.assign(g.size(), nan);
+  // scallop part of the residual per node: what the pass pairs are judged by.
+  std::vector<double> scallop(g.size(), nan);
+  UnreachableStats& u = m.unreachable_stats;
+  u.computed = reach != nullptr;
+  std::size_t on = 0, above = 0;
+  double sum = 0;
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    if (design.off_part[k]) continue;
+    const double res = machined[k] - design.z[k];
+    m.residual[k] = res;
+    double un = 0;
+    // The raster may cut a hair below the lattice's reach between its nodes:
+    // the reach counts only up to the machined surface.
+    if (reach && std::isfinite((*reach)[k])) un = std::max(0.0, std::min((*reach)[k], machined[k]) - design.z[k]);
+    m.unreachable[k] = un;
+    scallop[k] = res - un;
+    ++on;
+    sum += un;
+    above += un > kUnreachableMin;
+    if (un > u.max) {
+      u.max = un;
+      u.max_x = g.x0 + double(k % g.nx) * g.dx;
+      u.max_y = g.y0 + double(k / g.nx) * g.dy;
+    }
+  }
+  if (on) {
+    u.mean = sum / double(on);
+    u.share = double(above) / double(on);
+  }
   // Columns run along the passes; "across" indexes the other axis.
   const std::size_t ncol = along_x ? g.nx : g.ny, nacross = along_x ? g.ny : g.nx;
   const double a0 = along_x ? g.y0 : g.x0, da = along_x ? g.dy : g.dx;
@@ -53,7 +82,7 @@ ScallopMap scallops_from_cut(const GridSpec& g, const std::vector<double>& machi
     for (std::size_t c = 0; c < ncol; ++c) {
       double worst = -HUGE_VAL;
       for (std::size_t j = j0; j <= j1; ++j) {
-        const double r = m.residual[node(c, j)];
+        const double r = scallop[node(c, j)];
         if (std::isfinite(r)) worst = std::max(worst, r);
       }
       if (worst > -HUGE_VAL) m.pair_scallop[p * ncol + c] = std::max(0.0, worst);

@@ -39,6 +39,15 @@ TEST(SelectReport, WritesNumbersMapsAndPerNodeData) {
   EXPECT_NEAR(j["switch_deg"]["volume_plane"].get<double>(), 34.7, 0.1);
   EXPECT_NEAR(j["switch_deg"]["area_plane"].get<double>(), 21.8, 0.1);
   ASSERT_TRUE(j["switch_deg"]["volume_measured"].is_number()) << j.dump(2);
+  // The dome meets the plate in a concave crease (60 degrees): a ring that
+  // neither cutter reaches, split off from the scallops.
+  for (const char* c : {"ball:4", "bull:4:1"}) {
+    ASSERT_TRUE(j["unreachable"].contains(c)) << j.dump(2);
+    const double un = j["unreachable"][c]["max_mm"].get<double>();
+    EXPECT_GT(un, 0.05) << c;
+    EXPECT_LT(un, 2.0) << c;
+    EXPECT_LT(j["unreachable"][c]["share_above_min_pct"].get<double>(), 25.0) << c;
+  }
 
   // nodes.csv: one row per CL point, the choice consistent with d and d_base.
   std::ifstream nf(out / "nodes.csv");

@@ -32,22 +32,32 @@ struct Option {
   double seconds = 0;
   double max_residual = 0;          // over the part, mm
   double share_above_tol = 0;       // of on-part simulation nodes
+  double max_scallop = 0;           // residual less what the option's cutters cannot reach at all
+  double scallop_share_above_tol = 0;
 };
 
+// reach: per node the lowest height the option's cutters can reach at all
+// (NaN where not computed: all of the residual counts as scallop).
 Option evaluate(const std::string& name, const std::vector<std::string>& programs, const std::vector<double>& machined,
-                const DesignHeights& design, double tol, const gcode::MotionLimits& limits) {
+                const std::vector<double>& reach, const DesignHeights& design, double tol,
+                const gcode::MotionLimits& limits) {
   Option o;
   o.name = name;
   for (const auto& text : programs) o.seconds += gcode::estimate_program_time(gcode::trace_program(text), limits).total();
-  std::size_t on = 0, above = 0;
+  std::size_t on = 0, above = 0, scallop_above = 0;
   for (std::size_t k = 0; k < machined.size(); ++k) {
     if (design.off_part[k]) continue;
     const double r = machined[k] - design.z[k];
+    const double unreachable =
+        k < reach.size() && std::isfinite(reach[k]) ? std::max(0.0, std::min(reach[k], machined[k]) - design.z[k]) : 0.0;
     o.max_residual = std::max(o.max_residual, r);
+    o.max_scallop = std::max(o.max_scallop, r - unreachable);
     ++on;
     above += r > tol;
+    scallop_above += r - unreachable > tol;
   }
   o.share_above_tol = on ? double(above) / double(on) : 0;
+  o.scallop_share_above_tol = on ? double(scallop_above) / double(on) : 0;
   return o;
 }
 
@@ -131,12 +141,18 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
     gcode::MotionLimits limits;
     limits.max_rate = {so.max_rate, so.max_rate, so.max_rate};
     limits.acceleration = {so.accel, so.accel, so.accel};
+    // What either cutter can reach; where one was not computed (it left
+    // almost nothing there) the whole residual counts as scallop.
+    std::vector<double> reach_either(sg.size(), std::numeric_limits<double>::quiet_NaN());
+    if (r.ball.reach.size() == sg.size() && r.radiused.reach.size() == sg.size())
+      for (std::size_t k = 0; k < sg.size(); ++k) reach_either[k] = std::min(r.ball.reach[k], r.radiused.reach[k]);
     std::vector<Option> options = {
-        evaluate("ball only (" + r.ball.cutter.spec() + ")", {prog_ball}, r.ball.machined, r.design, so.scallop_tol, limits),
-        evaluate("radiused only (" + r.radiused.cutter.spec() + ")", {prog_rad}, r.radiused.machined, r.design, so.scallop_tol,
-                 limits),
+        evaluate("ball only (" + r.ball.cutter.spec() + ")", {prog_ball}, r.ball.machined, r.ball.reach, r.design,
+                 so.scallop_tol, limits),
+        evaluate("radiused only (" + r.radiused.cutter.spec() + ")", {prog_rad}, r.radiused.machined, r.radiused.reach,
+                 r.design, so.scallop_tol, limits),
         evaluate("combined (" + first.cutter.spec() + " then " + second.cutter.spec() + " clean-up)", {prog_first, prog_second},
-                 combined, r.design, so.scallop_tol, limits)};
+                 combined, reach_either, r.design, so.scallop_tol, limits)};
 
     std::error_code ec;
     fs::create_directories(o->out, ec);
@@ -159,11 +175,16 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
 
     std::cout << "plan (scallop tolerance " << so.scallop_tol << " mm; times at " << so.max_rate << " mm/min, " << so.accel
               << " mm/s^2 per axis):\n";
-    std::cout << "  option                                              time      largest residual   nodes above tol\n";
+    std::cout << "  option                                              time      largest residual   nodes above tol"
+                 "   largest scallop   scallop above tol\n";
     for (const auto& op : options)
       std::cout << "  " << std::left << std::setw(50) << op.name << std::right << std::setw(9) << format_duration(op.seconds) << "   "
                 << std::fixed << std::setprecision(4) << std::setw(10) << op.max_residual << " mm   " << std::setprecision(2)
-                << std::setw(10) << 100 * op.share_above_tol << " %\n";
+                << std::setw(10) << 100 * op.share_above_tol << " %" << std::setprecision(4) << std::setw(14)
+                << op.max_scallop << " mm" << std::setprecision(2) << std::setw(17) << 100 * op.scallop_share_above_tol
+                << " %\n";
+    std::cout << "  (residual: all material left; scallop: less what no stepover of these cutters removes, such as gaps "
+                 "narrower than the cutter)\n";
     std::cout << std::defaultfloat;
     std::cout << "wrote " << f1.string() << " (" << first.cutter.description() << ")\n";
     if (!pieces.empty())
@@ -185,7 +206,9 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
       j["options"].push_back({{"name", op.name},
                               {"seconds", op.seconds},
                               {"max_residual_mm", op.max_residual},
-                              {"share_above_tol", op.share_above_tol}});
+                              {"share_above_tol", op.share_above_tol},
+                              {"max_scallop_mm", op.max_scallop},
+                              {"scallop_share_above_tol", op.scallop_share_above_tol}});
     write(fs::path(o->out) / "plan.json", j.dump(2) + "\n");
     return 0;
   });

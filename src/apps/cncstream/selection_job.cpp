@@ -15,6 +15,7 @@
 
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/cam/path_machining.hpp"
+#include "cncstream/cam/reach.hpp"
 #include "cncstream/gcode/finishing_program.hpp"
 #include "cncstream/gcode/gcode_writer.hpp"
 #include "cncstream/image/category_map.hpp"
@@ -33,6 +34,9 @@ void add_selection_options(CLI::App* sub, SelectionOptions& o) {
   sub->add_option("--direction", o.direction, "Pass direction: x or y")->check(CLI::IsMember({"x", "y"}))->capture_default_str();
   sub->add_option("--scallop-tol", o.scallop_tol, "Scallop height accepted, mm (the plan cleans up above it)")
       ->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--reach-pitch", o.reach_pitch,
+                  "CL lattice pitch for each cutter's reach limit, which splits material left into scallop and "
+                  "unreachable (gaps narrower than the cutter), mm; 0: no split; default min(0.15, stepover/3)");
   sub->add_option("--threads", o.threads, "Worker threads (0: all cores)");
   sub->add_flag("--nodes-csv", o.nodes_csv,
                 "Also write nodes.csv: every CL point of the passes with both tip heights, d, slope and both choices "
@@ -57,6 +61,10 @@ std::vector<double> scallop_table(const Cutter& c, double s) {
   for (std::size_t k = 0; k < t.size(); ++k) t[k] = scallop_2d(c, s, double(k) * 0.5 * M_PI / 180);
   return t;
 }
+
+// Residual up to which the reach split is not computed: it counts as scallop
+// (an unreachable part this small is not reported anyway).
+constexpr double kReachSplitMin = kUnreachableMin;
 
 MapGrid map_grid(const GridSpec& g) { return {g.nx, g.ny, g.dx, g.dy, g.x0, g.y0}; }
 
@@ -124,14 +132,35 @@ SelectionResult run_selection(const SelectionOptions& o) {
   r.timings.push_back({"design heights", seconds_since(t0)});
   t0 = std::chrono::steady_clock::now();
   const double stock_top = box.hi.z + 1;
-  for (CutterRun* run : {&r.ball, &r.radiused}) {
+  for (CutterRun* run : {&r.ball, &r.radiused})
     run->machined = machine_path(sg, std::vector<double>(sg.size(), stock_top), raster_pieces(run->path), run->cutter,
                                  o.threads);
+  r.timings.push_back({"cut simulation", seconds_since(t0)});
+
+  // Reach limits: what each cutter leaves with its tip on every node of a
+  // dense CL lattice. Residual above that is material no stepover removes
+  // (gaps narrower than the cutter), not scallop. Nodes with almost nothing
+  // left need no split.
+  t0 = std::chrono::steady_clock::now();
+  // Default: stepover/3, which on the simulation grid's alignment gives
+  // stepover/3 along the passes and stepover/4 across (0.133 x 0.1 mm at 0.4).
+  const double pitch = o.reach_pitch < 0 ? std::min(0.15, o.stepover / 3) : o.reach_pitch;
+  for (CutterRun* run : {&r.ball, &r.radiused}) {
     std::vector<double> rows;
     for (const auto& row : run->path.rows) rows.push_back(along_x ? row.front().y : row.front().x);
-    run->scallops = scallops_from_cut(sg, run->machined, r.design, rows, along_x);
+    std::vector<double> reach;
+    if (pitch > 0) {
+      const ClEngine& e = run == &r.ball ? e_ball : e_rad;
+      std::vector<std::uint8_t> wanted(sg.size(), 0);
+      for (std::size_t k = 0; k < sg.size(); ++k)
+        wanted[k] = !r.design.off_part[k] && run->machined[k] - r.design.z[k] > kReachSplitMin;
+      const ClGrid dense = e.compute(reach_lattice(sg, b.x0, b.y0, b.x1, b.y1, pitch, pitch));
+      reach = reach_heights(dense, run->cutter, sg, wanted, o.threads);
+    }
+    run->scallops = scallops_from_cut(sg, run->machined, r.design, rows, along_x, pitch > 0 ? &reach : nullptr);
+    run->reach = std::move(reach);
   }
-  r.timings.push_back({"cut simulation", seconds_since(t0)});
+  if (pitch > 0) r.timings.push_back({"reach limits", seconds_since(t0)});
 
   // The 2-D estimate at every analysis node from the slope across the passes.
   for (CutterRun* run : {&r.ball, &r.radiused}) {
@@ -186,6 +215,15 @@ std::string SelectionResult::table() const {
     row("cut simulation", run->scallops.stats);
     row("2-D estimate", run->estimate_2d);
   }
+  if (ball.scallops.unreachable_stats.computed) {
+    o << "material no stepover removes (gaps and inside corners narrower than the cutter; not counted as scallop):\n";
+    for (const CutterRun* run : {&ball, &radiused}) {
+      const UnreachableStats& u = run->scallops.unreachable_stats;
+      o << "  " << std::left << std::setw(24) << run->cutter.spec() << std::right << " max " << mm(u.max) << " mm at ("
+        << mm(u.max_x + work_offset.x, 2) << ", " << mm(u.max_y + work_offset.y, 2) << ") work, mean " << mm(u.mean)
+        << " mm, more than " << mm(kUnreachableMin, 2) << " mm on " << mm(100 * u.share, 1) << " % of the part\n";
+    }
+  }
   o << "time: " << mm(seconds, 2) << " s (";
   for (std::size_t k = 0; k < timings.size(); ++k) o << (k ? ", " : "") << timings[k].first << " " << mm(timings[k].second, 2);
   o << ")\n";
@@ -224,9 +262,17 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
   auto stats = [](const ScallopStats& s) {
     return nlohmann::json{{"max_mm", s.max}, {"min_mm", s.min}, {"mean_mm", s.mean}, {"samples", s.samples}};
   };
-  for (const CutterRun* run : {&r.ball, &r.radiused})
+  for (const CutterRun* run : {&r.ball, &r.radiused}) {
     j["scallop"][run->cutter.spec()] = {{"cut_simulation", stats(run->scallops.stats)},
                                         {"estimate_2d", stats(run->estimate_2d)}};
+    const UnreachableStats& u = run->scallops.unreachable_stats;
+    if (u.computed)
+      j["unreachable"][run->cutter.spec()] = {{"max_mm", u.max},
+                                              {"at_work_xy", {u.max_x + r.work_offset.x, u.max_y + r.work_offset.y}},
+                                              {"mean_mm", u.mean},
+                                              {"share_above_min_pct", 100 * u.share},
+                                              {"min_mm", kUnreachableMin}};
+  }
   for (const auto& bin : r.profile.bins)
     if (bin.nodes)
       j["slope_bins"].push_back({{"lo_deg", bin.lo_deg},

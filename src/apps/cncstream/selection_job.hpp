@@ -25,6 +25,7 @@ struct SelectionOptions {
   double step = 0.05;      // along the passes
   std::string direction = "x";
   double scallop_tol = 0.01;
+  double reach_pitch = -1; // reach-limit lattice, mm; 0: no scallop/unreachable split; < 0: min(0.15, stepover/3)
   double sim_along = 0;    // cut simulation column spacing along the passes; 0: one per stepover
   double feed = 1000, plunge_feed = 300, rpm = 18000;
   double max_rate = 500, accel = 10;  // for predicted times ($110-$112, $120-$122)
@@ -38,7 +39,8 @@ struct CutterRun {
   Cutter cutter;
   RasterPath path;
   std::vector<double> machined;  // on the simulation grid
-  ScallopMap scallops;
+  ScallopMap scallops;           // scallop and unreachable material, split by the reach limit
+  std::vector<double> reach;     // the cutter's reach limit per simulation node (NaN where not computed)
   ScallopStats estimate_2d;      // the thesis's 2-D tangent estimate over the part
 };
 
