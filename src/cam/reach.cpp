@@ -58,8 +58,8 @@ std::vector<double> reach_heights(const ClGrid& cl, const Cutter& cutter, const 
   std::vector<double> out(at.size(), std::numeric_limits<double>::quiet_NaN());
   if (g.nx == 0 || g.ny == 0) return out;
 
-  // One stamp per distinct sub-cell offset of the wanted nodes (exact, not
-  // rounded: an aligned lattice gives one or two per axis).
+  // One stamp per distinct sub-cell offset of the wanted nodes (an aligned
+  // lattice gives one or two per axis); past 64 of them, one per node.
   auto offset = [](double u, double o, double d, long& idx) {
     const double t = (u - o) / d;
     const double fl = std::floor(t + 1e-9);
