@@ -43,10 +43,7 @@ ScallopMap scallops_from_cut(const GridSpec& g, const std::vector<double>& machi
     if (design.off_part[k]) continue;
     const double res = machined[k] - design.z[k];
     m.residual[k] = res;
-    double un = 0;
-    // The raster may cut a hair below the lattice's reach between its nodes:
-    // the reach counts only up to the machined surface.
-    if (reach && std::isfinite((*reach)[k])) un = std::max(0.0, std::min((*reach)[k], machined[k]) - design.z[k]);
+    const double un = reach ? unreachable_part(machined[k], design.z[k], (*reach)[k]) : 0.0;
     m.unreachable[k] = un;
     scallop[k] = res - un;
     ++on;

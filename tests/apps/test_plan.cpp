@@ -58,10 +58,7 @@ double number_after(const std::string& text, const std::string& key) {
 TEST(Plan, PredictedResidualMatchesTheSimulatorAfterBothFiles) {
   // A dome on a plate: the radiused cutter removes more on the plate and the
   // dome's gentle top, the ball on its flanks.
-  const Mesh part = cl_test::terrain(0, 0, 40, 160, [](double x, double y) {
-    const double r = std::hypot(x - 20, y - 20);
-    return 2 + std::max(0.0, std::sqrt(std::max(0.0, 16.0 * 16.0 - r * r)) - 8);
-  });
+  const Mesh part = cl_test::dome_on_plate(40, 16);
   const fs::path dir = temp_dir() / "plan";
   fs::create_directories(dir);
   const fs::path stl = dir / "dome.stl";

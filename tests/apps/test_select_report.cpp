@@ -18,10 +18,7 @@ using namespace cncstream;
 
 TEST(SelectReport, WritesNumbersMapsAndPerNodeData) {
   // A dome on a plate: flat ground (radiused wins) and steep flanks (ball wins).
-  const Mesh part = cl_test::terrain(0, 0, 30, 120, [](double x, double y) {
-    const double r = std::hypot(x - 15, y - 15);
-    return 2 + std::max(0.0, std::sqrt(std::max(0.0, 12.0 * 12.0 - r * r)) - 6);
-  });
+  const Mesh part = cl_test::dome_on_plate(30, 12);
   const fs::path dir = temp_dir() / "select";
   fs::create_directories(dir);
   write_stl_binary(dir / "dome.stl", part, "dome");

@@ -1,5 +1,6 @@
 #pragma once
 // Small meshes built in code for the CL engine tests.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
@@ -75,6 +76,16 @@ inline Mesh terrain(double x0, double y0, double size, int n, const std::functio
       }
     }
   return welded(t);
+}
+
+// A spherical cap on a plate at z = 2 over [0, size]^2: the sphere of radius r
+// centred on the square, cut at half its radius, so the cap meets the plate
+// in a 60-degree crease (0.25 mm quads).
+inline Mesh dome_on_plate(double size, double r) {
+  return terrain(0, 0, size, static_cast<int>(std::lround(size * 4)), [size, r](double x, double y) {
+    const double d = std::hypot(x - size / 2, y - size / 2);
+    return 2 + std::max(0.0, std::sqrt(std::max(0.0, r * r - d * d)) - r / 2);
+  });
 }
 
 // Upper hemisphere of radius r centred at the origin, vertices on the sphere.

@@ -5,6 +5,8 @@
 // between the two passes (the cusp left there). Given the cutter's reach
 // limit (reach.hpp), the residual is split: material the cutter cannot reach
 // at any stepover is "unreachable", the rest is scallop.
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -27,6 +29,14 @@ struct UnreachableStats {
 };
 // Below this an "unreachable" height is the reach lattice's own scallop.
 inline constexpr double kUnreachableMin = 0.01;
+
+// The part of a node's residual (machined - design) above the cutter's reach
+// limit; 0 where the limit was not computed (NaN). The raster may cut a hair
+// below the lattice's reach between its nodes: the reach counts only up to
+// the machined surface.
+inline double unreachable_part(double machined, double design, double reach) {
+  return std::isfinite(reach) ? std::max(0.0, std::min(reach, machined) - design) : 0.0;
+}
 
 struct ScallopMap {
   GridSpec grid;

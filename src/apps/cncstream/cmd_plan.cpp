@@ -48,8 +48,7 @@ Option evaluate(const std::string& name, const std::vector<std::string>& program
   for (std::size_t k = 0; k < machined.size(); ++k) {
     if (design.off_part[k]) continue;
     const double r = machined[k] - design.z[k];
-    const double unreachable =
-        k < reach.size() && std::isfinite(reach[k]) ? std::max(0.0, std::min(reach[k], machined[k]) - design.z[k]) : 0.0;
+    const double unreachable = k < reach.size() ? unreachable_part(machined[k], design.z[k], reach[k]) : 0.0;
     o.max_residual = std::max(o.max_residual, r);
     o.max_scallop = std::max(o.max_scallop, r - unreachable);
     ++on;
@@ -145,7 +144,9 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
     // almost nothing there) the whole residual counts as scallop.
     std::vector<double> reach_either(sg.size(), std::numeric_limits<double>::quiet_NaN());
     if (r.ball.reach.size() == sg.size() && r.radiused.reach.size() == sg.size())
-      for (std::size_t k = 0; k < sg.size(); ++k) reach_either[k] = std::min(r.ball.reach[k], r.radiused.reach[k]);
+      for (std::size_t k = 0; k < sg.size(); ++k)
+        if (std::isfinite(r.ball.reach[k]) && std::isfinite(r.radiused.reach[k]))
+          reach_either[k] = std::min(r.ball.reach[k], r.radiused.reach[k]);
     std::vector<Option> options = {
         evaluate("ball only (" + r.ball.cutter.spec() + ")", {prog_ball}, r.ball.machined, r.ball.reach, r.design,
                  so.scallop_tol, limits),
