@@ -18,7 +18,7 @@
 #include "cncsim/machine.hpp"
 #include "cncsim/pty_frontend.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
-#include "cncstream/transport/stream_runner.hpp"
+#include "cncstream/session/stream_runner.hpp"
 
 namespace {
 double thread_cpu_s() {
@@ -47,25 +47,26 @@ int main(int argc, char** argv) {
   std::atomic<bool> stop{false};
   std::thread sim;
 
-  cncstream::transport::RunnerOptions o;
+  cncstream::session::RunnerOptions o;
   o.port = front.slave_path();
   o.profiles_dir = cncstream::protocol::default_profiles_dir();
   o.on_port_opened = [&] { sim = std::thread([&] { front.run(stop); }); };
   double fill_sum = 0, cpu_start = 0, t_start = 0;
   long samples = 0;
   bool started = false;
-  o.on_tick = [&](const cncstream::transport::RunnerSnapshot& s) {
+  o.tick_s = 0.02;  // samples of the buffer fill
+  o.on_tick = [&](const cncstream::session::MachineSnapshot& s) {
     if (!started && s.progress.lines_answered > 0) {
       started = true;
       cpu_start = thread_cpu_s();
       t_start = s.now;
     }
-    if (started && s.rx_size > 0 && s.progress.lines_answered + 20 < s.progress.total_lines) {
-      fill_sum += double(s.rx_in_flight) / double(s.rx_size);
+    if (started && s.buffer.capacity > 0 && s.progress.lines_answered + 20 < s.progress.total_lines) {
+      fill_sum += double(s.buffer.in_flight) / double(s.buffer.capacity);
       ++samples;
     }
   };
-  cncstream::transport::StreamRunner runner(o);
+  cncstream::session::StreamRunner runner(o);
   const auto r = runner.run(prog);
   const double cpu = thread_cpu_s() - cpu_start;
   const double wall = r.seconds - t_start;

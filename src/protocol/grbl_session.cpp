@@ -3,6 +3,7 @@
 #include "cncstream/protocol/pattern.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace cncstream::protocol {
@@ -144,8 +145,7 @@ void GrblSession::on_answer(bool ok, int code, double) {
       progress_.last_answered_line = line->source_line;
       if (ok) {
         ++progress_.lines_answered;
-        modal_.apply(line->text);
-        modal_.wco = tracker_.wco();
+        apply_answered_line(modal_, line->text);
         Event e{EventKind::LineAnswered, "ok"};
         e.source_line = line->source_line;
         e.line_text = line->text;
@@ -189,6 +189,7 @@ void GrblSession::on_answer(bool ok, int code, double) {
       emit(std::move(e));
       break;
     }
+    case Origin::JogStep:
     case Origin::Jog:
       if (!ok) {
         const CodeInfo info = profile_.error_info(code);
@@ -384,7 +385,7 @@ void GrblSession::start_job(PreparedProgram program, JobMode mode, double now) {
   error_seen_ = false;
   draining_ = false;
   stop_requested_ = false;
-  modal_ = ModalState{};
+  modal_ = gcode::ParserState{};
   check_phase_ = CheckPhase::None;
   if (mode == JobMode::Check) {
     check_phase_ = CheckPhase::Entering;
@@ -490,6 +491,21 @@ bool GrblSession::realtime(Realtime r) {
   if (!b) return false;
   write(std::string(1, static_cast<char>(*b)));
   return true;
+}
+
+double GrblSession::next_deadline() const {
+  double t = opt_.poll_status ? next_poll_ : std::numeric_limits<double>::infinity();
+  if (draining_ && progress_.state == JobState::Running && !expect_reset_) t = std::min(t, drain_poll_at_);
+  if (expect_reset_) t = std::min(t, reset_deadline_);
+  return t;
+}
+
+void GrblSession::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) {
+  if (is_active(progress_.state)) throw std::logic_error("cannot jog while a job is running");
+  PreparedLine l;
+  l.text = jog_step_line(dir, distance_mm, feed_mm_min);  // validates
+  commands_.emplace_back(std::move(l), Origin::JogStep);
+  pump();
 }
 
 void GrblSession::jog_start(const JogDirection& dir, double feed_mm_min) {

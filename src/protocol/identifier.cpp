@@ -1,5 +1,7 @@
 #include "cncstream/protocol/identifier.hpp"
 
+#include <limits>
+
 #include <algorithm>
 #include <cstdio>
 #include <stdexcept>
@@ -70,6 +72,11 @@ void FirmwareIdentifier::on_line(std::string_view line, double now) {
   } else {
     lines_.emplace_back(line);
   }
+}
+
+double FirmwareIdentifier::next_deadline() const {
+  if (phase_ == Phase::WaitBanner || phase_ == Phase::Query) return deadline_;
+  return std::numeric_limits<double>::infinity();
 }
 
 void FirmwareIdentifier::tick(double now) {

@@ -8,12 +8,14 @@ namespace cncstream::protocol {
 
 namespace {
 
-std::string format_jog(const JogDirection& dir, double length, double feed) {
+}  // namespace
+
+std::string relative_move_words(const JogDirection& dir, double length, double feed) {
   const double n = std::sqrt(dir.v[0] * dir.v[0] + dir.v[1] * dir.v[1] + dir.v[2] * dir.v[2]);
   if (!(n > 0) || !std::isfinite(n)) throw std::invalid_argument("jog: direction must be a non-zero vector");
   if (!(feed > 0) || !std::isfinite(feed)) throw std::invalid_argument("jog: feed must be positive");
   if (!(length > 0) || !std::isfinite(length)) throw std::invalid_argument("jog: distance must be positive");
-  std::string out = "$J=G91G21";
+  std::string out;
   static constexpr char kAxis[3] = {'X', 'Y', 'Z'};
   char buf[48];
   for (int i = 0; i < 3; ++i) {
@@ -25,6 +27,12 @@ std::string format_jog(const JogDirection& dir, double length, double feed) {
   std::snprintf(buf, sizeof buf, "F%.0f", feed);
   out += buf;
   return out;
+}
+
+namespace {
+
+std::string format_jog(const JogDirection& dir, double length, double feed) {
+  return "$J=G91G21" + relative_move_words(dir, length, feed);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "cncstream/protocol/marlin_session.hpp"
 
+#include <limits>
 #include <stdexcept>
 
 namespace cncstream::protocol {
@@ -154,11 +155,13 @@ void MarlinSession::on_ok(const Response& r) {
   if (s.file) {
     ++progress_.lines_answered;
     progress_.last_answered_line = s.line.source_line;
-    modal_.apply(s.line.text);
+    apply_answered_line(modal_, s.line.text);
     Event e{EventKind::LineAnswered, "ok"};
     e.source_line = s.line.source_line;
     e.line_text = s.line.text;
     emit(std::move(e));
+  } else if (s.jog_segment) {
+    if (jog_segments_queued_ > 0) --jog_segments_queued_;
   } else {
     Event e{EventKind::CommandAnswered, s.line.text + ": ok"};
     e.line_text = s.line.text;
@@ -214,6 +217,17 @@ void MarlinSession::pump() {
       send_numbered(std::move(l), false);
       continue;
     }
+    if (jog_dir_ && !is_active(progress_.state) && jog_segments_queued_ < 2) {
+      PreparedLine l;
+      // One segment covers 0.1 s at the jog feed, as GRBL's continuous jog does.
+      l.text = "G1" + relative_move_words(*jog_dir_, jog_feed_ / 60.0 * 0.1, jog_feed_);
+      const long n = next_n_;
+      send_numbered(std::move(l), false);
+      history_[n].jog_segment = true;
+      outstanding_.back().jog_segment = true;
+      ++jog_segments_queued_;
+      continue;
+    }
     if (progress_.state == JobState::Running && next_index_ < program_.lines.size()) {
       PreparedLine l = program_.lines[next_index_++];
       ++progress_.lines_sent;
@@ -234,6 +248,7 @@ void MarlinSession::pump() {
 void MarlinSession::start_job(PreparedProgram program, JobMode mode, double now) {
   now_ = now;
   if (is_active(progress_.state)) throw std::logic_error("a job is already running");
+  if (jog_dir_) throw std::logic_error("a jog is running: release it first");
   if (mode != JobMode::Run) throw std::invalid_argument("Marlin has no check mode ($C)");
   if (!program.errors.empty()) {
     std::string all = "the program cannot be sent:";
@@ -245,7 +260,7 @@ void MarlinSession::start_job(PreparedProgram program, JobMode mode, double now)
   progress_ = JobProgress{};
   progress_.total_lines = program_.lines.size();
   progress_.state = JobState::Running;
-  modal_ = ModalState{};
+  modal_ = gcode::ParserState{};
   emit({EventKind::JobState, "running: job started"});
   pump();
 }
@@ -286,7 +301,52 @@ void MarlinSession::send_command(const std::string& line) {
   pump();
 }
 
+bool MarlinSession::realtime(Realtime) { return false; }
+
+double MarlinSession::next_deadline() const {
+  if (!outstanding_.empty() && !warned_silence_) return last_rx_ + profile_.busy_timeout_s;
+  return std::numeric_limits<double>::infinity();
+}
+
+void MarlinSession::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) {
+  if (is_active(progress_.state)) throw std::logic_error("cannot jog while a job is running");
+  for (std::string text : {std::string("G91"), "G1" + relative_move_words(dir, distance_mm, feed_mm_min),
+                           std::string("G90")}) {
+    PreparedLine l;
+    l.text = std::move(text);
+    commands_.push_back(std::move(l));
+  }
+  pump();
+}
+
+void MarlinSession::jog_start(const JogDirection& dir, double feed_mm_min) {
+  if (is_active(progress_.state)) throw std::logic_error("cannot jog while a job is running");
+  (void)relative_move_words(dir, 1.0, feed_mm_min);  // validates
+  if (!jog_dir_) {
+    PreparedLine l;
+    l.text = "G91";
+    commands_.push_back(std::move(l));
+  }
+  jog_dir_ = dir;
+  jog_feed_ = feed_mm_min;
+  pump();
+}
+
+void MarlinSession::jog_release() {
+  if (!jog_dir_) return;
+  jog_dir_.reset();
+  // M410 discards every queued move at once; G90 restores absolute moves.
+  PreparedLine stop, absolute;
+  stop.text = "M410";
+  absolute.text = "G90";
+  commands_.push_front(std::move(absolute));
+  commands_.push_front(std::move(stop));
+  pump();
+}
+
 void MarlinSession::disconnected() {
+  jog_dir_.reset();
+  jog_segments_queued_ = 0;
   outstanding_.clear();
   resend_queue_.clear();
   commands_.clear();

@@ -1,5 +1,7 @@
 #include "cncstream/transport/journal.hpp"
 
+#include "cncstream/gcode/modal_words.hpp"
+
 #include <sqlite3.h>
 
 #include <chrono>
@@ -186,12 +188,12 @@ void Journal::record_progress(const ProgressRecord& p) {
          "INSERT INTO progress(job_id, at, lines_ok, last_line, reason, units, distance, plane, wcs, motion, feed,"
          " spindle_speed, spindle, coolant, tool, wco_x, wco_y, wco_z, status_x, status_y, status_z, status_line,"
          " machine_state) VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
-  const auto& m = p.modal;
+  const gcode::ModalWords m = gcode::modal_words(p.modal);
   s.bind(1, p.job_id).bind(2, p.at.empty() ? now_iso8601() : p.at).bind(3, p.lines_ok).bind(4, p.last_line);
   s.bind(5, p.reason).bind(6, m.units).bind(7, m.distance).bind(8, m.plane).bind(9, m.wcs).bind(10, m.motion);
-  s.bind(11, m.feed).bind(12, m.spindle_speed).bind(13, m.spindle).bind(14, m.coolant());
+  s.bind(11, m.feed).bind(12, m.spindle_speed).bind(13, m.spindle).bind(14, m.coolant);
   s.bind(15, static_cast<std::int64_t>(m.tool));
-  if (m.wco) s.bind(16, (*m.wco)[0]).bind(17, (*m.wco)[1]).bind(18, (*m.wco)[2]);
+  if (p.wco) s.bind(16, (*p.wco)[0]).bind(17, (*p.wco)[1]).bind(18, (*p.wco)[2]);
   else s.bind_null(16).bind_null(17).bind_null(18);
   if (p.status_work_pos) s.bind(19, (*p.status_work_pos)[0]).bind(20, (*p.status_work_pos)[1]).bind(21, (*p.status_work_pos)[2]);
   else s.bind_null(19).bind_null(20).bind_null(21);
@@ -234,7 +236,7 @@ std::optional<ProgressRecord> Journal::last_progress(std::int64_t job_id) const 
   p.lines_ok = s.i64(2);
   p.last_line = s.i64(3);
   p.reason = s.text(4);
-  auto& m = p.modal;
+  gcode::ModalWords m;
   m.units = s.text(5);
   m.distance = s.text(6);
   m.plane = s.text(7);
@@ -243,11 +245,14 @@ std::optional<ProgressRecord> Journal::last_progress(std::int64_t job_id) const 
   m.feed = s.f64(10);
   m.spindle_speed = s.f64(11);
   m.spindle = s.text(12);
-  const std::string coolant = s.text(13);
-  m.mist = coolant.find("M7") != std::string::npos;
-  m.flood = coolant.find("M8") != std::string::npos;
+  m.coolant = s.text(13);
   m.tool = static_cast<int>(s.i64(14));
-  if (!s.is_null(15)) m.wco = protocol::Axes{s.f64(15), s.f64(16), s.f64(17), 0, 0, 0};
+  try {
+    p.modal = gcode::modal_from_words(m);
+  } catch (const std::invalid_argument& e) {
+    throw JournalError(path_.string() + ": job " + std::to_string(job_id) + ": " + e.what());
+  }
+  if (!s.is_null(15)) p.wco = std::array<double, 3>{s.f64(15), s.f64(16), s.f64(17)};
   if (!s.is_null(18)) p.status_work_pos = std::array<double, 3>{s.f64(18), s.f64(19), s.f64(20)};
   if (!s.is_null(21)) p.status_line = s.i64(21);
   if (!s.is_null(22)) p.machine_state = s.text(22);

@@ -7,7 +7,7 @@
 
 #include "app_run.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
-#include "cncstream/transport/stream_runner.hpp"
+#include "cncstream/session/stream_runner.hpp"
 #include "sim/pty_process.hpp"
 
 using namespace apptest;
@@ -25,12 +25,12 @@ TEST(Controls, HoldResumeOverrideAndStopWithoutAlarm) {
     f << "M2\n";
   }
   simtest::SimProcess sim({"--speed", "4", "--strict"});
-  cncstream::transport::RunnerOptions o;
+  cncstream::session::RunnerOptions o;
   o.port = sim.slave();
   o.profiles_dir = cncstream::protocol::default_profiles_dir();
   o.identify.banner_timeout_s = 0.5;
   o.max_run_s = 20;
-  cncstream::transport::StreamRunner* runner = nullptr;
+  cncstream::session::StreamRunner* runner = nullptr;
   enum class Step { Start, Holding, Resumed, Overridden, Stopping } step = Step::Start;
   bool saw_hold0 = false, saw_run_after = false, saw_ov110 = false, alarm = false;
   std::size_t answered_at_hold = 0, answered_after_hold = 0;
@@ -38,7 +38,7 @@ TEST(Controls, HoldResumeOverrideAndStopWithoutAlarm) {
   o.on_event = [&](const cncstream::protocol::Event& e) {
     if (e.kind == EventKind::Alarm) alarm = true;
   };
-  o.on_tick = [&](const cncstream::transport::RunnerSnapshot& s) {
+  o.on_tick = [&](const cncstream::session::MachineSnapshot& s) {
     const auto st = s.status ? s.status->state : MachineState::Unknown;
     switch (step) {
       case Step::Start:
@@ -77,7 +77,7 @@ TEST(Controls, HoldResumeOverrideAndStopWithoutAlarm) {
       case Step::Stopping: break;
     }
   };
-  cncstream::transport::StreamRunner r(o);
+  cncstream::session::StreamRunner r(o);
   runner = &r;
   const auto res = r.run(prog);
   EXPECT_EQ(res.outcome, JobOutcome::Stopped) << res.message;

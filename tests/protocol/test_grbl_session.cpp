@@ -103,7 +103,7 @@ TEST(GrblSession, StreamsWithinBufferAndCompletes) {
   EXPECT_EQ(w.lines.size(), 40u);
   EXPECT_EQ(s.progress().lines_answered, 40u);
   EXPECT_EQ(count(s.take_events(), EventKind::LineAnswered), 40u);
-  EXPECT_DOUBLE_EQ(s.modal().feed, 1000);
+  EXPECT_DOUBLE_EQ(s.modal().feed_rate, 1000);
 }
 
 TEST(GrblSession, PushedMessagesPopNothing) {

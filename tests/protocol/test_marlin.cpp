@@ -40,7 +40,7 @@ TEST(Marlin, SendResponseOneAtATime) {
   EXPECT_EQ(s.take_output(), marlin_frame(3, "G1 Y5") + "\n");
   s.on_bytes("ok\n", 0.4);
   EXPECT_EQ(s.progress().outcome, JobOutcome::Completed);
-  EXPECT_DOUBLE_EQ(s.modal().feed, 600);
+  EXPECT_DOUBLE_EQ(s.modal().feed_rate, 600);
 }
 
 TEST(Marlin, ForcedResendGoesBackToTheRequestedLine) {

@@ -6,6 +6,8 @@
 #include <csignal>
 #include <filesystem>
 
+#include "cncstream/gcode/modal_words.hpp"
+#include "cncstream/protocol/modal_state.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "cncstream/transport/sha256.hpp"
 
@@ -43,9 +45,8 @@ TEST(Journal, RoundTrip) {
   {
     Journal j(path);
     id = j.begin_job("/parts/plate.nc", sha256_hex("G0X0\n"), "grbl-1.1", "/dev/ttyUSB0", "run", 1200);
-    cncstream::protocol::ModalState m;
-    m.apply("G20G91G18G55F250S12000M3M8T2");
-    m.wco = cncstream::protocol::Axes{1.5, -2.0, 3.25, 0, 0, 0};
+    cncstream::gcode::ParserState m;
+    cncstream::protocol::apply_answered_line(m, "G20G91G18G55F250S12000M3M8T2");
     ProgressRecord p;
     p.job_id = id;
     p.lines_ok = 10;
@@ -56,6 +57,7 @@ TEST(Journal, RoundTrip) {
     p.last_line = 518;
     p.reason = "error";
     p.modal = m;
+    p.wco = std::array<double, 3>{1.5, -2.0, 3.25};
     p.status_work_pos = std::array<double, 3>{12.5, -3.25, -0.75};
     p.status_line = 511;
     p.machine_state = "Hold:0";
@@ -76,17 +78,20 @@ TEST(Journal, RoundTrip) {
   EXPECT_EQ(last->lines_ok, 517);
   EXPECT_EQ(last->last_line, 518);
   EXPECT_EQ(last->reason, "error");
-  EXPECT_EQ(last->modal.units, "G20");
-  EXPECT_EQ(last->modal.distance, "G91");
-  EXPECT_EQ(last->modal.plane, "G18");
-  EXPECT_EQ(last->modal.wcs, "G55");
-  EXPECT_DOUBLE_EQ(last->modal.feed, 250);
-  EXPECT_DOUBLE_EQ(last->modal.spindle_speed, 12000);
-  EXPECT_EQ(last->modal.spindle, "M3");
-  EXPECT_EQ(last->modal.coolant(), "M8");
-  EXPECT_EQ(last->modal.tool, 2);
-  ASSERT_TRUE(last->modal.wco);
-  EXPECT_DOUBLE_EQ((*last->modal.wco)[2], 3.25);
+  const auto words = cncstream::gcode::modal_words(last->modal);
+  EXPECT_EQ(words.units, "G20");
+  EXPECT_EQ(words.distance, "G91");
+  EXPECT_EQ(words.plane, "G18");
+  EXPECT_EQ(words.wcs, "G55");
+  EXPECT_DOUBLE_EQ(words.feed, 250);  // program units (inches per minute), as written
+  EXPECT_NEAR(last->modal.feed_rate, 250 * 25.4, 1e-9);
+  EXPECT_DOUBLE_EQ(words.spindle_speed, 12000);
+  EXPECT_EQ(words.spindle, "M3");
+  EXPECT_EQ(words.coolant, "M8");
+  EXPECT_EQ(words.tool, 2);
+  EXPECT_EQ(cncstream::gcode::format_modes(last->modal), "[GC:G0 G55 G18 G20 G91 G94 M3 M8 T2 F250 S12000]");
+  ASSERT_TRUE(last->wco);
+  EXPECT_DOUBLE_EQ((*last->wco)[2], 3.25);
   ASSERT_TRUE(last->status_work_pos);
   EXPECT_DOUBLE_EQ((*last->status_work_pos)[0], 12.5);
   EXPECT_DOUBLE_EQ((*last->status_work_pos)[2], -0.75);

@@ -8,7 +8,9 @@
 #include <string_view>
 #include <vector>
 
+#include "cncstream/gcode/interpreter.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/protocol/jog.hpp"
 #include "cncstream/protocol/line_cleaner.hpp"
 #include "cncstream/protocol/status_report.hpp"
 
@@ -86,9 +88,39 @@ class ProtocolEngine {
   // The controller went away (EOF/EIO): ends any job as Disconnected.
   virtual void disconnected() = 0;
 
+  // A real-time command (overrides, hold, status...); false if this
+  // controller has no such byte (nothing is sent then).
+  virtual bool realtime(Realtime r) = 0;
+
+  // Jogging, only while no job runs (std::logic_error otherwise; bad
+  // direction or feed: std::invalid_argument). A step moves `distance_mm`
+  // along `dir`; a continuous jog runs until jog_release(), which stops the
+  // motion at once (GRBL: jog cancel 0x85; Marlin: M410 quick stop).
+  virtual void jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) = 0;
+  virtual void jog_start(const JogDirection& dir, double feed_mm_min) = 0;
+  virtual void jog_release() = 0;
+  virtual bool jogging() const = 0;
+
   virtual const FirmwareProfile& profile() const = 0;
   virtual const JobProgress& progress() const = 0;
   virtual bool busy() const = 0;  // lines or commands still in flight or queued
+  // The modal state after the last answered file line (the G-code
+  // interpreter's own state: one modal state for the whole project).
+  virtual const gcode::ParserState& modal() const = 0;
+  // The last status report with positions completed (nullopt: none yet, or
+  // a controller that is not polled) and the override percentages.
+  virtual std::optional<StatusReport> status() const { return std::nullopt; }
+  virtual std::optional<std::array<int, 3>> overrides() const { return std::nullopt; }
+  // Bytes (GRBL) or lines (Marlin) in the controller's receive queue, and how many fit.
+  struct BufferUse {
+    std::size_t in_flight = 0, capacity = 0;
+    bool bytes = true;
+  };
+  virtual BufferUse buffer() const = 0;
+  // The next time tick() has work (status poll, time-out), in the engine's
+  // clock; +infinity when nothing is due. The caller arms a timer for it:
+  // no polling loop.
+  virtual double next_deadline() const = 0;
 
  protected:
   void emit(Event e) { events_.push_back(std::move(e)); }

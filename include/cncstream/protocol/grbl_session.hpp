@@ -36,19 +36,23 @@ class GrblSession final : public ProtocolEngine {
   void send_command(const std::string& line) override;
   void disconnected() override;
 
-  // Sends a real-time byte if the profile has it; false if unsupported.
-  bool realtime(Realtime r);
-  // Continuous jog until jog_release(); only while no job is running.
-  void jog_start(const JogDirection& dir, double feed_mm_min);
-  void jog_release();
-  bool jogging() const { return jog_dir_.has_value(); }
+  bool realtime(Realtime r) override;
+  // Continuous jog: short $J= segments of jog_segment_s each, at most
+  // jog_max_in_flight queued, topped up as they are answered.
+  void jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) override;
+  void jog_start(const JogDirection& dir, double feed_mm_min) override;
+  void jog_release() override;
+  bool jogging() const override { return jog_dir_.has_value(); }
 
   const FirmwareProfile& profile() const override { return profile_; }
   const JobProgress& progress() const override { return progress_; }
   bool busy() const override;
-  const StatusTracker& status() const { return tracker_; }
-  // Modal state after the last answered file line.
-  const ModalState& modal() const { return modal_; }
+  std::optional<StatusReport> status() const override { return tracker_.last(); }
+  std::optional<std::array<int, 3>> overrides() const override { return tracker_.overrides(); }
+  const StatusTracker& tracker() const { return tracker_; }
+  const gcode::ParserState& modal() const override { return modal_; }
+  BufferUse buffer() const override { return {counter_.in_flight_bytes(), profile_.rx_buffer_size, true}; }
+  double next_deadline() const override;
   const CharacterCountingStream& counter() const { return counter_; }
   bool waiting_for_reset() const { return expect_reset_; }
 
@@ -57,7 +61,7 @@ class GrblSession final : public ProtocolEngine {
 
  private:
   enum class CheckPhase { None, Entering, Streaming, Leaving };
-  enum class Origin { File, Command, Jog, CheckToggle };
+  enum class Origin { File, Command, Jog, JogStep, CheckToggle };
 
   void pump();
   void on_answer(bool ok, int code, double now);
@@ -74,7 +78,7 @@ class GrblSession final : public ProtocolEngine {
   CharacterCountingStream counter_;
   LineSplitter splitter_;
   StatusTracker tracker_;
-  ModalState modal_;
+  gcode::ParserState modal_;
   double next_poll_ = 0;
 
   PreparedProgram program_;

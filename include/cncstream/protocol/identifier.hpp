@@ -36,6 +36,8 @@ class FirmwareIdentifier {
   void tick(double now);
   std::string take_output() { return std::exchange(output_, {}); }
   bool done() const { return result_.has_value(); }
+  // When tick() must next run (a banner or query time-out); +infinity when none is pending.
+  double next_deadline() const;
   const Identification& result() const { return *result_; }
 
   // Which profile's banner pattern matches `line`, if any (highest priority first).

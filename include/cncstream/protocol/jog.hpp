@@ -16,6 +16,10 @@ struct JogDirection {
 // Throws std::invalid_argument for a zero direction or a non-positive feed.
 std::string jog_segment_line(const JogDirection& dir, double feed_mm_min, double segment_s);
 
+// The axis and feed words of a relative move of `length_mm` along `dir`
+// ("X1.000Y-0.500F1000"): the Marlin engine jogs with relative G1 moves.
+std::string relative_move_words(const JogDirection& dir, double length_mm, double feed_mm_min);
+
 // A step jog of `distance_mm` along `dir` (incremental, millimetres).
 std::string jog_step_line(const JogDirection& dir, double distance_mm, double feed_mm_min);
 

@@ -34,10 +34,24 @@ class MarlinSession final : public ProtocolEngine {
   void send_command(const std::string& line) override;
   void disconnected() override;
 
+  // No real-time bytes: always false.
+  bool realtime(Realtime r) override;
+  // Jogs are relative G1 moves between G91 and G90; a continuous jog keeps
+  // at most two segments queued and its release sends M410 (quick stop),
+  // which Marlin's emergency parser acts on as the bytes arrive.
+  void jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) override;
+  void jog_start(const JogDirection& dir, double feed_mm_min) override;
+  void jog_release() override;
+  bool jogging() const override { return jog_dir_.has_value(); }
+
   const FirmwareProfile& profile() const override { return profile_; }
   const JobProgress& progress() const override { return progress_; }
   bool busy() const override;
-  const ModalState& modal() const { return modal_; }
+  const gcode::ParserState& modal() const override { return modal_; }
+  BufferUse buffer() const override {
+    return {outstanding_.size(), static_cast<std::size_t>(profile_.send_window), false};
+  }
+  double next_deadline() const override;
   long next_line_number() const { return next_n_; }
   std::optional<int> planner_free() const { return planner_free_; }
   std::size_t resends() const { return resends_; }
@@ -47,6 +61,7 @@ class MarlinSession final : public ProtocolEngine {
     long n;
     PreparedLine line;
     bool file;
+    bool jog_segment = false;
   };
   void pump();
   void send_numbered(PreparedLine line, bool file);
@@ -56,7 +71,7 @@ class MarlinSession final : public ProtocolEngine {
 
   FirmwareProfile profile_;
   LineSplitter splitter_;
-  ModalState modal_;
+  gcode::ParserState modal_;
   bool counter_reset_sent_ = false;
   bool counter_reset_acked_ = false;
   long next_n_ = 1;
@@ -75,6 +90,10 @@ class MarlinSession final : public ProtocolEngine {
   double now_ = 0;
   double last_rx_ = 0;
   bool warned_silence_ = false;
+
+  std::optional<JogDirection> jog_dir_;
+  double jog_feed_ = 0;
+  std::size_t jog_segments_queued_ = 0;  // continuous-jog moves not yet answered
 };
 
 }  // namespace cncstream::protocol

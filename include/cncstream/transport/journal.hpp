@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "cncstream/protocol/modal_state.hpp"
+#include "cncstream/gcode/interpreter.hpp"
 
 struct sqlite3;
 
@@ -44,7 +44,8 @@ struct ProgressRecord {
   std::int64_t lines_ok = 0;   // file lines answered ok (blank lines count once passed)
   std::int64_t last_line = 0;  // 1-based file line of the last answer
   std::string reason;          // "periodic", "error", "alarm", "stop", "end", ...
-  protocol::ModalState modal;
+  gcode::ParserState modal;  // modal groups, feed, spindle speed and tool (the rest is not kept)
+  std::optional<std::array<double, 3>> wco;  // work offset the controller reported (MPos - WPos), mm
   // The controller's last status report before this row: its work position
   // (mm) and state, and the last answered file line when it came. The machine
   // was then on a line at most one planner queue before that one, so resume

@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 
+#include "cncstream/gcode/modal_words.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "commands.hpp"
 
@@ -43,9 +44,9 @@ void register_jobs(CLI::App& app, CommandRegistry& registry) {
       if (const auto p = j.last_progress(job->id)) {
         std::cout << "  last record (" << p->reason << ", " << p->at << "): " << p->lines_ok
                   << " lines answered ok, last answered file line " << p->last_line << "\n  modal state: "
-                  << p->modal.to_json() << "\n  to restart after line " << p->last_line
-                  << " (after homing and checking the work offset), send first:\n";
-        std::cout << p->modal.preamble();
+                  << gcode::modal_json(p->modal) << "\n  to continue (after homing and checking the work offset): "
+                  << "cncstream resume " << job->id
+                  << " PORT, which plans the retract, travel, spindle and plunge from the program itself\n";
       }
       return 0;
     }

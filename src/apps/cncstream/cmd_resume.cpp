@@ -62,7 +62,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
       throw std::invalid_argument(file.string() + " changed since job " + std::to_string(o->job) +
                                   " streamed it (SHA-256 " + sha.substr(0, 16) + "..., journal " +
                                   rec->file_sha256.substr(0, 16) + "...): refusing to resume a different program");
-    const transport::JobInput whole = transport::job_from_file(file);
+    const session::JobInput whole = session::job_from_file(file);
     std::string text;
     for (const auto& l : whole.lines) text.append(l).push_back('\n');
     const auto trace = gcode::trace_program(text);
@@ -97,7 +97,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     }
     const auto preamble = gcode::resume_preamble(at, ro);
 
-    transport::JobInput job;
+    session::JobInput job;
     job.file = file;
     job.file_sha256 = sha;
     job.total_lines = whole.total_lines;

@@ -66,7 +66,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       ->group("Tool path (STL input)");
   registry.add(sub, [o] {
     const auto& c = o->conn;
-    transport::JobInput job;
+    session::JobInput job;
     std::optional<VerifyTarget> verify;
     const auto limits = planning_limits(c, o->sim);
     const std::string limits_note = c.port == "sim" ? "the simulator's $110-$122"
@@ -85,7 +85,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
         f.close();
         if (!f) throw std::runtime_error(out.string() + ": write failed");
       }
-      job = transport::job_from_file(out);
+      job = session::job_from_file(out);
       EtaEstimator eta = estimate_job(job, limits);
       std::cout << "plan for " << o->file << ":\n"
                 << "  tool: " << r.cutter.description() << " [" << r.cutter.spec() << "]\n"
@@ -102,7 +102,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       verify = VerifyTarget{r.work_mesh, r.cutter};
       return run_session(c, o->sim, job, verify, std::move(eta));
     }
-    job = transport::job_from_file(o->file);
+    job = session::job_from_file(o->file);
     EtaEstimator eta = estimate_job(job, limits);
     std::cout << o->file << ": " << job.total_lines << " lines, estimated machining time "
               << format_duration(eta.total()) << " (" << limits_note << ")" << std::endl;

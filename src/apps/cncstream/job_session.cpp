@@ -17,20 +17,11 @@
 #include "cncstream/transport/port_discovery.hpp"
 #include "keyboard_control.hpp"
 #include "live_panel.hpp"
-#include "sim_port.hpp"
+#include "cncstream/session/simulator_port.hpp"
 
 namespace cncstream::app {
 
 namespace {
-
-transport::StreamRunner* g_runner = nullptr;
-volatile std::sig_atomic_t g_interrupts = 0;
-
-extern "C" void on_sigint(int) {
-  g_interrupts = g_interrupts + 1;
-  if (g_interrupts >= 2) std::signal(SIGINT, SIG_DFL);
-  if (g_runner) g_runner->request_stop();  // sets an atomic flag only
-}
 
 // "LINE:VALUE" fault specs.
 template <typename T>
@@ -101,7 +92,7 @@ gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOpti
   return cncsim::Settings::defaults().motion_limits();
 }
 
-EtaEstimator estimate_job(const transport::JobInput& job, const gcode::MotionLimits& limits) {
+EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits) {
   std::string text;
   for (const auto& l : job.lines) text.append(l).push_back('\n');
   const auto trace = gcode::trace_program(text);
@@ -127,12 +118,12 @@ bool confirm(const std::string& question, bool yes) {
   return answer == "y" || answer == "Y" || answer == "yes";
 }
 
-int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transport::JobInput& job,
+int run_session(const ConnectionOptions& c, const SimCliOptions& s, const session::JobInput& job,
                 std::optional<VerifyTarget> verify, std::optional<EtaEstimator> precomputed) {
-  std::unique_ptr<SimPort> sim;
-  transport::RunnerOptions ro;
+  std::shared_ptr<session::SimulatorPort> sim;
+  session::RunnerOptions ro;
   if (c.port == "sim") {
-    SimPortOptions so;
+    session::SimulatorOptions so;
     so.speed = s.speed;
     so.strict = !s.lenient;
     so.settings_file = s.settings;
@@ -158,9 +149,8 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
       throw std::invalid_argument("--sim-tool-table and --sim-result need a cut to simulate: an STL job, or --sim-design "
                                   "with --sim-tool (and not --no-sim-verify)");
     }
-    sim = std::make_unique<SimPort>(so);
-    ro.port = sim->path();
-    ro.on_port_opened = [&sim] { sim->start(); };
+    sim = std::make_shared<session::SimulatorPort>(so);
+    ro.machine_port = sim;
     std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << s.speed << ", "
               << (s.lenient ? "lenient" : "strict") << " RX buffer)\n";
   } else if (c.port == "auto") {
@@ -203,7 +193,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
                   format_duration(eta.total()));
   };
   const bool verbose = c.verbose;
-  transport::StreamRunner* runner_ptr = nullptr;
+  session::StreamRunner* runner_ptr = nullptr;
   bool interactive = false;
   ro.on_event = [&panel, verbose, &runner_ptr, &interactive](const protocol::Event& e) {
     using protocol::EventKind;
@@ -230,11 +220,11 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
       default: panel.message(std::string(to_string(e.kind)) + ": " + e.text); return;
     }
   };
-  const std::string title = job.file.filename().string() + " -> " + (c.port == "sim" ? "sim" : ro.port);
+  const std::string title = job.file.filename().string() + " -> " + (c.port == "sim" ? std::string("sim") : ro.port);
   JobView view;
   view.title = title;
   view.total_lines = job.total_lines;
-  ro.on_tick = [&](const transport::RunnerSnapshot& snap) {
+  ro.on_tick = [&](const session::MachineSnapshot& snap) {
     view.title = title + " (" + snap.profile + ")";
     view.job_state = protocol::to_string(snap.progress.state);
     view.line = snap.progress.last_answered_line;
@@ -246,16 +236,16 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
       view.mpos = snap.status->mpos;
     }
     view.overrides = snap.overrides;
-    if (snap.rx_size > 0) view.buffer_fill = double(snap.rx_in_flight) / double(snap.rx_size);
+    if (snap.buffer.bytes && snap.buffer.capacity > 0)
+      view.buffer_fill = double(snap.buffer.in_flight) / double(snap.buffer.capacity);
     view.show_help = keys && keys->help_shown();
     panel.update(view, snap.now);
   };
 
-  transport::StreamRunner runner(ro);
+  ro.stop_on_sigint = true;
+  session::StreamRunner runner(ro);
   runner_ptr = &runner;
-  g_runner = &runner;
-  auto previous = std::signal(SIGINT, on_sigint);
-  transport::RunResult r;
+  session::RunResult r;
   try {
     keys = std::make_unique<KeyboardControl>(runner);  // restores the terminal when the job ends
     if (!keys->active()) keys.reset();
@@ -264,12 +254,8 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transp
     keys.reset();
   } catch (...) {
     keys.reset();
-    g_runner = nullptr;
-    std::signal(SIGINT, previous);
     throw;
   }
-  g_runner = nullptr;
-  std::signal(SIGINT, previous);
   view.job_state = to_string(r.outcome);
   view.line = r.last_answered_line;
   view.elapsed_s = r.seconds;

@@ -13,7 +13,7 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/gcode/motion_planner.hpp"
 #include "cncstream/geometry/mesh.hpp"
-#include "cncstream/transport/stream_runner.hpp"
+#include "cncstream/session/stream_runner.hpp"
 #include "job_display.hpp"
 
 namespace cncstream::app {
@@ -57,7 +57,7 @@ struct VerifyTarget {
 gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOptions& s);
 
 // When each file line's motion ends, for the lines the job sends.
-EtaEstimator estimate_job(const transport::JobInput& job, const gcode::MotionLimits& limits);
+EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits);
 
 // Asks "question [y/N]" on the terminal unless `yes`. Without a TTY and
 // without --yes, refuses (returns false) with a message saying so.
@@ -66,7 +66,7 @@ bool confirm(const std::string& question, bool yes);
 // Streams the job; prints the outcome (and the simulator's report). Returns
 // the process exit code: 0 completed / check passed, 1 not completed,
 // 3 the simulator's verify found a gouge, 4 the simulator's RX buffer overflowed.
-int run_session(const ConnectionOptions& c, const SimCliOptions& s, const transport::JobInput& job,
+int run_session(const ConnectionOptions& c, const SimCliOptions& s, const session::JobInput& job,
                 std::optional<VerifyTarget> verify, std::optional<EtaEstimator> eta = std::nullopt);
 
 }  // namespace cncstream::app

@@ -14,7 +14,7 @@ termios g_saved{};
 
 const char* KeyboardControl::help() { return job_keys_help(); }
 
-KeyboardControl::KeyboardControl(transport::StreamRunner& runner) : runner_(runner) {
+KeyboardControl::KeyboardControl(session::StreamRunner& runner) : runner_(runner) {
   if (!::isatty(STDIN_FILENO) || ::tcgetattr(STDIN_FILENO, &g_saved) != 0) return;
   termios raw = g_saved;
   raw.c_lflag &= static_cast<tcflag_t>(~(ICANON | ECHO));  // keep ISIG: Ctrl-C still stops

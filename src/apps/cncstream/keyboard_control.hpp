@@ -6,13 +6,13 @@
 #include <atomic>
 #include <thread>
 
-#include "cncstream/transport/stream_runner.hpp"
+#include "cncstream/session/stream_runner.hpp"
 
 namespace cncstream::app {
 
 class KeyboardControl {
  public:
-  explicit KeyboardControl(transport::StreamRunner& runner);
+  explicit KeyboardControl(session::StreamRunner& runner);
   ~KeyboardControl();  // restores the terminal
   KeyboardControl(const KeyboardControl&) = delete;
   KeyboardControl& operator=(const KeyboardControl&) = delete;
@@ -22,7 +22,7 @@ class KeyboardControl {
 
  private:
   void loop();
-  transport::StreamRunner& runner_;
+  session::StreamRunner& runner_;
   std::atomic<bool> running_{true};
   bool active_ = false;
   std::atomic<bool> show_help_{false};

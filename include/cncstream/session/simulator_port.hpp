@@ -1,10 +1,12 @@
 #pragma once
 // `PORT=sim`: the built-in simulator (cncsim's Machine behind its pty front
-// end) served from a thread of this process, so the streamer talks to it
-// exactly as to a USB serial port. Optionally cuts a stock block and, at the
-// end, verifies the machined surface against the design.
+// end) served from a thread of this process, so a machine session talks to
+// it exactly as to a USB serial port. Optionally cuts a stock block and, at
+// the end, verifies the machined surface against the design. The session
+// depends on the simulator here, never the other way round.
 #include <atomic>
 #include <exception>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -15,10 +17,11 @@
 #include "cncsim/removal.hpp"
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/geometry/mesh.hpp"
+#include "cncstream/session/machine_port.hpp"
 
-namespace cncstream::app {
+namespace cncstream::session {
 
-struct SimPortOptions {
+struct SimulatorOptions {
   std::string speed = "max";  // "max" or a time scale K (1 = real time)
   bool strict = true;         // an RX overflow stops the simulator (a streamer bug)
   std::string settings_file;  // persistent $$ / offsets; empty: defaults
@@ -32,23 +35,29 @@ struct SimPortOptions {
   std::string png;          // deviation map written after the job
   std::optional<cncsim::ToolTable> tools;  // T number -> cutter (else `cutter` throughout)
   std::string result;       // machined surface written here (.f32 + .txt, and .stl)
+  std::optional<std::filesystem::path> link;  // a stable symlink to the pty (e.g. for a reconnect test)
 };
 
 // Parses "max" or a positive number; throws std::invalid_argument naming the text.
 double parse_sim_speed(const std::string& text);
 
-class SimPort {
+class SimulatorPort final : public MachinePort {
  public:
-  explicit SimPort(SimPortOptions options);
-  ~SimPort();
-  SimPort(const SimPort&) = delete;
-  SimPort& operator=(const SimPort&) = delete;
+  explicit SimulatorPort(SimulatorOptions options);
+  ~SimulatorPort() override;
+  SimulatorPort(const SimulatorPort&) = delete;
+  SimulatorPort& operator=(const SimulatorPort&) = delete;
 
-  // Starts serving the pty. Call it once the host has opened (and flushed)
+  // Starts serving the pty. Called once the host has opened (and flushed)
   // the port, so the power-on banner reaches the host like a DTR reset's.
   void start();
-  // The pty slave to open as the serial port.
-  const std::string& path() const { return path_; }
+  void opened() override { start(); }
+  // The pty slave to open as the serial port (the link, when one was asked for).
+  std::string path() override { return path_; }
+  std::string describe() override { return "the built-in simulator (" + path_ + ")"; }
+  // Lines the simulated machine received and answered: read them after finish().
+  std::size_t lines_received() const { return machine_->lines_received(); }
+  std::size_t lines_answered() const { return machine_->lines_answered(); }
   // The controller's settings ($$), for planning before connecting.
   const cncsim::Settings& settings() const { return machine_->settings(); }
 
@@ -66,7 +75,7 @@ class SimPort {
   Report finish(bool let_motion_finish);
 
  private:
-  SimPortOptions opt_;
+  SimulatorOptions opt_;
   std::unique_ptr<cncsim::Machine> machine_;
   std::unique_ptr<cncsim::MaterialRemoval> removal_;
   std::unique_ptr<cncsim::PtyFrontEnd> front_;
@@ -78,4 +87,4 @@ class SimPort {
   bool finished_ = false;
 };
 
-}  // namespace cncstream::app
+}  // namespace cncstream::session

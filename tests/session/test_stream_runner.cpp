@@ -9,11 +9,12 @@
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "cncstream/transport/serial_transport.hpp"
-#include "cncstream/transport/stream_runner.hpp"
+#include "cncstream/session/stream_runner.hpp"
 #include "fake_grbl.hpp"
 #include "fake_marlin.hpp"
 
 using namespace cncstream::transport;
+using namespace cncstream::session;
 using cncstream::protocol::JobOutcome;
 namespace fs = std::filesystem;
 
@@ -114,7 +115,7 @@ TEST(StreamRunner, StreamsAJobOverAPtyAndJournalsIt) {
   const auto last = j.last_progress(jobs[0].id);
   ASSERT_TRUE(last);
   EXPECT_EQ(last->lines_ok, 403);
-  EXPECT_DOUBLE_EQ(last->modal.feed, 1200);
+  EXPECT_DOUBLE_EQ(last->modal.feed_rate, 1200);
 }
 
 TEST(StreamRunner, DisconnectRecordsTheLastAnsweredLine) {

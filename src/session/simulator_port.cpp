@@ -1,4 +1,4 @@
-#include "sim_port.hpp"
+#include "cncstream/session/simulator_port.hpp"
 
 #include <cstdio>
 #include <sstream>
@@ -6,7 +6,7 @@
 
 #include "cncstream/cam/deviation.hpp"
 
-namespace cncstream::app {
+namespace cncstream::session {
 
 double parse_sim_speed(const std::string& text) {
   if (text == "max") return 0;
@@ -22,13 +22,14 @@ double parse_sim_speed(const std::string& text) {
   return v;
 }
 
-SimPort::SimPort(SimPortOptions options) : opt_(std::move(options)) {
+SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)) {
   cncsim::MachineOptions mo;
   if (!opt_.settings_file.empty()) mo.store_path = opt_.settings_file;
   mo.strict = opt_.strict;
   mo.faults = opt_.faults;
   cncsim::PtyOptions po;
   po.speed = parse_sim_speed(opt_.speed);
+  po.link = opt_.link;
   mo.instant_waits = po.speed <= 0;
   machine_ = std::make_unique<cncsim::Machine>(mo);
   if (opt_.design) {
@@ -43,10 +44,10 @@ SimPort::SimPort(SimPortOptions options) : opt_(std::move(options)) {
     removal_->attach(*machine_);
   }
   front_ = std::make_unique<cncsim::PtyFrontEnd>(*machine_, po);
-  path_ = front_->slave_path();
+  path_ = opt_.link ? opt_.link->string() : front_->slave_path();
 }
 
-void SimPort::start() {
+void SimulatorPort::start() {
   if (thread_.joinable() || finished_) return;
   thread_ = std::thread([this] {
     try {
@@ -61,12 +62,12 @@ void SimPort::start() {
   });
 }
 
-SimPort::~SimPort() {
+SimulatorPort::~SimulatorPort() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
 }
 
-SimPort::Report SimPort::finish(bool let_motion_finish) {
+SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
   Report r;
   if (finished_) return r;
   finished_ = true;
@@ -113,4 +114,4 @@ SimPort::Report SimPort::finish(bool let_motion_finish) {
   return r;
 }
 
-}  // namespace cncstream::app
+}  // namespace cncstream::session

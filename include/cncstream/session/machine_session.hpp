@@ -1,0 +1,156 @@
+#pragma once
+// One machine: the controller connection that outlives a job. A session owns
+// its port, identifies the firmware, reads `$$`, polls status at the
+// controller's cadence and lives across jobs and idle time, on an io_context
+// the caller gives it (one thread may drive several sessions). Every front end
+// (the CLI, the daemon, a pendant, the journal) is a client: it posts commands,
+// which are refused with a reason when the state forbids them, and subscribes
+// to events. Event-driven throughout: a timer armed for the engine's next
+// deadline, no polling loop.
+//
+// Threading: call the session's methods on the thread running its io_context
+// (from elsewhere, boost::asio::post a lambda to executor()). Subscribers are
+// called on that thread.
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cncstream/protocol/engine.hpp"
+#include "cncstream/protocol/grbl_session.hpp"
+#include "cncstream/protocol/grbl_settings.hpp"
+#include "cncstream/protocol/identifier.hpp"
+#include "cncstream/session/job_input.hpp"
+#include "cncstream/session/machine_port.hpp"
+#include "cncstream/session/session_events.hpp"
+#include "cncstream/transport/serial_transport.hpp"
+
+namespace cncstream::session {
+
+struct MachineOptions {
+  std::string name = "machine";
+  std::shared_ptr<MachinePort> port;  // what to open (a device, or the in-process simulator)
+  transport::SerialSettings serial;
+  std::filesystem::path profiles_dir;
+  std::optional<std::string> force_profile;  // skip identification's choice (still waits for the banner)
+  protocol::IdentifyOptions identify;
+  protocol::GrblSessionOptions grbl;
+  // GRBL family: read `$$` after identification (rates and accelerations for
+  // time estimates, $13 report units, $130-$132 travel).
+  bool read_settings = true;
+  double settings_timeout_s = 2.0;
+  // After the port vanishes, try to open it again this often (0: stay
+  // disconnected until open() is called). A job is never resumed by itself.
+  double reconnect_interval_s = 0;
+};
+
+class MachineSession {
+ public:
+  MachineSession(boost::asio::io_context& io, MachineOptions options);
+  ~MachineSession();
+  MachineSession(const MachineSession&) = delete;
+  MachineSession& operator=(const MachineSession&) = delete;
+
+  boost::asio::io_context::executor_type executor() { return io_.get_executor(); }
+  const std::string& name() const { return opt_.name; }
+
+  // ---- connection --------------------------------------------------------
+  // Opens the port and starts identification. Throws std::runtime_error
+  // naming the port when it cannot be opened (with reconnect on, a later
+  // attempt is scheduled all the same).
+  void open();
+  // Closes deliberately (not a disconnect). Refused while a job runs: stop it first.
+  CommandResult close();
+
+  // ---- commands (refused with a reason when the state forbids them) ------
+  // Starts a program. Refused unless connected and ready, with no job, jog
+  // or alarm; refused when a line cannot be sent to this controller (too
+  // long, not plain ASCII), naming the line.
+  CommandResult start_job(JobInput job, protocol::JobMode mode = protocol::JobMode::Run);
+  CommandResult hold();
+  CommandResult resume();
+  CommandResult toggle_hold();  // the operator's one key: resume when holding, else hold
+  CommandResult stop();         // controlled stop: hold, wait for motion to stop, reset
+  CommandResult realtime(protocol::Realtime r);  // overrides and other real-time bytes
+  CommandResult jog_step(const protocol::JogDirection& dir, double distance_mm, double feed_mm_min);
+  CommandResult jog_start(const protocol::JogDirection& dir, double feed_mm_min);
+  CommandResult jog_release();  // always accepted: stopping is never refused
+  CommandResult console(const std::string& line);  // an operator's line; refused during a job
+  CommandResult unlock();  // $X (Marlin: M999)
+  CommandResult home();    // $H (Marlin: G28)
+  CommandResult reset();   // soft reset (0x18)
+
+  // ---- state -------------------------------------------------------------
+  LinkState link() const { return link_; }
+  bool ready() const { return link_ == LinkState::Ready; }
+  bool job_active() const;
+  bool in_alarm() const { return alarm_; }
+  MachineSnapshot snapshot() const;
+  const protocol::ProtocolEngine* engine() const { return engine_.get(); }
+  const protocol::GrblSettings& settings() const { return settings_; }
+  // Seconds since the session was made: the clock of every event and snapshot.
+  double now() const;
+  std::size_t bytes_written() const;
+
+  // ---- events ------------------------------------------------------------
+  // Any number of subscribers; the returned handle unsubscribes when dropped.
+  [[nodiscard]] Subscription subscribe(std::function<void(const SessionEvent&)> fn);
+
+ private:
+  void connect_transport();
+  void on_data(std::string_view bytes);
+  void on_port_closed(const std::string& reason);
+  void after_identification();
+  void on_settings_line(std::string_view line);
+  void settings_done(const std::string& why);
+  void start_engine();
+  void drain();
+  void arm_timer();
+  void on_timer();
+  void emit(SessionEvent e);
+  void set_link(LinkState s, const std::string& why);
+  void schedule_reconnect();
+  void log(const std::string& text);
+  CommandResult needs_engine(const char* what) const;
+  CommandResult refuse_in_alarm(const char* what) const;
+
+  boost::asio::io_context& io_;
+  MachineOptions opt_;
+  std::chrono::steady_clock::time_point t0_;
+  std::vector<protocol::FirmwareProfile> profiles_;
+  LinkState link_ = LinkState::Closed;
+  std::shared_ptr<transport::SerialTransport> transport_;
+  std::size_t bytes_written_before_ = 0;  // by transports of earlier connections
+
+  std::unique_ptr<protocol::FirmwareIdentifier> identifier_;
+  protocol::LineSplitter id_splitter_;
+  std::string pending_after_id_;
+  enum class SettingsPhase { NotStarted, Reading, Done } settings_phase_ = SettingsPhase::NotStarted;
+  double settings_deadline_ = 0;
+  protocol::GrblSettings settings_;
+  protocol::FirmwareProfile profile_;
+  std::string banner_;
+  std::unique_ptr<protocol::ProtocolEngine> engine_;
+  bool report_inches_ = false;
+  bool alarm_ = false;
+
+  std::optional<JobInput> job_;  // the running job (its lines stay with the engine)
+  std::int64_t jobs_started_ = 0;
+
+  boost::asio::steady_timer timer_;
+  double timer_at_ = 0;
+  bool timer_armed_ = false;
+  boost::asio::steady_timer reconnect_timer_;
+
+  std::shared_ptr<SubscriberList> subscribers_;
+  std::shared_ptr<bool> alive_;  // handlers posted by the session check it
+};
+
+}  // namespace cncstream::session

@@ -1,0 +1,573 @@
+#include "cncstream/session/machine_session.hpp"
+
+#include <boost/asio/post.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "cncstream/protocol/grbl_session.hpp"
+#include "cncstream/protocol/marlin_session.hpp"
+#include "cncstream/protocol/response.hpp"
+
+namespace cncstream::session {
+
+using namespace protocol;
+
+namespace {
+
+constexpr double kNever = std::numeric_limits<double>::infinity();
+
+bool is_active(JobState s) {
+  return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping;
+}
+
+bool marlin_family(const FirmwareProfile& p) { return p.flow == FlowControl::SendResponse; }
+
+}  // namespace
+
+const char* to_string(LinkState s) {
+  switch (s) {
+    case LinkState::Closed: return "closed";
+    case LinkState::Connecting: return "connecting";
+    case LinkState::Ready: return "ready";
+    case LinkState::Disconnected: return "disconnected";
+  }
+  return "?";
+}
+
+void Subscription::reset() {
+  if (auto l = list_.lock())
+    for (auto& e : l->entries)
+      if (e.first == id_) e.second = nullptr;  // removed from the vector at the next emit
+  list_.reset();
+  id_ = 0;
+}
+
+MachineSession::MachineSession(boost::asio::io_context& io, MachineOptions options)
+    : io_(io),
+      opt_(std::move(options)),
+      t0_(std::chrono::steady_clock::now()),
+      timer_(io),
+      reconnect_timer_(io),
+      subscribers_(std::make_shared<SubscriberList>()),
+      alive_(std::make_shared<bool>(true)) {
+  if (!opt_.port) throw std::invalid_argument("machine '" + opt_.name + "': no port given");
+  profiles_ = load_firmware_profiles(opt_.profiles_dir);
+  if (opt_.force_profile &&
+      std::none_of(profiles_.begin(), profiles_.end(), [&](const auto& p) { return p.id == *opt_.force_profile; }))
+    throw std::invalid_argument("no firmware profile named '" + *opt_.force_profile + "'");
+}
+
+MachineSession::~MachineSession() {
+  *alive_ = false;
+  timer_.cancel();
+  reconnect_timer_.cancel();
+  if (transport_) transport_->close();
+  // Handlers still queued for this transport hold it alive (see retire below).
+  if (transport_) boost::asio::post(io_, [t = std::move(transport_)] {});
+}
+
+double MachineSession::now() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+}
+
+std::size_t MachineSession::bytes_written() const {
+  return bytes_written_before_ + (transport_ ? transport_->bytes_written() : 0);
+}
+
+Subscription MachineSession::subscribe(std::function<void(const SessionEvent&)> fn) {
+  const auto id = subscribers_->next_id++;
+  subscribers_->entries.emplace_back(id, std::move(fn));
+  return Subscription(subscribers_, id);
+}
+
+void MachineSession::emit(SessionEvent e) {
+  e.at = now();
+  e.link = link_;
+  auto list = subscribers_;  // a subscriber may drop its handle, or the session, meanwhile
+  auto& v = list->entries;
+  // Removed entries go only at the outermost emit: a subscriber's command may emit again.
+  if (list->depth == 0) std::erase_if(v, [](const auto& p) { return !p.second; });
+  ++list->depth;
+  for (std::size_t i = 0; i < v.size(); ++i)  // index: subscribing from a callback appends
+    if (v[i].second) {
+      auto fn = v[i].second;  // a copy: the callback may unsubscribe itself
+      try {
+        fn(e);
+      } catch (...) {
+        --list->depth;
+        throw;
+      }
+    }
+  --list->depth;
+}
+
+void MachineSession::log(const std::string& text) {
+  SessionEvent e;
+  e.kind = SessionEventKind::Log;
+  e.text = text;
+  emit(std::move(e));
+}
+
+void MachineSession::set_link(LinkState s, const std::string& why) {
+  link_ = s;
+  SessionEvent e;
+  e.kind = SessionEventKind::Link;
+  e.text = why;
+  emit(std::move(e));
+}
+
+// ---- connection ----------------------------------------------------------
+
+void MachineSession::open() {
+  if (link_ == LinkState::Connecting || link_ == LinkState::Ready) return;
+  reconnect_timer_.cancel();
+  try {
+    connect_transport();
+  } catch (const std::exception& e) {
+    if (link_ == LinkState::Disconnected) schedule_reconnect();
+    throw;
+  }
+}
+
+void MachineSession::connect_transport() {
+  const std::string path = opt_.port->path();
+  auto t = std::make_shared<transport::SerialTransport>(io_, opt_.serial);
+  t->open(path);  // throws naming the path
+  if (transport_) {
+    bytes_written_before_ += transport_->bytes_written();
+    boost::asio::post(io_, [old = std::move(transport_)] {});
+  }
+  transport_ = std::move(t);
+  engine_.reset();
+  identifier_ = std::make_unique<FirmwareIdentifier>(profiles_, opt_.identify);
+  id_splitter_ = LineSplitter{};
+  pending_after_id_.clear();
+  settings_phase_ = SettingsPhase::NotStarted;
+  settings_.clear();
+  alarm_ = false;
+  banner_.clear();
+  set_link(LinkState::Connecting, "opened " + opt_.port->describe() + " at " + std::to_string(opt_.serial.baud) +
+                                      " baud");
+  log("opened " + path + " at " + std::to_string(opt_.serial.baud) + " baud");
+  std::weak_ptr<bool> alive = alive_;
+  transport::SerialTransport* self = transport_.get();
+  transport_->start(
+      [this, alive, self](std::string_view bytes) {
+        if (!alive.lock() || transport_.get() != self) return;
+        on_data(bytes);
+      },
+      [this, alive, self](const std::string& reason) {
+        if (!alive.lock() || transport_.get() != self) return;
+        on_port_closed(reason);
+      });
+  opt_.port->opened();
+  identifier_->start(now());
+  transport_->write(identifier_->take_output());
+  arm_timer();
+}
+
+CommandResult MachineSession::close() {
+  if (job_active()) return CommandResult::refused("a job is running: stop it before closing the port");
+  reconnect_timer_.cancel();
+  if (engine_ && engine_->jogging()) {
+    engine_->jog_release();
+    drain();
+  }
+  if (transport_) transport_->close_when_flushed();
+  engine_.reset();
+  identifier_.reset();
+  timer_.cancel();
+  timer_armed_ = false;
+  set_link(LinkState::Closed, "closed");
+  return CommandResult::ok();
+}
+
+void MachineSession::on_port_closed(const std::string& reason) {
+  log("port closed: " + reason);
+  if (engine_) {
+    engine_->disconnected();  // a running job ends as Disconnected; a jog is forgotten
+    drain();
+  }
+  engine_.reset();
+  identifier_.reset();
+  alarm_ = false;
+  timer_.cancel();
+  timer_armed_ = false;
+  set_link(LinkState::Disconnected, "controller disconnected (" + reason + ")");
+  schedule_reconnect();
+}
+
+void MachineSession::schedule_reconnect() {
+  if (!(opt_.reconnect_interval_s > 0)) return;
+  reconnect_timer_.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(opt_.reconnect_interval_s)));
+  std::weak_ptr<bool> alive = alive_;
+  reconnect_timer_.async_wait([this, alive](const boost::system::error_code& ec) {
+    if (ec || !alive.lock() || link_ != LinkState::Disconnected) return;
+    try {
+      connect_transport();
+    } catch (const std::exception&) {
+      schedule_reconnect();  // not back yet
+    }
+  });
+}
+
+// ---- bytes in ------------------------------------------------------------
+
+void MachineSession::on_data(std::string_view bytes) {
+  if (engine_) {
+    engine_->on_bytes(bytes, now());
+    drain();
+    arm_timer();
+    return;
+  }
+  if (!identifier_) return;
+  id_splitter_.feed(bytes, [&](std::string_view line) {
+    if (!identifier_->done()) identifier_->on_line(line, now());
+    else if (settings_phase_ == SettingsPhase::Reading) on_settings_line(line);
+    else pending_after_id_.append(line).push_back('\n');
+  });
+  transport_->write(identifier_->take_output());
+  after_identification();
+  arm_timer();
+}
+
+void MachineSession::after_identification() {
+  if (engine_ || !identifier_ || !identifier_->done()) return;
+  if (settings_phase_ == SettingsPhase::NotStarted) {
+    const auto& id = identifier_->result();
+    for (const auto& w : id.warnings) log("warning: " + w);
+    profile_ = id.profile;
+    banner_ = id.banner;
+    if (opt_.force_profile)
+      for (const auto& p : profiles_)
+        if (p.id == *opt_.force_profile) profile_ = p;
+    if (opt_.read_settings && !marlin_family(profile_)) {
+      settings_phase_ = SettingsPhase::Reading;
+      settings_deadline_ = now() + opt_.settings_timeout_s;
+      transport_->write("$$\n");
+    } else {
+      settings_phase_ = SettingsPhase::Done;
+    }
+  }
+  if (settings_phase_ == SettingsPhase::Reading && now() >= settings_deadline_) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", opt_.settings_timeout_s);
+    settings_done(std::string("no answer within ") + buf + " s");
+  }
+  if (settings_phase_ == SettingsPhase::Done) start_engine();
+}
+
+void MachineSession::on_settings_line(std::string_view line) {
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
+  if (line == "ok") settings_done("");
+  else if (line.rfind("error:", 0) == 0) settings_done("the controller answered " + std::string(line));
+  else if (const auto kv = parse_setting_line(line)) settings_[kv->first] = kv->second;
+}
+
+void MachineSession::settings_done(const std::string& why) {
+  settings_phase_ = SettingsPhase::Done;
+  if (!why.empty()) {
+    log("warning: controller settings ($$) not read: " + why);
+    return;
+  }
+  if (const auto it = settings_.find(13); it != settings_.end()) report_inches_ = it->second == 1;
+  SessionEvent e;
+  e.kind = SessionEventKind::Settings;
+  e.text = std::to_string(settings_.size()) + " settings read";
+  emit(std::move(e));
+}
+
+void MachineSession::start_engine() {
+  log("controller: " + profile_.id + (banner_.empty() ? "" : " ('" + banner_ + "')") + ", RX " +
+      std::to_string(profile_.rx_buffer_size) + " bytes, lines up to " + std::to_string(profile_.line_length_limit));
+  if (marlin_family(profile_)) engine_ = std::make_unique<MarlinSession>(profile_);
+  else engine_ = std::make_unique<GrblSession>(profile_, opt_.grbl);
+  set_link(LinkState::Ready, "controller " + profile_.id + " ready");
+  if (!pending_after_id_.empty()) engine_->on_bytes(std::exchange(pending_after_id_, {}), now());
+  engine_->tick(now());
+  drain();
+}
+
+// ---- engine output and events --------------------------------------------
+
+void MachineSession::drain() {
+  if (!engine_) return;
+  if (transport_) transport_->write(engine_->take_output());
+  for (auto& ev : engine_->take_events()) {
+    if (ev.kind == EventKind::Alarm) alarm_ = true;
+    if (ev.kind == EventKind::Status && ev.status) {
+      alarm_ = ev.status->state == MachineState::Alarm;
+      if (report_inches_) {
+        // Positions in mm inside: $13=1 reports inches.
+        for (auto* axes : {&ev.status->mpos, &ev.status->wpos, &ev.status->wco})
+          if (*axes)
+            for (auto& v : **axes) v *= 25.4;
+      }
+    }
+    SessionEvent e;
+    e.kind = SessionEventKind::Controller;
+    e.text = ev.text;
+    e.controller = ev;
+    emit(e);
+    if (ev.kind == EventKind::JobFinished && job_) {
+      SessionEvent end;
+      end.kind = SessionEventKind::JobEnded;
+      const auto& p = engine_->progress();
+      end.outcome = p.outcome;
+      end.text = ev.text;
+      end.last_answered_line = p.last_answered_line;
+      end.lines_answered = p.lines_answered;
+      end.job = &*job_;
+      emit(end);
+      job_.reset();
+    }
+    if (!engine_) return;  // a subscriber closed the session
+  }
+  if (transport_) transport_->write(engine_->take_output());
+}
+
+void MachineSession::arm_timer() {
+  double at = kNever;
+  if (engine_) at = engine_->next_deadline();
+  else if (identifier_ && !identifier_->done()) at = identifier_->next_deadline();
+  else if (settings_phase_ == SettingsPhase::Reading) at = settings_deadline_;
+  if (!std::isfinite(at)) return;
+  if (timer_armed_ && timer_at_ <= at) return;  // fires early enough; on_timer re-arms
+  timer_armed_ = true;
+  timer_at_ = at;
+  timer_.expires_at(t0_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(at)));
+  std::weak_ptr<bool> alive = alive_;
+  timer_.async_wait([this, alive](const boost::system::error_code& ec) {
+    if (ec == boost::asio::error::operation_aborted || !alive.lock()) return;
+    timer_armed_ = false;
+    on_timer();
+  });
+}
+
+void MachineSession::on_timer() {
+  const double t = now();
+  if (engine_) {
+    engine_->tick(t);
+    drain();
+  } else if (identifier_) {
+    if (!identifier_->done()) {
+      identifier_->tick(t);
+      if (transport_) transport_->write(identifier_->take_output());
+    }
+    after_identification();
+  }
+  arm_timer();
+}
+
+// ---- commands ------------------------------------------------------------
+
+bool MachineSession::job_active() const { return engine_ && is_active(engine_->progress().state); }
+
+CommandResult MachineSession::needs_engine(const char* what) const {
+  if (engine_) return CommandResult::ok();
+  switch (link_) {
+    case LinkState::Connecting:
+      return CommandResult::refused(std::string(what) + ": the controller is still being identified");
+    case LinkState::Disconnected:
+      return CommandResult::refused(std::string(what) + ": the controller is disconnected");
+    default: return CommandResult::refused(std::string(what) + ": the port is not open");
+  }
+}
+
+CommandResult MachineSession::refuse_in_alarm(const char* what) const {
+  if (!alarm_) return CommandResult::ok();
+  return CommandResult::refused(std::string(what) + ": the controller is in alarm; unlock ($X), home or reset first");
+}
+
+CommandResult MachineSession::start_job(JobInput job, JobMode mode) {
+  if (auto r = needs_engine("start a job"); !r) return r;
+  if (job_active()) return CommandResult::refused("start a job: a job is already running");
+  if (engine_->jogging()) return CommandResult::refused("start a job: a jog is running; release it first");
+  if (auto r = refuse_in_alarm("start a job"); !r) return r;
+  if (mode != JobMode::Run && marlin_family(profile_))
+    return CommandResult::refused("start a job: " + profile_.id + " has no check mode ($C)");
+  if (!job.source_lines.empty() && job.source_lines.size() != job.lines.size())
+    return CommandResult::refused("start a job: one source line per line expected");
+  CleanOptions clean;
+  if (marlin_family(profile_)) {
+    clean.strip_whitespace = false;
+    clean.reject_realtime_chars = false;
+  }
+  auto program = prepare_program(job.lines, job.file.string(), profile_.line_length_limit, clean);
+  if (!program.errors.empty()) {
+    std::string all = job.file.string() + " cannot be sent to " + profile_.id + ":";
+    for (const auto& e : program.errors) all += "\n  " + e;
+    return CommandResult::refused(all);
+  }
+  if (!job.source_lines.empty())
+    for (std::size_t i = 0; i < program.lines.size(); ++i) program.lines[i].source_line = job.source_lines[i];
+  try {
+    engine_->start_job(std::move(program), mode, now());
+  } catch (const std::exception& e) {
+    return CommandResult::refused(std::string("start a job: ") + e.what());
+  }
+  job_ = std::move(job);
+  ++jobs_started_;
+  SessionEvent e;
+  e.kind = SessionEventKind::JobStarted;
+  e.text = mode == JobMode::Check ? "check" : mode == JobMode::CheckThenRun ? "check+run" : "run";
+  e.job = &*job_;
+  emit(e);
+  drain();
+  arm_timer();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::hold() {
+  if (auto r = needs_engine("hold"); !r) return r;
+  if (engine_->jogging()) return jog_release();
+  if (job_active()) engine_->pause();
+  else if (!engine_->realtime(Realtime::FeedHold)) return CommandResult::refused("hold: no job is running");
+  drain();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::resume() {
+  if (auto r = needs_engine("resume"); !r) return r;
+  if (auto r = refuse_in_alarm("resume"); !r) return r;
+  if (job_active()) engine_->resume();
+  else if (!engine_->realtime(Realtime::CycleStart)) return CommandResult::refused("resume: no job is running");
+  drain();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::toggle_hold() {
+  if (auto r = needs_engine("hold/resume"); !r) return r;
+  if (!job_active()) return CommandResult::refused("hold/resume: no job is running");
+  engine_->toggle_pause();
+  drain();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::stop() {
+  if (auto r = needs_engine("stop"); !r) return r;
+  if (engine_->jogging()) engine_->jog_release();
+  if (job_active()) engine_->stop();
+  drain();
+  arm_timer();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::realtime(Realtime rt) {
+  if (auto r = needs_engine("real-time command"); !r) return r;
+  if (rt != Realtime::SoftReset && rt != Realtime::StatusReport && rt != Realtime::FeedHold && alarm_)
+    return refuse_in_alarm("real-time command");
+  if (!engine_->realtime(rt))
+    return CommandResult::refused(std::string("real-time command '") + realtime_key(rt) + "' is not available on " +
+                                  profile_.id);
+  drain();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) {
+  if (auto r = needs_engine("jog"); !r) return r;
+  if (job_active()) return CommandResult::refused("jog: a job is running");
+  if (auto r = refuse_in_alarm("jog"); !r) return r;
+  try {
+    engine_->jog_step(dir, distance_mm, feed_mm_min);
+  } catch (const std::exception& e) {
+    return CommandResult::refused(e.what());
+  }
+  drain();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::jog_start(const JogDirection& dir, double feed_mm_min) {
+  if (auto r = needs_engine("jog"); !r) return r;
+  if (job_active()) return CommandResult::refused("jog: a job is running");
+  if (auto r = refuse_in_alarm("jog"); !r) return r;
+  try {
+    engine_->jog_start(dir, feed_mm_min);
+  } catch (const std::exception& e) {
+    return CommandResult::refused(e.what());
+  }
+  drain();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::jog_release() {
+  if (engine_) {
+    engine_->jog_release();
+    drain();
+  }
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::console(const std::string& line) {
+  if (auto r = needs_engine("console"); !r) return r;
+  if (job_active()) return CommandResult::refused("console: a job is running; lines are refused until it ends");
+  if (engine_->jogging()) return CommandResult::refused("console: a jog is running");
+  if (alarm_ && line != "$X" && line != "$H")
+    return refuse_in_alarm("console");
+  try {
+    engine_->send_command(line);
+  } catch (const std::exception& e) {
+    return CommandResult::refused(e.what());
+  }
+  drain();
+  return CommandResult::ok();
+}
+
+// Marlin has no alarm lock: M999 clears its "stopped" state; G28 homes.
+CommandResult MachineSession::unlock() {
+  if (auto r = needs_engine("unlock"); !r) return r;
+  if (job_active()) return CommandResult::refused("unlock: a job is running");
+  engine_->send_command(marlin_family(profile_) ? "M999" : "$X");
+  drain();
+  return CommandResult::ok();
+}
+
+// Homing is also a way out of an alarm (GRBL's ALARM:11 asks for it).
+CommandResult MachineSession::home() {
+  if (auto r = needs_engine("home"); !r) return r;
+  if (job_active()) return CommandResult::refused("home: a job is running");
+  if (engine_->jogging()) return CommandResult::refused("home: a jog is running");
+  engine_->send_command(marlin_family(profile_) ? "G28" : "$H");
+  drain();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::reset() {
+  if (auto r = needs_engine("reset"); !r) return r;
+  if (job_active()) return stop();  // a reset in motion loses the position: stop does it safely
+  if (!engine_->realtime(Realtime::SoftReset))
+    return CommandResult::refused("reset: " + profile_.id + " has no soft reset");
+  drain();
+  return CommandResult::ok();
+}
+
+MachineSnapshot MachineSession::snapshot() const {
+  MachineSnapshot s;
+  s.name = opt_.name;
+  s.link = link_;
+  s.now = now();
+  s.alarm = alarm_;
+  if (engine_) {
+    s.profile = engine_->profile().id;
+    s.banner = banner_;
+    s.progress = engine_->progress();
+    s.progress.check_errors.clear();
+    s.status = engine_->status();
+    if (s.status && report_inches_)
+      for (auto* axes : {&s.status->mpos, &s.status->wpos, &s.status->wco})
+        if (*axes)
+          for (auto& v : **axes) v *= 25.4;
+    s.overrides = engine_->overrides();
+    s.buffer = engine_->buffer();
+    s.jogging = engine_->jogging();
+    s.job_active = job_active();
+  }
+  return s;
+}
+
+}  // namespace cncstream::session
