@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <deque>
 #include <random>
 
@@ -359,6 +361,27 @@ TEST(GrblSession, JogKeepsTwoSegmentsAndCancelsOnRelease) {
   w.take(s.take_output());
   EXPECT_EQ(w.lines.size(), 3u);
   EXPECT_THROW(s.jog_start(JogDirection{{0, 0, 0}}, 100), std::invalid_argument);
+}
+
+TEST(GrblSession, StepJogIsOneLineAndRefusedDuringAJob) {
+  GrblSession s(grbl(), no_poll());
+  s.jog_step(JogDirection{{0, 0, 1}}, 5, 300);
+  Wire w;
+  w.take(s.take_output());
+  ASSERT_EQ(w.lines.size(), 1u);
+  EXPECT_EQ(w.lines[0], "$J=G91G21Z5.000F300");
+  s.on_bytes("ok\n", 0.1);
+  s.start_job(program({"G1 X1 F100"}), JobMode::Run, 0.2);
+  EXPECT_THROW(s.jog_step(JogDirection{{1, 0, 0}}, 1, 300), std::logic_error);
+}
+
+TEST(GrblSession, NextDeadlineIsTheStatusPollOrTheResetTimeOut) {
+  GrblSession s(grbl());
+  EXPECT_DOUBLE_EQ(s.next_deadline(), 0);  // first poll at once
+  s.tick(1.0);
+  EXPECT_NEAR(s.next_deadline(), 1.0 + grbl().status_poll_interval_s, 1e-9);
+  GrblSession quiet(grbl(), no_poll());
+  EXPECT_TRUE(std::isinf(quiet.next_deadline()));
 }
 
 TEST(GrblSession, UnexpectedResetAndDisconnectEndTheJob) {

@@ -95,3 +95,38 @@ TEST(Marlin, FatalErrorEndsJobAndStopDrains) {
   EXPECT_EQ(t.progress().last_answered_line, 1);
   EXPECT_THROW(t.start_job(program({"G1 X1"}), JobMode::Check, 2), std::invalid_argument);
 }
+
+TEST(Marlin, JogsAreRelativeMovesAndReleaseIsAQuickStop) {
+  MarlinSession s(marlin());
+  s.tick(0);
+  s.take_output();
+  s.on_bytes("ok\n", 0);  // M110
+  s.jog_step(JogDirection{{1, 0, 0}}, 2.5, 600);
+  EXPECT_EQ(s.take_output(), marlin_frame(1, "G91") + "\n");
+  s.on_bytes("ok\n", 0.1);
+  EXPECT_EQ(s.take_output(), marlin_frame(2, "G1X2.500F600") + "\n");
+  s.on_bytes("ok\n", 0.2);
+  EXPECT_EQ(s.take_output(), marlin_frame(3, "G90") + "\n");
+  s.on_bytes("ok\n", 0.3);
+
+  // Continuous: G91, then 0.1 s segments (1000 mm/min: 1.667 mm) while held.
+  s.jog_start(JogDirection{{0, -1, 0}}, 1000);
+  EXPECT_TRUE(s.jogging());
+  EXPECT_EQ(s.take_output(), marlin_frame(4, "G91") + "\n");
+  s.on_bytes("ok\n", 0.4);
+  EXPECT_EQ(s.take_output(), marlin_frame(5, "G1Y-1.667F1000") + "\n");
+  s.on_bytes("ok\n", 0.5);
+  EXPECT_EQ(s.take_output(), marlin_frame(6, "G1Y-1.667F1000") + "\n");
+  EXPECT_THROW(s.start_job(program({"G1 X1"}), JobMode::Run, 0.5), std::logic_error);
+  // Release: M410 goes before any further segment, then G90.
+  s.jog_release();
+  EXPECT_FALSE(s.jogging());
+  s.on_bytes("ok\n", 0.6);
+  EXPECT_EQ(s.take_output(), marlin_frame(7, "M410") + "\n");
+  s.on_bytes("ok\n", 0.7);
+  EXPECT_EQ(s.take_output(), marlin_frame(8, "G90") + "\n");
+  s.on_bytes("ok\n", 0.8);
+  EXPECT_EQ(s.take_output(), "");
+  EXPECT_FALSE(s.modal().modal.incremental);
+  EXPECT_FALSE(s.realtime(Realtime::FeedHold));  // Marlin has no real-time bytes
+}
