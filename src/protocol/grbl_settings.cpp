@@ -40,4 +40,9 @@ std::optional<gcode::MotionLimits> motion_limits_from(const GrblSettings& s) {
   return m;
 }
 
+gcode::MotionLimits grbl_default_motion_limits() {
+  return *motion_limits_from(GrblSettings{{11, 0.010}, {110, 500}, {111, 500}, {112, 500},
+                                          {120, 10},   {121, 10},  {122, 10}});
+}
+
 }  // namespace cncstream::protocol

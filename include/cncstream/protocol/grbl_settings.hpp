@@ -21,4 +21,8 @@ std::optional<std::pair<int, double>> parse_setting_line(std::string_view line);
 // rates and accelerations are present and positive.
 std::optional<gcode::MotionLimits> motion_limits_from(const GrblSettings& s);
 
+// GRBL 1.1's shipped defaults (defaults.h: $110-$112 500 mm/min, $120-$122
+// 10 mm/s^2, $11 0.010 mm): a real machine's plan before its `$$` is read.
+gcode::MotionLimits grbl_default_motion_limits();
+
 }  // namespace cncstream::protocol

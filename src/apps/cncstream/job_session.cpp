@@ -13,6 +13,7 @@
 #include "cncstream/gcode/program.hpp"
 #include "cncstream/geometry/stl.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/protocol/grbl_settings.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "cncstream/transport/port_discovery.hpp"
 #include "keyboard_control.hpp"
@@ -88,8 +89,10 @@ std::filesystem::path journal_path(const ConnectionOptions& o) {
 }
 
 gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOptions& s) {
-  if (c.port == "sim" && !s.settings.empty()) return cncsim::load_store(s.settings).settings.motion_limits();
-  return cncsim::Settings::defaults().motion_limits();
+  if (c.port == "sim")
+    return s.settings.empty() ? cncsim::Settings::defaults().motion_limits()
+                              : cncsim::load_store(s.settings).settings.motion_limits();
+  return protocol::grbl_default_motion_limits();  // refined from the controller's own $$ once connected
 }
 
 EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits) {

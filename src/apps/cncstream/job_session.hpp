@@ -52,7 +52,7 @@ struct VerifyTarget {
 };
 
 // Motion limits for a plan shown before connecting: the simulator's settings
-// for `sim`, GRBL's defaults otherwise (the controller's own `$$` replaces
+// for `sim`, GRBL 1.1's shipped defaults (protocol, not the simulator) otherwise (the controller's own `$$` replaces
 // them once connected).
 gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOptions& s);
 
