@@ -13,10 +13,6 @@ namespace {
 constexpr double kResetTimeout = 3.0;  // banner expected within this after 0x18
 constexpr double kDrainPollInterval = 0.2;  // status requests while the last moves run out
 
-bool is_active(JobState s) {
-  return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping;
-}
-
 std::string describe(const CodeInfo& c, const char* kind) {
   return std::string(kind) + std::to_string(c.code) + " (" + c.name + "): " + c.text + " What to do: " + c.action;
 }

@@ -9,10 +9,6 @@ namespace {
 
 constexpr std::size_t kHistory = 64;  // Marlin only asks for recent lines
 
-bool is_active(JobState s) {
-  return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping;
-}
-
 }  // namespace
 
 int marlin_checksum(std::string_view s) {

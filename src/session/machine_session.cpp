@@ -19,10 +19,6 @@ namespace {
 
 constexpr double kNever = std::numeric_limits<double>::infinity();
 
-bool is_active(JobState s) {
-  return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping;
-}
-
 bool marlin_family(const FirmwareProfile& p) { return p.flow == FlowControl::SendResponse; }
 
 }  // namespace

@@ -48,6 +48,10 @@ struct Event {
 enum class JobMode { Run, Check, CheckThenRun };
 enum class JobState { None, Running, Paused, HeldOnError, Stopping, Finished };
 const char* to_string(JobState s);
+// A job that has started and not finished (running, paused, held, stopping).
+inline bool is_active(JobState s) {
+  return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping;
+}
 
 enum class JobOutcome { None, Completed, Stopped, Error, Alarm, Disconnected, CheckPassed, CheckFailed };
 const char* to_string(JobOutcome o);
