@@ -65,11 +65,7 @@ std::vector<std::string_view> split_lines(std::string_view text) {
 }
 
 std::string LineError::message() const {
-  std::string m = "line " + std::to_string(line + 1) + ": error:" + std::to_string(status);
-  const auto d = grbl::status_description(status);
-  if (!d.empty()) m += " (" + std::string(d) + ")";
-  m += ": " + text;
-  return m;
+  return "line " + std::to_string(line + 1) + ": error:" + std::to_string(status) + ": " + text;
 }
 
 ProgramTrace trace_program(std::string_view text, const ProgramOptions& options) {
