@@ -465,17 +465,10 @@ void Machine::queue_actions(const gc::BlockResult& r) {
     if (const auto* m = std::get_if<gc::LinearMove>(&a)) {
       if (!add_block(m->from, m->to, m->feed, m->rapid)) return;
     } else if (const auto* arc = std::get_if<gc::ArcMove>(&a)) {
-      const auto pts = gc::segment_arc(*arc, store_.settings.arc_tolerance());
-      double feed = arc->feed;
-      if (arc->inverse_time) {
-        double len = 0;
-        Vec3 p = arc->from;
-        for (const Vec3& q : pts) { len += norm(q - p); p = q; }
-        feed = arc->feed * len;
-      }
+      const gc::ArcChords chords = gc::arc_chords(*arc, store_.settings.arc_tolerance());
       Vec3 p = arc->from;
-      for (const Vec3& q : pts) {
-        if (!add_block(p, q, feed, false)) return;
+      for (const Vec3& q : chords.points) {
+        if (!add_block(p, q, chords.feed, false)) return;
         p = q;
       }
     } else if (const auto* pr = std::get_if<gc::ProbeMove>(&a)) {

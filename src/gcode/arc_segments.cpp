@@ -65,4 +65,18 @@ std::vector<Vec3> segment_arc(const ArcMove& arc, double tolerance) {
   return points;
 }
 
+ArcChords arc_chords(const ArcMove& arc, double arc_tolerance) {
+  ArcChords c{segment_arc(arc, arc_tolerance), arc.feed};
+  if (arc.inverse_time) {
+    double length = 0;
+    Vec3 p = arc.from;
+    for (const Vec3& q : c.points) {
+      length += norm(q - p);
+      p = q;
+    }
+    c.feed = arc.feed * length;
+  }
+  return c;
+}
+
 }  // namespace cncstream::gcode

@@ -65,11 +65,7 @@ std::vector<std::string_view> split_lines(std::string_view text) {
 }
 
 std::string LineError::message() const {
-  std::string m = "line " + std::to_string(line + 1) + ": error:" + std::to_string(status);
-  const auto d = grbl::status_description(status);
-  if (!d.empty()) m += " (" + std::string(d) + ")";
-  m += ": " + text;
-  return m;
+  return "line " + std::to_string(line + 1) + ": error:" + std::to_string(status) + ": " + text;
 }
 
 ProgramTrace trace_program(std::string_view text, const ProgramOptions& options) {
@@ -97,18 +93,10 @@ ProgramTrace trace_program(std::string_view text, const ProgramOptions& options)
         if (m->from == m->to) continue;
         trace.segments.push_back({m->from, m->to, wco, m->rapid, m->feed, i});
       } else if (const auto* arc = std::get_if<ArcMove>(&a)) {
-        const auto pts = segment_arc(*arc, options.arc_tolerance);
-        double feed = arc->feed;
-        if (arc->inverse_time) {
-          // The whole arc takes 1/F minutes: feed = length * F.
-          double len = 0;
-          Vec3 p = arc->from;
-          for (const Vec3& q : pts) { len += norm(q - p); p = q; }
-          feed = arc->feed * len;
-        }
+        const ArcChords chords = arc_chords(*arc, options.arc_tolerance);
         Vec3 p = arc->from;
-        for (const Vec3& q : pts) {
-          trace.segments.push_back({p, q, wco, false, feed, i});
+        for (const Vec3& q : chords.points) {
+          trace.segments.push_back({p, q, wco, false, chords.feed, i});
           p = q;
         }
       } else if (const auto* pr = std::get_if<ProbeMove>(&a)) {

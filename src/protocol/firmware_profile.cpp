@@ -3,7 +3,6 @@
 #include "cncstream/protocol/pattern.hpp"
 
 #include <algorithm>
-#include <cstdlib>
 #include <set>
 #include <sstream>
 
@@ -306,11 +305,6 @@ std::vector<FirmwareProfile> load_firmware_profiles(const std::filesystem::path&
   if (out.empty()) throw ProfileError(dir.string() + ": contains no *.toml firmware profiles");
   std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.priority > b.priority; });
   return out;
-}
-
-std::filesystem::path default_profiles_dir() {
-  if (const char* env = std::getenv("CNCSTREAM_PROFILES"); env && *env) return env;
-  return CNCSTREAM_FIRMWARE_PROFILES_DIR;
 }
 
 FirmwareProfile conservative_grbl_subset(const FirmwareProfile& grbl11) {

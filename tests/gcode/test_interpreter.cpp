@@ -198,6 +198,26 @@ TEST(Interpreter, InverseTimeNeedsFEveryBlock) {
   EXPECT_NEAR(std::get<LinearMove>(r.actions[0]).feed, 10, 1e-9);
 }
 
+TEST(Interpreter, InverseTimeArcTakesOneOverFMinutes) {
+  ParserState s = run_ok({}, "G1 X0 Y0 F100");
+  BlockResult r = run(s, "G2 X10 Y0 R5");
+  ArcChords c = arc_chords(std::get<ArcMove>(r.actions[0]), 0.002);
+  EXPECT_EQ(c.points.size(), segment_arc(std::get<ArcMove>(r.actions[0]), 0.002).size());
+  EXPECT_NEAR(c.feed, 100, 1e-12);  // G94: the programmed feed
+  r = run(s, "G93 G2 X10 Y0 R5 F2");  // half a circle in 1/2 min
+  ASSERT_TRUE(r.ok());
+  c = arc_chords(std::get<ArcMove>(r.actions[0]), 0.002);
+  double length = 0;
+  Vec3 p{0, 0, 0};
+  for (const Vec3& q : c.points) {
+    length += norm(q - p);
+    p = q;
+  }
+  EXPECT_NEAR(length / c.feed, 0.5, 1e-12);
+  EXPECT_LT(c.feed, 2 * 5 * M_PI);  // the chords are a hair shorter than the arc
+  EXPECT_GT(c.feed, 2 * 5 * M_PI * 0.999);
+}
+
 TEST(Interpreter, JogRules) {
   ParserState s;
   BlockOptions jog{true};

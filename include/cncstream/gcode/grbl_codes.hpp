@@ -1,7 +1,9 @@
 #pragma once
-// GRBL 1.1 status (error:N) and alarm (ALARM:N) codes with the firmware's
-// own descriptions (doc/csv/error_codes_en_US.csv, alarm_codes_en_US.csv).
-#include <string_view>
+// GRBL 1.1 status (error:N) and alarm (ALARM:N) numbers: the firmware's
+// protocol, which the interpreter and the simulator answer with. What each
+// number means (and what to do about it) is data in the firmware profiles
+// (firmware-profiles/*.toml, read in the protocol layer), the one table of
+// texts; real GRBL also sends numbers only.
 
 namespace cncstream::grbl {
 
@@ -56,11 +58,5 @@ enum Alarm : int {
   kAlarmHomingFailPulloff = 8,
   kAlarmHomingFailApproach = 9,
 };
-
-// Description of error:N / ALARM:N; empty for codes GRBL 1.1 does not define.
-std::string_view status_description(int code);
-std::string_view alarm_description(int code);
-bool is_known_status(int code);
-bool is_known_alarm(int code);
 
 }  // namespace cncstream::grbl

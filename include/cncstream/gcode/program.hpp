@@ -26,7 +26,9 @@ struct LineError {
   std::size_t line = 0;  // 0-based
   int status = 0;        // GRBL error code
   std::string text;      // the raw line
-  std::string message() const;  // "line 12: error:22 (Feed rate has not yet been set...): G1 X1"
+  // "line 12: error:22: G1 X1"; the firmware profile's error_info() says
+  // what error:22 means.
+  std::string message() const;
 };
 
 struct ProgramOptions {

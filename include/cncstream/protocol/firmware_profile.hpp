@@ -91,8 +91,11 @@ class ProfileError : public std::runtime_error {
 FirmwareProfile load_firmware_profile(const std::filesystem::path& path);
 // Every *.toml in `dir`, highest priority first.
 std::vector<FirmwareProfile> load_firmware_profiles(const std::filesystem::path& dir);
-// The folder the build was configured with (CNCSTREAM_FIRMWARE_PROFILES_DIR),
-// overridable with the CNCSTREAM_PROFILES environment variable.
+// The profiles folder: $CNCSTREAM_PROFILES when set; else
+// <program's folder>/../share/cncstream/firmware-profiles (an install); else,
+// for a program run from its build folder, the source tree's
+// firmware-profiles. ProfileError naming every place looked when none is a
+// folder. The search itself is in profiles_dir.hpp.
 std::filesystem::path default_profiles_dir();
 
 // The conservative profile used when a controller is not recognised: GRBL 1.1
