@@ -9,7 +9,7 @@ echo "== Release build (-Werror)"
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DCNCSTREAM_WERROR=ON
 cmake --build build/release -j"$jobs"
 echo "== Release tests"
-ctest --test-dir build/release --output-on-failure -j"$jobs" --timeout 900 --repeat until-pass:2
+ctest --test-dir build/release --output-on-failure -j"$jobs" --timeout 900
 
 echo "== ASan+UBSan build"
 # -O1 -g1 with assertions on: line-level stack traces, half the compile time of -O2 -g.
@@ -18,4 +18,4 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX
 cmake --build build/asan -j"$jobs"
 echo "== ASan+UBSan tests"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ctest --test-dir build/asan --output-on-failure -j"$jobs" --timeout 1800 --repeat until-pass:2
+  ctest --test-dir build/asan --output-on-failure -j"$jobs" --timeout 1800
