@@ -5,12 +5,12 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 #include "cl_contact.hpp"
 #include "cl_point_index.hpp"
 #include "cl_primitives.hpp"
 #include "cl_raster.hpp"
+#include "cncstream/cam/thread_limit.hpp"
 
 namespace cncstream {
 
@@ -29,13 +29,10 @@ struct ClEngine::Impl {
 
   Impl(const Mesh& m, const Cutter& c, ClOptions o) : mesh(&m), cutter(c), shape(c), options(std::move(o)) {}
 
-  unsigned threads() const {
-    if (options.threads) return options.threads;
-    return std::max(1u, std::thread::hardware_concurrency());
-  }
-
-  void rows(const GridSpec& spec, std::size_t j0, std::size_t j1, double* z, std::uint8_t* on_floor) const {
-    cl_detail::rasterize_rows(*mesh, prims, shape, spec, j0, j1, threads(), z);
+  void rows(const GridSpec& spec, std::size_t j0, std::size_t j1, double* z, std::uint8_t* on_floor,
+            const Checkpoint& checkpoint) const {
+    run_with_thread_limit(options.threads,
+                          [&] { cl_detail::rasterize_rows(*mesh, prims, shape, spec, j0, j1, z, checkpoint); });
     const std::size_t n = (j1 - j0) * spec.nx;
     for (std::size_t k = 0; k < n; ++k) {
       const bool untouched = z[k] == kNoContact;
@@ -110,14 +107,14 @@ const Cutter& ClEngine::cutter() const { return impl_->cutter; }
 double ClEngine::floor() const { return impl_->floor; }
 const ClEngineStats& ClEngine::stats() const { return impl_->stats; }
 
-ClGrid ClEngine::compute(const GridSpec& spec) const {
+ClGrid ClEngine::compute(const GridSpec& spec, const Checkpoint& checkpoint) const {
   validate_spec(spec);
   ClGrid g;
   g.spec = spec;
   g.floor = impl_->floor;
   g.z.resize(spec.size());
   g.on_floor.resize(spec.size());
-  if (spec.size()) impl_->rows(spec, 0, spec.ny, g.z.data(), g.on_floor.data());
+  if (spec.size()) impl_->rows(spec, 0, spec.ny, g.z.data(), g.on_floor.data(), checkpoint);
   return g;
 }
 
@@ -136,7 +133,7 @@ void ClEngine::compute_tiles(const GridSpec& spec, const std::function<void(cons
     tile.grid.spec.ny = j1 - j0;
     tile.grid.z.resize(tile.grid.spec.size());
     tile.grid.on_floor.resize(tile.grid.spec.size());
-    impl_->rows(spec, j0, j1, tile.grid.z.data(), tile.grid.on_floor.data());
+    impl_->rows(spec, j0, j1, tile.grid.z.data(), tile.grid.on_floor.data(), {});
     sink(tile);
   }
 }

@@ -1,11 +1,12 @@
 #include "cl_raster.hpp"
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/enumerable_thread_specific.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <exception>
-#include <mutex>
-#include <thread>
 #include <vector>
 
 namespace cncstream::cl_detail {
@@ -264,7 +265,7 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
 }  // namespace
 
 void rasterize_rows(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter, const GridSpec& spec,
-                    std::size_t j0, std::size_t j1, unsigned threads, double* z) {
+                    std::size_t j0, std::size_t j1, double* z, const Checkpoint& checkpoint) {
   if (j1 <= j0 || spec.nx == 0) return;
   const Layout layout{&spec, j0, j1, (spec.nx + kTile - 1) / kTile, (j1 - j0 + kTile - 1) / kTile};
   const double R = cutter.R;
@@ -290,31 +291,18 @@ void rasterize_rows(const Mesh& mesh, const ClPrimitives& prims, const CutterSha
     return true;
   });
 
+  // Each tile writes only its own nodes, so the grid does not depend on which
+  // thread ran which tile.
   const std::size_t tiles = layout.count();
-  const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(1u, threads), tiles));
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto work = [&] {
-    try {
-      Scratch s;
-      for (std::size_t t = next++; t < tiles; t = next++) process_tile(c, t, s);
-    } catch (...) {
-      std::lock_guard lock(error_mutex);
-      if (!error) error = std::current_exception();
-      next = tiles;
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  std::atomic<std::size_t> done{0};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    Scratch& s = scratch.local();
+    for (std::size_t t = r.begin(); t != r.end(); ++t) {
+      process_tile(c, t, s);
+      if (checkpoint) checkpoint(double(++done) / double(tiles));
     }
-  };
-  if (workers <= 1) {
-    work();
-  } else {
-    std::vector<std::thread> pool;
-    pool.reserve(workers - 1);
-    for (unsigned k = 1; k < workers; ++k) pool.emplace_back(work);
-    work();
-    for (auto& t : pool) t.join();
-  }
-  if (error) std::rethrow_exception(error);
+  });
 }
 
 }  // namespace cncstream::cl_detail

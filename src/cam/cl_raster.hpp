@@ -5,6 +5,7 @@
 #include <cstddef>
 
 #include "cl_contact.hpp"
+#include "cncstream/cam/checkpoint.hpp"
 #include "cl_primitives.hpp"
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/geometry/mesh.hpp"
@@ -12,8 +13,9 @@
 namespace cncstream::cl_detail {
 
 // Rows [j0, j1) of `spec` into z (row-major, (j1 - j0) * spec.nx values).
-// A node no primitive touches gets kNoContact. threads >= 1.
+// A node no primitive touches gets kNoContact. Tiles run as oneTBB tasks in
+// the caller's task arena; `checkpoint` is called after each tile.
 void rasterize_rows(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter, const GridSpec& spec,
-                    std::size_t j0, std::size_t j1, unsigned threads, double* z);
+                    std::size_t j0, std::size_t j1, double* z, const Checkpoint& checkpoint = {});
 
 }  // namespace cncstream::cl_detail

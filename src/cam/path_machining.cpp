@@ -1,15 +1,26 @@
 #include "cncstream/cam/path_machining.hpp"
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
-#include <exception>
-#include <mutex>
 #include <stdexcept>
-#include <thread>
 
 #include "cncstream/cam/stock.hpp"
+#include "cncstream/cam/thread_limit.hpp"
 
 namespace cncstream {
+
+namespace {
+
+// Rows per band: enough that a band's share of the moves is worth a task,
+// few enough that bands balance across cores. Any split gives the same
+// heights (bands keep the whole grid's node coordinates).
+constexpr std::size_t kBandRows = 32;
+
+}  // namespace
 
 std::vector<Polyline> raster_pieces(const RasterPath& path) {
   std::vector<Polyline> out;
@@ -21,7 +32,7 @@ std::vector<Polyline> raster_pieces(const RasterPath& path) {
 }
 
 std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
-                                 const Cutter& cutter, unsigned threads) {
+                                 const Cutter& cutter, unsigned threads, const Checkpoint& checkpoint) {
   if (heights.size() != grid.size()) throw std::invalid_argument("machine_path: heights do not match the grid");
   if (grid.size() == 0) return heights;
   double top = -HUGE_VAL;
@@ -34,41 +45,40 @@ std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heigh
   const Vec3* last = nullptr;
   for (const auto& pl : pieces)
     for (const auto& p : pl) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        throw std::invalid_argument("machine_path: a point of the path is not finite");
       if (last && !(p.x == last->x && p.y == last->y && p.z == last->z)) moves.push_back({*last, p});
       last = &p;
     }
-  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-  const unsigned workers = std::max(1u, std::min<unsigned>(threads ? threads : hw, static_cast<unsigned>(grid.ny)));
+  // Each band takes, in cutting order, the moves whose cutter can reach its
+  // rows (one row of margin); moves above the stock cut nothing.
+  const std::size_t bands = (grid.ny + kBandRows - 1) / kBandRows;
   const double R = cutter.radius;
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto band = [&](unsigned w) {
-    try {
-      const std::size_t j0 = grid.ny * w / workers, j1 = grid.ny * (w + 1) / workers;
-      if (j0 >= j1) return;
-      GridSpec sub = grid;
-      sub.y0 = grid.y(j0);
-      sub.ny = j1 - j0;
-      std::vector<double> z(heights.begin() + static_cast<std::ptrdiff_t>(j0 * grid.nx),
-                            heights.begin() + static_cast<std::ptrdiff_t>(j1 * grid.nx));
-      HeightFieldStock stock(sub, top, std::move(z));
-      const double ylo = sub.y0 - R - grid.dy, yhi = sub.y1() + R + grid.dy;
-      for (const Move& m : moves) {
-        if (std::max(m.a.y, m.b.y) < ylo || std::min(m.a.y, m.b.y) > yhi) continue;
-        if (std::min(m.a.z, m.b.z) >= top) continue;  // above the stock: cuts nothing
-        stock.cut_segment(m.a, m.b, cutter);
+  std::vector<std::vector<std::size_t>> band_moves(bands);
+  for (std::size_t k = 0; k < moves.size(); ++k) {
+    const Move& m = moves[k];
+    if (std::min(m.a.z, m.b.z) >= top) continue;
+    const double lo = (std::min(m.a.y, m.b.y) - R - grid.y0) / grid.dy - 1;
+    const double hi = (std::max(m.a.y, m.b.y) + R - grid.y0) / grid.dy + 1;
+    if (hi < 0 || lo > double(grid.ny - 1)) continue;
+    const std::size_t b0 = lo <= 0 ? 0 : std::size_t(lo) / kBandRows;
+    const std::size_t b1 = std::min(bands - 1, std::size_t(std::min(hi, double(grid.ny - 1))) / kBandRows);
+    for (std::size_t b = b0; b <= b1; ++b) band_moves[b].push_back(k);
+  }
+  std::atomic<std::size_t> done{0};
+  run_with_thread_limit(threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bands, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t b = r.begin(); b != r.end(); ++b) {
+        const std::size_t j0 = b * kBandRows, j1 = std::min(grid.ny, j0 + kBandRows);
+        const auto first = heights.begin() + static_cast<std::ptrdiff_t>(j0 * grid.nx);
+        const auto end = heights.begin() + static_cast<std::ptrdiff_t>(j1 * grid.nx);
+        HeightFieldStock stock = HeightFieldStock::band(grid, j0, top, std::vector<double>(first, end));
+        for (std::size_t k : band_moves[b]) stock.cut_segment(moves[k].a, moves[k].b, cutter);
+        std::copy(stock.heights().begin(), stock.heights().end(), first);
+        if (checkpoint) checkpoint(double(++done) / double(bands));
       }
-      std::copy(stock.heights().begin(), stock.heights().end(), heights.begin() + static_cast<std::ptrdiff_t>(j0 * grid.nx));
-    } catch (...) {
-      std::lock_guard lock(error_mutex);
-      if (!error) error = std::current_exception();
-    }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(band, w);
-  band(0);
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+    });
+  });
   return heights;
 }
 

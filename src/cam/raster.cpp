@@ -1,11 +1,13 @@
 #include "cncstream/cam/raster.hpp"
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <optional>
 #include <stdexcept>
-#include <thread>
 
 #include "cncstream/cam/polyline_simplify.hpp"
 
@@ -169,7 +171,7 @@ Polyline pass_polyline(const std::vector<double>& us_in, const std::vector<doubl
 
 }  // namespace
 
-RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterOptions& o) {
+RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterOptions& o, const Checkpoint& checkpoint) {
   if (!(o.stepover > 0)) throw std::invalid_argument("stepover must be positive");
   if (!(o.tolerance >= 0)) throw std::invalid_argument("tolerance must not be negative");
   if (o.check_subdivisions < 1) throw std::invalid_argument("check_subdivisions must be at least 1");
@@ -192,9 +194,12 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   const std::size_t nu = us_axis.s.size(), nrows = vs_axis.s.size();
   const double du = us_axis.d, dv = vs_axis.d;
 
+  // Progress: the CL grid is the first half of the work, the rows the second.
+  const Checkpoint grid_checkpoint =
+      checkpoint ? Checkpoint([&](double f) { checkpoint(0.5 * f); }) : Checkpoint();
   // Uniform columns and rows come from one CL grid; a shorter last row is a
   // second one-row grid, and a shorter last column point queries.
-  auto grid_for = [&](double v_first, std::size_t rows, double v_step) {
+  auto grid_for = [&](double v_first, std::size_t rows, double v_step, const Checkpoint& cp) {
     GridSpec spec;
     spec.nx = along_x ? us_axis.uniform : rows;
     spec.ny = along_x ? rows : us_axis.uniform;
@@ -202,11 +207,11 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
     spec.y0 = along_x ? v_first : u0;
     spec.dx = along_x ? (du > 0 ? du : 1) : (v_step > 0 ? v_step : 1);
     spec.dy = along_x ? (v_step > 0 ? v_step : 1) : (du > 0 ? du : 1);
-    return engine.compute(spec);
+    return engine.compute(spec, cp);
   };
-  ClGrid grid = grid_for(v0, vs_axis.uniform, dv);
+  ClGrid grid = grid_for(v0, vs_axis.uniform, dv, grid_checkpoint);
   std::optional<ClGrid> last_row;
-  if (nrows > vs_axis.uniform) last_row = grid_for(v0 + vs_axis.s.back(), 1, 1);
+  if (nrows > vs_axis.uniform) last_row = grid_for(v0 + vs_axis.s.back(), 1, 1, {});
 
   RasterPath path;
   path.bounds = along_x ? XYBounds{u0, v0, u1, v1} : XYBounds{v0, u0, v1, u1};
@@ -244,15 +249,13 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
         ss, zs, refiner, o.tolerance, [&](double s) { return query(along(s), v); },
         [&](double s, double z) { return point(along(s), v, z); }, row_queries[r]);
   };
-  const unsigned nthreads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), 8));
-  std::atomic<std::size_t> next{0};
-  std::vector<std::thread> pool;
-  for (unsigned t = 0; t + 1 < nthreads; ++t)
-    pool.emplace_back([&] {
-      for (std::size_t r; (r = next++) < nrows;) do_row(r);
-    });
-  for (std::size_t r; (r = next++) < nrows;) do_row(r);
-  for (auto& th : pool) th.join();
+  std::atomic<std::size_t> rows_done{0};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nrows, 1), [&](const tbb::blocked_range<std::size_t>& rr) {
+    for (std::size_t r = rr.begin(); r != rr.end(); ++r) {
+      do_row(r);
+      if (checkpoint) checkpoint(0.5 + 0.5 * double(++rows_done) / double(nrows));
+    }
+  });
   const std::size_t steps_per_row =
       lat > 0 ? std::size_t(std::ceil((u1 - u0) / (du * o.check_subdivisions) - 1e-9)) + 1
               : (nu - 1) / std::size_t(o.check_subdivisions) + 1;

@@ -1,12 +1,17 @@
 #include "cncstream/cam/reach.hpp"
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <stdexcept>
-#include <thread>
 #include <utility>
+
+#include "cncstream/cam/thread_limit.hpp"
 
 namespace cncstream {
 
@@ -52,7 +57,8 @@ GridSpec reach_lattice(const GridSpec& at, double x0, double y0, double x1, doub
 }
 
 std::vector<double> reach_heights(const ClGrid& cl, const Cutter& cutter, const GridSpec& at,
-                                  const std::vector<std::uint8_t>& wanted, unsigned threads) {
+                                  const std::vector<std::uint8_t>& wanted, unsigned threads,
+                                  const Checkpoint& checkpoint) {
   if (wanted.size() != at.size()) throw std::invalid_argument("reach_heights: mask size differs from the grid");
   const GridSpec& g = cl.spec;
   std::vector<double> out(at.size(), std::numeric_limits<double>::quiet_NaN());
@@ -115,17 +121,20 @@ std::vector<double> reach_heights(const ClGrid& cl, const Cutter& cutter, const 
           out[k] = at_node(i, j, stamps[which[k]]);
       }
   };
-  const unsigned n = std::max(1u, std::min<unsigned>(threads ? threads : std::thread::hardware_concurrency(),
-                                                     static_cast<unsigned>(std::max<std::size_t>(1, at.ny / 16))));
-  // Interleaved bands: wanted nodes cluster (walls, pockets), so contiguous
-  // halves would load one thread.
+  // Bands of 16 rows as tasks: wanted nodes cluster (walls, pockets), so
+  // small bands let idle threads take over a loaded region. Each node is
+  // computed alone: the heights do not depend on the split.
   const std::size_t band = 16;
-  std::vector<std::thread> pool;
-  for (unsigned t = 0; t < n; ++t)
-    pool.emplace_back([&, t] {
-      for (std::size_t j0 = std::size_t(t) * band; j0 < at.ny; j0 += std::size_t(n) * band) rows(j0, std::min(at.ny, j0 + band));
+  const std::size_t bands = (at.ny + band - 1) / band;
+  std::atomic<std::size_t> done{0};
+  run_with_thread_limit(threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bands, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t b = r.begin(); b != r.end(); ++b) {
+        rows(b * band, std::min(at.ny, (b + 1) * band));
+        if (checkpoint) checkpoint(double(++done) / double(bands));
+      }
     });
-  for (auto& th : pool) th.join();
+  });
   return out;
 }
 

@@ -68,7 +68,7 @@ Span capsule_row(const detail::SweptCutter& sw, const Vec3& a, const Vec3& b, do
 
 }  // namespace
 
-HeightFieldStock::HeightFieldStock(const GridSpec& grid, double top) : grid_(grid), top_(top) {
+HeightFieldStock::HeightFieldStock(const GridSpec& grid, double top) : grid_(grid), top_(top), rows_y0_(grid.y0) {
   if (grid.nx == 0 || grid.ny == 0) throw std::invalid_argument("stock grid is empty");
   if (!(grid.dx > 0) || !(grid.dy > 0)) throw std::invalid_argument("stock grid step must be positive");
   if (!std::isfinite(top)) throw std::invalid_argument("stock top must be finite");
@@ -85,6 +85,22 @@ HeightFieldStock::HeightFieldStock(const GridSpec& grid, double top, std::vector
   z_ = std::move(heights);
 }
 
+HeightFieldStock HeightFieldStock::band(const GridSpec& grid, std::size_t first_row, double top,
+                                        std::vector<double> heights) {
+  const std::size_t rows = grid.nx ? heights.size() / grid.nx : 0;
+  if (rows == 0 || rows * grid.nx != heights.size() || first_row + rows > grid.ny)
+    throw std::invalid_argument("stock band: " + std::to_string(heights.size()) + " heights from row " +
+                                std::to_string(first_row) + " are not whole rows of a " + std::to_string(grid.nx) +
+                                " x " + std::to_string(grid.ny) + " grid");
+  GridSpec sub = grid;
+  sub.y0 = grid.y(first_row);
+  sub.ny = rows;
+  HeightFieldStock s(sub, top, std::move(heights));
+  s.rows_y0_ = grid.y0;
+  s.first_row_ = first_row;
+  return s;
+}
+
 double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter& cutter) {
   check_cutter(cutter);
   check_point(a, "a");
@@ -96,11 +112,12 @@ double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter&
   // Rows the capsule touches.
   const double ylo = std::min(a.y, b.y) - R, yhi = std::max(a.y, b.y) + R;
   const long jn = static_cast<long>(g.ny) - 1, in = static_cast<long>(g.nx) - 1;
-  const long j0 = std::max(0L, static_cast<long>(std::ceil((ylo - g.y0) / g.dy - 1e-9)));
-  const long j1 = std::min(jn, static_cast<long>(std::floor((yhi - g.y0) / g.dy + 1e-9)));
+  const long jb = static_cast<long>(first_row_);
+  const long j0 = std::max(0L, static_cast<long>(std::ceil((ylo - rows_y0_) / g.dy - 1e-9)) - jb);
+  const long j1 = std::min(jn, static_cast<long>(std::floor((yhi - rows_y0_) / g.dy + 1e-9)) - jb);
   double dropped = 0;
   for (long j = j0; j <= j1; ++j) {
-    const double y = g.y(static_cast<std::size_t>(j));
+    const double y = rows_y0_ + static_cast<double>(j + jb) * g.dy;
     const Span row = capsule_row(sw, a, b, y);
     if (row.lo > row.hi) continue;
     const long i0 = std::max(0L, static_cast<long>(std::ceil((row.lo - g.x0) / g.dx - 1e-9)));

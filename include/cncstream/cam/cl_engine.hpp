@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 
+#include "cncstream/cam/checkpoint.hpp"
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/geometry/mesh.hpp"
@@ -17,7 +18,8 @@ namespace cncstream {
 struct ClOptions {
   // Height for nodes the cutter cannot touch; default: the mesh's lowest z.
   std::optional<double> floor;
-  // Worker threads; 0 = hardware concurrency.
+  // Worker threads: 0 = the caller's oneTBB task arena (the shared pool of all
+  // cores unless the caller limited it); n = a task arena of n slots.
   unsigned threads = 0;
   // Upper bound on the bytes of grid held at once by compute_tiles().
   std::size_t max_tile_bytes = std::size_t{256} << 20;
@@ -59,8 +61,9 @@ class ClEngine {
   const ClEngineStats& stats() const;
 
   // Whole grid in memory. Throws std::invalid_argument for a bad spec
-  // (non-positive or non-finite step, non-finite origin).
-  ClGrid compute(const GridSpec& spec) const;
+  // (non-positive or non-finite step, non-finite origin). `checkpoint` is
+  // called after each tile of nodes (see checkpoint.hpp).
+  ClGrid compute(const GridSpec& spec, const Checkpoint& checkpoint = {}) const;
   // Grid in row tiles of at most options.max_tile_bytes each, handed to sink
   // in order, so a grid larger than memory can be streamed to a file. Node
   // heights are identical to compute()'s (nodes are placed from the full

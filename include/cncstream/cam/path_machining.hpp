@@ -1,10 +1,12 @@
 #pragma once
 // Machines a tool-tip path into a height-field stock with the simulator's own
 // material removal (HeightFieldStock), split into horizontal bands cut in
-// parallel: each band is its own stock and takes the moves that can reach it,
-// so the result equals one stock cut move by move.
+// parallel (oneTBB tasks): each band is its own stock at the whole grid's node
+// coordinates and takes, in order, the moves that can reach it, so the result
+// equals one stock cut move by move, bit for bit, however the bands ran.
 #include <vector>
 
+#include "cncstream/cam/checkpoint.hpp"
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/cam/raster.hpp"
@@ -14,9 +16,11 @@ namespace cncstream {
 // `pieces` are cut in order; consecutive pieces are joined by a straight move
 // from one's last point to the next's first (as in a raster: row, link,
 // row...). `heights` (grid.size() values) is the stock before; returns it after.
-// threads = 0: all cores.
+// threads = 0: the caller's oneTBB task arena (all cores unless the caller
+// limited it); n: a task arena of n slots. `checkpoint` is called as bands
+// are done (see checkpoint.hpp).
 std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
-                                 const Cutter& cutter, unsigned threads = 0);
+                                 const Cutter& cutter, unsigned threads = 0, const Checkpoint& checkpoint = {});
 
 // A raster's pieces in cutting order: row 0, link 0, row 1, ...
 std::vector<Polyline> raster_pieces(const RasterPath& path);

@@ -6,6 +6,7 @@
 #include <optional>
 #include <vector>
 
+#include "cncstream/cam/checkpoint.hpp"
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
@@ -62,6 +63,10 @@ struct RasterPath {
 
 XYBounds default_bounds(const Mesh& mesh, const Cutter& cutter);
 
-RasterPath build_raster(const ClEngine& engine, const XYBounds& bounds, const RasterOptions& options);
+// Rows are refined as oneTBB tasks in the caller's task arena; the path does
+// not depend on how they were scheduled. `checkpoint` is called as the CL grid
+// and the rows are done (see checkpoint.hpp).
+RasterPath build_raster(const ClEngine& engine, const XYBounds& bounds, const RasterOptions& options,
+                        const Checkpoint& checkpoint = {});
 
 }  // namespace cncstream

@@ -22,6 +22,13 @@ class HeightFieldStock {
   // A stock already machined to `heights` (grid.size() values; a machined
   // result read back from a file). Non-finite values are taken as `top`.
   HeightFieldStock(const GridSpec& grid, double top, std::vector<double> heights);
+  // Rows [first_row, first_row + heights.size() / grid.nx) of a stock over
+  // `grid`, at `heights`. Its nodes keep the whole grid's coordinates
+  // (grid.y0 + j * grid.dy, not restarted from the band's first row), so
+  // bands cut apart equal, bit for bit, the same rows of one stock over the
+  // whole grid; grid() describes the band. Throws as the constructors above
+  // and for heights that are not whole rows inside the grid.
+  static HeightFieldStock band(const GridSpec& grid, std::size_t first_row, double top, std::vector<double> heights);
 
   const GridSpec& grid() const { return grid_; }
   double top() const { return top_; }
@@ -44,6 +51,10 @@ class HeightFieldStock {
  private:
   GridSpec grid_;
   double top_;
+  // Node rows are at rows_y0_ + (first_row_ + j) * grid_.dy: the whole grid's
+  // coordinates for a band, grid_'s own otherwise.
+  double rows_y0_ = 0;
+  std::size_t first_row_ = 0;
   std::vector<double> z_;
   std::size_t nodes_cut_ = 0;
   double removed_ = 0;

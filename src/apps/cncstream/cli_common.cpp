@@ -14,14 +14,12 @@ void add_part_options(CLI::App* sub, PartOptions& o) {
       ->capture_default_str();
 }
 
-StlLoadResult load_part(const PartOptions& o) {
-  StlLoadOptions opt;
-  opt.units = parse_length_unit(o.units);
-  opt.scale = o.scale;
-  auto r = load_stl(o.stl, opt);
-  if (r.mesh.triangles.empty())
-    throw StlError(o.stl + ": the file holds no facets with area; nothing to machine");
-  return r;
+jobs::PartSource part_source(const PartOptions& o) {
+  jobs::PartSource p;
+  p.stl = o.stl;
+  p.units = parse_length_unit(o.units);
+  p.scale = o.scale;
+  return p;
 }
 
 std::array<double, 4> parse_bounds(const std::string& text) {

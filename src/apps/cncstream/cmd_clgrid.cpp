@@ -78,8 +78,8 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
     const std::string ext = std::filesystem::path(o->out).extension().string();
     if (ext != ".csv" && ext != ".png" && ext != ".f32")
       throw std::invalid_argument(o->out + ": unsupported output type '" + ext + "' (use .csv, .png or .f32)");
-    const auto part = load_part(o->part);
-    XYBounds b = default_bounds(part.mesh, cutter);
+    const auto mesh = jobs::load_part(part_source(o->part));
+    XYBounds b = default_bounds(*mesh, cutter);
     if (!o->bounds.empty()) {
       const auto v = parse_bounds(o->bounds);
       b = {v[0], v[1], v[2], v[3]};
@@ -88,7 +88,7 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
     ClOptions clo;
     clo.floor = o->floor;
     clo.threads = o->threads;
-    const ClEngine engine(part.mesh, cutter, clo);
+    const ClEngine engine(*mesh, cutter, clo);
     if (ext == ".csv") write_csv(engine, spec, o->out);
     else if (ext == ".f32") write_f32(engine, spec, o->out);
     else write_png_map(engine, spec, o->out, "CL surface (tool tip) of " + std::filesystem::path(o->part.stl).filename().string());

@@ -1,18 +1,19 @@
 // `cncstream resume JOB [PORT] [--from-line N]`: continue a journaled job after
 // line N (default: the line the machine was cutting when the job ended, from
 // the journaled status report; see choose_resume_line). The file must be
-// the one the job streamed (same SHA-256). The modal state at line N comes
-// from the program itself through the G-code interpreter; a preamble brings
-// the controller there safely, then the file continues with line N+1. Never
-// automatic: the operator confirms the plan (or passes --yes).
+// the one the job streamed (same SHA-256). The resume job (jobs/resume_job.hpp)
+// plans it: the modal state at line N from the program itself through the
+// G-code interpreter, a preamble that brings the controller there safely, then
+// the file from line N+1. Never automatic: the operator confirms the plan (or
+// passes --yes).
 #include <fstream>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
 #include "cncstream/gcode/gcode_writer.hpp"
-#include "cncstream/gcode/program.hpp"
-#include "cncstream/gcode/resume.hpp"
+#include "cncstream/gcode/interpreter.hpp"
+#include "cncstream/jobs/resume_job.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "cncstream/transport/sha256.hpp"
 #include "commands.hpp"
@@ -63,61 +64,42 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
                                   " streamed it (SHA-256 " + sha.substr(0, 16) + "..., journal " +
                                   rec->file_sha256.substr(0, 16) + "...): refusing to resume a different program");
     const session::JobInput whole = session::job_from_file(file);
-    std::string text;
-    for (const auto& l : whole.lines) text.append(l).push_back('\n');
-    const auto trace = gcode::trace_program(text);
-    std::string why = "--from-line";
-    long n = o->from_line;
-    if (n < 0) {
-      std::optional<gcode::LastSeen> seen;
-      if (last && last->status_work_pos)
-        seen = gcode::LastSeen{{(*last->status_work_pos)[0], (*last->status_work_pos)[1], (*last->status_work_pos)[2]},
-                               static_cast<std::size_t>(last->status_line)};
-      const auto choice =
-          gcode::choose_resume_line(trace, last ? static_cast<std::size_t>(last->last_line) : 0, seen);
-      n = static_cast<long>(choice.after_line);
-      why = choice.reason;
+    jobs::ResumeInput in;
+    in.file = file;
+    in.file_sha256 = sha;
+    in.lines = whole.lines;
+    if (last) {
+      in.last_line = last->last_line;
+      if (last->status_work_pos)
+        in.status_work_pos = Vec3{(*last->status_work_pos)[0], (*last->status_work_pos)[1], (*last->status_work_pos)[2]};
+      in.status_line = last->status_line;
     }
-    if (n >= whole.total_lines)
-      throw std::invalid_argument("--from-line " + std::to_string(n) + ": " + file.string() + " has only " +
-                                  std::to_string(whole.total_lines) + " lines; nothing left to run");
-
-    const gcode::ParserState at = gcode::state_before_line(text, static_cast<std::size_t>(n));
-    gcode::ResumeOptions ro;
-    ro.machine_safe_z = o->machine_safe_z;
-    ro.plunge_feed = o->plunge_feed;
-    ro.dwell_s = o->dwell;
-    if (o->safe_z) {
-      ro.safe_z = *o->safe_z;
-    } else {
-      // The program's own highest point (its retract height) clears everything it cuts.
-      double top = at.work_position().z;
-      for (const auto& s : trace.segments) top = std::max({top, s.work_from().z, s.work_to().z});
-      ro.safe_z = top;
-    }
-    const auto preamble = gcode::resume_preamble(at, ro);
+    in.from_line = o->from_line;
+    in.machine_safe_z = o->machine_safe_z;
+    in.safe_z = o->safe_z;
+    in.plunge_feed = o->plunge_feed;
+    in.dwell_s = o->dwell;
+    const jobs::ResumePlan plan = jobs::plan_resume(in);
+    const long n = plan.from_line;
+    const gcode::ParserState& at = plan.state;
+    const gcode::ResumeOptions& ro = plan.options;
+    const auto& preamble = plan.preamble;
 
     session::JobInput job;
-    job.file = file;
-    job.file_sha256 = sha;
-    job.total_lines = whole.total_lines;
+    job.file = plan.file;
+    job.file_sha256 = plan.file_sha256;
+    job.total_lines = plan.total_lines;
     job.resumed_from = o->job;
     job.from_line = n;
-    for (const auto& l : preamble) {
-      job.lines.push_back(l);
-      job.source_lines.push_back(n);
-    }
-    for (long k = n; k < whole.total_lines; ++k) {
-      job.lines.push_back(whole.lines[static_cast<std::size_t>(k)]);
-      job.source_lines.push_back(k + 1);
-    }
+    job.lines = plan.lines;
+    job.source_lines = plan.source_lines;
     const auto limits = planning_limits(o->conn, o->sim);
     EtaEstimator eta = estimate_job(job, limits);
     const Vec3 p = at.work_position();
     std::cout << "resume job " << rec->id << " (" << rec->outcome.value_or("interrupted") << "): " << file.string()
               << "\n  continue after line " << n << " of " << whole.total_lines << " (last answered: "
               << (last ? std::to_string(last->last_line) : std::string("none")) << ")\n"
-              << "  why line " << n << ": " << why << "\n"
+              << "  why line " << n << ": " << plan.reason << "\n"
               << "  tool at line " << n << ": X" << format_gcode_number(p.x) << " Y" << format_gcode_number(p.y)
               << " Z" << format_gcode_number(p.z) << " (work), " << gcode::format_modes(at) << "\n"
               << "  the controller must be homed with the same work offset as before\n"

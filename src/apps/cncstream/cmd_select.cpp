@@ -4,8 +4,10 @@
 #include <iostream>
 #include <memory>
 
+#include "cncstream/jobs/selection_job.hpp"
+#include "cncstream/jobs/selection_report.hpp"
 #include "commands.hpp"
-#include "selection_job.hpp"
+#include "selection_options.hpp"
 
 namespace cncstream::app {
 
@@ -19,9 +21,12 @@ void register_select(CLI::App& app, CommandRegistry& registry) {
   add_selection_options(sub, o->sel);
   sub->add_option("-o,--output", o->out, "Report folder")->capture_default_str();
   registry.add(sub, [o] {
-    const SelectionResult r = run_selection(o->sel);
+    const jobs::JobControl control = selection_control(o->sel);
+    const jobs::SelectionResult r = jobs::run_selection(selection_params(o->sel), control);
     std::cout << r.table();
-    for (const auto& f : write_selection_report(r, o->out)) std::cout << "wrote " << f.string() << "\n";
+    jobs::SelectionReportOptions ro;
+    ro.nodes_csv = o->sel.nodes_csv;
+    for (const auto& f : jobs::write_selection_report(r, o->out, ro, control)) std::cout << "wrote " << f.string() << "\n";
     return 0;
   });
 }

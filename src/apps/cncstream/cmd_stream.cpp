@@ -7,10 +7,11 @@
 #include <memory>
 
 #include "cncstream/gcode/gcode_writer.hpp"
+#include "cncstream/jobs/toolpath_job.hpp"
 #include "cncstream/transport/sha256.hpp"
 #include "commands.hpp"
 #include "job_session.hpp"
-#include "toolpath_job.hpp"
+#include "toolpath_options.hpp"
 
 namespace cncstream::app {
 
@@ -75,7 +76,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       if (o->tp.tool.empty())
         throw std::invalid_argument(o->file + " is a part: say which cutter machines it with --tool (e.g. ball:3.175)");
       o->tp.part.stl = o->file;
-      const ToolpathResult r = generate_toolpath(o->tp);
+      const jobs::ToolpathProgram r = jobs::generate_toolpath(toolpath_params(o->tp), toolpath_control(o->tp));
       const std::string sha = transport::sha256_hex(r.gcode);
       const std::filesystem::path out = o->output.empty() ? program_path(c, o->file, sha) : std::filesystem::path(o->output);
       {

@@ -1,11 +1,11 @@
 // `cncstream toolpath PART.stl --tool SPEC --stepover S ... -o part.nc`
 #include <chrono>
-#include <fstream>
 #include <iostream>
 #include <memory>
 
+#include "cncstream/jobs/toolpath_job.hpp"
 #include "commands.hpp"
-#include "toolpath_job.hpp"
+#include "toolpath_options.hpp"
 
 namespace cncstream::app {
 
@@ -21,13 +21,10 @@ void register_toolpath(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("-o,--output", o->out, "G-code file to write")->required();
   registry.add(sub, [o] {
     const auto t0 = std::chrono::steady_clock::now();
-    const ToolpathResult r = generate_toolpath(o->tp);
-    std::ofstream f(o->out, std::ios::binary);
-    if (!f) throw std::runtime_error(o->out + ": cannot open for writing");
-    f << r.gcode;
-    f.close();
-    if (!f) throw std::runtime_error(o->out + ": write failed");
-    std::cout << r.report();
+    jobs::ToolpathParams params = toolpath_params(o->tp);
+    params.output = o->out;
+    const jobs::ToolpathProgram r = jobs::generate_toolpath(params, toolpath_control(o->tp));
+    std::cout << toolpath_report(r);
     std::cout << "wrote " << o->out << " in "
               << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s total\n";
     return 0;

@@ -1,10 +1,7 @@
-#include "toolpath_job.hpp"
+#include "toolpath_options.hpp"
 
-#include <chrono>
-#include <cmath>
 #include <sstream>
 
-#include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/gcode/gcode_writer.hpp"
 #include "job_display.hpp"
 
@@ -29,66 +26,42 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
       ->check(CLI::IsMember({"min", "center", "model"}))->capture_default_str();
   sub->add_option("--z-zero", o.z_zero, "Work Z0 at the part's top, bottom, or the model origin")
       ->check(CLI::IsMember({"top", "bottom", "model"}))->capture_default_str();
+  // A oneTBB task arena of N slots for the whole job; 0: the shared pool.
   sub->add_option("--threads", o.threads, "Worker threads (0: all cores)");
 }
 
-ToolpathResult generate_toolpath(const ToolpathOptions& o) {
-  ToolpathResult r;
-  r.cutter = parse_cutter_spec(o.tool);
-  auto t0 = std::chrono::steady_clock::now();
-  const StlLoadResult part = load_part(o.part);
-  r.facets = part.mesh.triangles.size();
-  r.seconds_load = seconds_since(t0);
-
-  t0 = std::chrono::steady_clock::now();
-  ClOptions clo;
-  clo.floor = o.floor;
-  clo.threads = o.threads;
-  const ClEngine engine(part.mesh, r.cutter, clo);
-  RasterOptions ro;
-  ro.stepover = o.stepover;
-  ro.step = o.step;
-  ro.direction = o.direction == "y" ? RasterDirection::Y : RasterDirection::X;
-  ro.tolerance = o.tolerance;
-  XYBounds b = default_bounds(part.mesh, r.cutter);
+jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
+  jobs::ToolpathParams p;
+  p.cutter = parse_cutter_spec(o.tool);
+  p.part = part_source(o.part);
+  p.stepover = o.stepover;
+  p.step = o.step;
+  p.direction = o.direction == "y" ? RasterDirection::Y : RasterDirection::X;
+  p.feed = o.feed;
+  p.plunge_feed = o.plunge_feed;
+  p.rpm = o.rpm;
+  p.safe_z = o.safe_z;
+  p.tolerance = o.tolerance;
   if (!o.bounds.empty()) {
     const auto v = parse_bounds(o.bounds);
-    b = {v[0], v[1], v[2], v[3]};
+    p.bounds = XYBounds{v[0], v[1], v[2], v[3]};
   }
-  const Box3 box = part.mesh.bounds();
-  const XYOrigin xy = o.origin == "center" ? XYOrigin::PartCenter : o.origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
-  const ZZero zz = o.z_zero == "bottom" ? ZZero::PartBottom : o.z_zero == "model" ? ZZero::Model : ZZero::PartTop;
-  const Vec3 offset = work_offset(box, xy, zz);
-  MachiningParams mp;
-  // Path XY on the G-code's decimal lattice in work coordinates: printed = computed.
-  ro.lattice = XYLattice{std::pow(10.0, -mp.decimals), -offset.x, -offset.y};
-  r.path = build_raster(engine, b, ro);
-  r.seconds_path = seconds_since(t0);
-
-  t0 = std::chrono::steady_clock::now();
-  r.work_offset = offset;
-  r.work_mesh = part.mesh;
-  r.work_mesh.translate(offset);
-  mp.feed = o.feed;
-  mp.plunge_feed = o.plunge_feed;
-  mp.rpm = o.rpm;
-  mp.safe_z = o.safe_z.value_or(box.hi.z + offset.z + 5.0);
-  std::ostringstream hdr;
-  mp.header_comments = {
-      "cncstream raster finishing",
-      "part: " + o.part.stl + " (" + std::to_string(r.facets) + " facets)",
-      "tool: " + r.cutter.description() + " [" + r.cutter.spec() + "]",
-      "stepover " + format_gcode_number(r.path.stepover, 4) + " mm along " + (o.direction == "y" ? "Y" : "X") +
-          ", step " + format_gcode_number(r.path.step, 4) + " mm, tolerance " + format_gcode_number(o.tolerance, 4) + " mm",
-      std::string("work origin: XY at ") + (xy == XYOrigin::PartMin ? "part minimum" : xy == XYOrigin::PartCenter ? "part centre" : "model origin") +
-          ", Z0 at " + (zz == ZZero::PartTop ? "part top" : zz == ZZero::PartBottom ? "part bottom" : "model origin"),
-  };
-  r.gcode = finishing_program(r.path, offset, mp, &r.stats);
-  r.seconds_gcode = seconds_since(t0);
-  return r;
+  p.floor = o.floor;
+  p.origin = o.origin == "center" ? XYOrigin::PartCenter : o.origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
+  p.z_zero = o.z_zero == "bottom" ? ZZero::PartBottom : o.z_zero == "model" ? ZZero::Model : ZZero::PartTop;
+  return p;
 }
 
-std::string ToolpathResult::report() const {
+jobs::JobControl toolpath_control(const ToolpathOptions& o) {
+  jobs::JobControl c;
+  c.threads = o.threads;
+  return c;
+}
+
+std::string toolpath_report(const jobs::ToolpathProgram& r) {
+  const auto& cutter = r.cutter;
+  const auto& path = r.path;
+  const auto& stats = r.stats;
   std::ostringstream o;
   const auto& b = stats.work_bounds;
   o << "tool: " << cutter.description() << " [" << cutter.spec() << "]\n";
@@ -105,8 +78,8 @@ std::string ToolpathResult::report() const {
   o << "tool tip in work coordinates: X " << format_gcode_number(b.lo.x) << " .. " << format_gcode_number(b.hi.x) << ", Y "
     << format_gcode_number(b.lo.y) << " .. " << format_gcode_number(b.hi.y) << ", Z " << format_gcode_number(b.lo.z) << " .. "
     << format_gcode_number(b.hi.z) << "\n";
-  o << "time: load " << format_gcode_number(seconds_load, 3) << " s, CL + path " << format_gcode_number(seconds_path, 3)
-    << " s, G-code " << format_gcode_number(seconds_gcode, 3) << " s\n";
+  o << "time: load " << format_gcode_number(r.seconds_load, 3) << " s, CL + path " << format_gcode_number(r.seconds_path, 3)
+    << " s, G-code " << format_gcode_number(r.seconds_gcode, 3) << " s\n";
   return o.str();
 }
 

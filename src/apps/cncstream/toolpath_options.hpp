@@ -1,15 +1,15 @@
 #pragma once
-// Tool-path generation as the CLI does it: options -> loaded part, CL engine,
-// raster path and G-code program with a report. Shared by `toolpath` and by
-// the main streaming command.
+// The tool path options as the CLI takes them (`toolpath` and the main
+// streaming command), turned into the jobs layer's parameters, and the
+// report printed after a tool path job.
 #include <CLI/CLI.hpp>
 
 #include <optional>
 #include <string>
 
 #include "cli_common.hpp"
-#include "cncstream/cam/raster.hpp"
-#include "cncstream/gcode/finishing_program.hpp"
+#include "cncstream/jobs/job_control.hpp"
+#include "cncstream/jobs/toolpath_job.hpp"
 
 namespace cncstream::app {
 
@@ -34,18 +34,12 @@ struct ToolpathOptions {
 // `tool_required`: false where a G-code file may be given instead of an STL.
 void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required = true);
 
-struct ToolpathResult {
-  std::string gcode;
-  ProgramStats stats;
-  RasterPath path;
-  Cutter cutter;
-  std::size_t facets = 0;
-  Vec3 work_offset;  // model -> work coordinates
-  Mesh work_mesh;    // the part placed in work coordinates (for a verify)
-  double seconds_load = 0, seconds_path = 0, seconds_gcode = 0;
-  std::string report() const;  // human-readable summary
-};
+// Throws for a bad cutter spec or bounds (before the part is read).
+jobs::ToolpathParams toolpath_params(const ToolpathOptions& o);
+// --threads: the whole job in a oneTBB task arena of that many slots.
+jobs::JobControl toolpath_control(const ToolpathOptions& o);
 
-ToolpathResult generate_toolpath(const ToolpathOptions& o);
+// Human-readable summary of a finished tool path.
+std::string toolpath_report(const jobs::ToolpathProgram& r);
 
 }  // namespace cncstream::app

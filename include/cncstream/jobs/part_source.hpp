@@ -1,0 +1,23 @@
+#pragma once
+// The part a job machines: an STL file read with its units and scale, or a
+// mesh already in memory (a daemon that keeps parts loaded).
+#include <memory>
+#include <string>
+
+#include "cncstream/geometry/mesh.hpp"
+#include "cncstream/geometry/stl.hpp"
+
+namespace cncstream::jobs {
+
+struct PartSource {
+  std::string stl;  // read unless `mesh` is given; names the part in G-code headers and reports either way
+  LengthUnit units = LengthUnit::Millimetre;
+  double scale = 1.0;                // after the unit conversion
+  std::shared_ptr<const Mesh> mesh;  // already loaded, model coordinates in mm
+};
+
+// The mesh: `mesh` if given, else the STL read. Throws StlError naming the
+// file when it holds no facet with area (nothing to machine).
+std::shared_ptr<const Mesh> load_part(const PartSource& part);
+
+}  // namespace cncstream::jobs

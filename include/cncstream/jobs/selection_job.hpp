@@ -1,0 +1,60 @@
+#pragma once
+// Cutter-type selection (thesis chapter 4), the job behind `cncstream select`
+// and `plan`: the part, both cutters' exact CL grids and the per-node choice,
+// both cutters' raster finishing paths machined by the shared cut simulation,
+// the scallops split from material no stepover removes, and Table 4.1.
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cncstream/cam/cutter_selection.hpp"
+#include "cncstream/cam/deviation.hpp"
+#include "cncstream/cam/raster.hpp"
+#include "cncstream/cam/scallop.hpp"
+#include "cncstream/jobs/job_control.hpp"
+#include "cncstream/jobs/part_source.hpp"
+
+namespace cncstream::jobs {
+
+struct SelectionParams {
+  PartSource part;
+  CutterPair cutters;       // the ball and the radiused cutter, same diameter
+  double stepover = 0.4;
+  double step = 0.05;       // along the passes
+  RasterDirection direction = RasterDirection::X;
+  double scallop_tol = 0.01;
+  double reach_pitch = -1;  // reach-limit lattice, mm; 0: no scallop/unreachable split; < 0: min(0.15, stepover/3)
+  double sim_along = 0;     // cut simulation column spacing along the passes; 0: one per stepover
+};
+
+struct CutterRun {
+  Cutter cutter;
+  RasterPath path;
+  std::vector<double> machined;  // on the simulation grid
+  ScallopMap scallops;           // scallop and unreachable material, split by the reach limit
+  std::vector<double> reach;     // the cutter's reach limit per simulation node (NaN where not computed)
+  ScallopStats estimate_2d;      // the thesis's 2-D tangent estimate over the part
+};
+
+struct SelectionResult {
+  SelectionParams params;
+  std::size_t facets = 0;
+  CutterPair pair;
+  Vec3 work_offset;                  // model -> work coordinates (G-code)
+  RemovalChoice choice;              // on the analysis grid
+  SlopeProfile profile;
+  DesignHeights design;              // on the simulation grid
+  CutterRun ball, radiused;
+  std::vector<std::int8_t> min_scallop_choice;  // per simulation node: Choice, or 2 = equal
+  double seconds = 0;
+  std::vector<std::pair<std::string, double>> timings;
+  std::string table() const;  // Table 4.1 and the choice summary, for a person
+};
+
+// Stages: "load", "CL grids + raster paths", "choice", "design heights",
+// "cut simulation", "reach limits", "scallops", "done". Throws Cancelled on a
+// stop request.
+SelectionResult run_selection(const SelectionParams& params, const JobControl& control = {});
+
+}  // namespace cncstream::jobs

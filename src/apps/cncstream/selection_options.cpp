@@ -1,0 +1,72 @@
+#include "selection_options.hpp"
+
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+namespace cncstream::app {
+
+void add_selection_options(CLI::App* sub, SelectionOptions& o) {
+  sub->add_option("stl", o.part.stl, "STL file")->required();
+  add_part_options(sub, o.part);
+  sub->add_option("--tools", o.tools, "The ball and the radiused cutter, same diameter: ball:D,bull:D:r")->capture_default_str();
+  sub->add_option("--stepover", o.stepover, "Distance between passes, mm")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--step", o.step, "Sampling step along the passes, mm")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--direction", o.direction, "Pass direction: x or y")->check(CLI::IsMember({"x", "y"}))->capture_default_str();
+  sub->add_option("--scallop-tol", o.scallop_tol, "Scallop height accepted, mm (the plan cleans up above it)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--reach-pitch", o.reach_pitch,
+                  "CL lattice pitch for each cutter's reach limit, which splits material left into scallop and "
+                  "unreachable (gaps narrower than the cutter), mm; 0: no split; default min(0.15, stepover/3)");
+  // A oneTBB task arena of N slots for the whole job; 0: the shared pool.
+  sub->add_option("--threads", o.threads, "Worker threads (0: all cores)");
+  sub->add_flag("--nodes-csv", o.nodes_csv,
+                "Also write nodes.csv: every CL point of the passes with both tip heights, d, slope and both choices "
+                "(about 60 bytes a node)");
+}
+
+namespace {
+
+CutterPair parse_pair(const std::string& tools) {
+  std::vector<Cutter> cs;
+  std::stringstream ss(tools);
+  for (std::string item; std::getline(ss, item, ',');)
+    if (!item.empty()) cs.push_back(parse_cutter_spec(item));
+  if (cs.size() != 2) throw std::invalid_argument("--tools '" + tools + "': give exactly two cutters, e.g. ball:3.175,bull:3.175:0.79");
+  if (cs[0].type != CutterType::Ball) std::swap(cs[0], cs[1]);
+  return CutterPair(cs[0], cs[1]);
+}
+
+}  // namespace
+
+jobs::SelectionParams selection_params(const SelectionOptions& o) {
+  jobs::SelectionParams p;
+  p.cutters = parse_pair(o.tools);
+  p.part = part_source(o.part);
+  p.stepover = o.stepover;
+  p.step = o.step;
+  p.direction = o.direction == "y" ? RasterDirection::Y : RasterDirection::X;
+  p.scallop_tol = o.scallop_tol;
+  p.reach_pitch = o.reach_pitch;
+  return p;
+}
+
+jobs::PlanParams plan_params(const SelectionOptions& o) {
+  jobs::PlanParams p;
+  p.selection = selection_params(o);
+  p.feed = o.feed;
+  p.plunge_feed = o.plunge_feed;
+  p.rpm = o.rpm;
+  p.max_rate = o.max_rate;
+  p.accel = o.accel;
+  return p;
+}
+
+jobs::JobControl selection_control(const SelectionOptions& o) {
+  jobs::JobControl c;
+  c.threads = o.threads;
+  return c;
+}
+
+}  // namespace cncstream::app

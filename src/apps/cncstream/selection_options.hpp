@@ -1,0 +1,37 @@
+#pragma once
+// The cutter-selection options as the CLI takes them (`cncstream select` and
+// `plan`), turned into the jobs layer's parameters.
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+#include "cli_common.hpp"
+#include "cncstream/jobs/job_control.hpp"
+#include "cncstream/jobs/plan_job.hpp"
+#include "cncstream/jobs/selection_job.hpp"
+
+namespace cncstream::app {
+
+struct SelectionOptions {
+  PartOptions part;
+  std::string tools = "ball:3.175,bull:3.175:0.79";
+  double stepover = 0.4;
+  double step = 0.05;      // along the passes
+  std::string direction = "x";
+  double scallop_tol = 0.01;
+  double reach_pitch = -1; // reach-limit lattice, mm; 0: no scallop/unreachable split; < 0: min(0.15, stepover/3)
+  double feed = 1000, plunge_feed = 300, rpm = 18000;  // plan only
+  double max_rate = 500, accel = 10;  // plan only: for predicted times ($110-$112, $120-$122)
+  unsigned threads = 0;
+  bool nodes_csv = false;  // also write every CL point's heights, d and choices (large)
+};
+
+void add_selection_options(CLI::App* sub, SelectionOptions& o);
+
+// Throws for a --tools that is not one ball and one radiused cutter.
+jobs::SelectionParams selection_params(const SelectionOptions& o);
+jobs::PlanParams plan_params(const SelectionOptions& o);
+// --threads: the whole job in a oneTBB task arena of that many slots.
+jobs::JobControl selection_control(const SelectionOptions& o);
+
+}  // namespace cncstream::app

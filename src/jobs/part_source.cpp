@@ -1,0 +1,18 @@
+#include "cncstream/jobs/part_source.hpp"
+
+namespace cncstream::jobs {
+
+std::shared_ptr<const Mesh> load_part(const PartSource& part) {
+  std::shared_ptr<const Mesh> mesh = part.mesh;
+  if (!mesh) {
+    StlLoadOptions opt;
+    opt.units = part.units;
+    opt.scale = part.scale;
+    mesh = std::make_shared<const Mesh>(load_stl(part.stl, opt).mesh);
+  }
+  if (mesh->triangles.empty())
+    throw StlError(part.stl + ": the file holds no facets with area; nothing to machine");
+  return mesh;
+}
+
+}  // namespace cncstream::jobs

@@ -1,0 +1,67 @@
+#include "cncstream/jobs/resume_job.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "cncstream/gcode/program.hpp"
+#include "job_run.hpp"
+
+namespace cncstream::jobs {
+
+ResumePlan plan_resume(const ResumeInput& in, const JobControl& control) {
+  JobRun run(control);
+  ResumePlan plan;
+  plan.file = in.file;
+  plan.file_sha256 = in.file_sha256;
+  plan.total_lines = static_cast<std::int64_t>(in.lines.size());
+
+  run.stage("trace", 0, 0.6);
+  std::string text;
+  for (const auto& l : in.lines) text.append(l).push_back('\n');
+  const auto trace = gcode::trace_program(text);
+
+  run.stage("choose line", 0.6, 0.7);
+  plan.reason = "--from-line";
+  long n = in.from_line;
+  if (n < 0) {
+    std::optional<gcode::LastSeen> seen;
+    if (in.status_work_pos) seen = gcode::LastSeen{*in.status_work_pos, static_cast<std::size_t>(in.status_line)};
+    const auto choice = gcode::choose_resume_line(trace, static_cast<std::size_t>(in.last_line), seen);
+    n = static_cast<long>(choice.after_line);
+    plan.reason = choice.reason;
+  }
+  if (n >= plan.total_lines)
+    throw std::invalid_argument("--from-line " + std::to_string(n) + ": " + in.file.string() + " has only " +
+                                std::to_string(plan.total_lines) + " lines; nothing left to run");
+  plan.from_line = n;
+
+  run.stage("state", 0.7, 0.95);
+  plan.state = gcode::state_before_line(text, static_cast<std::size_t>(n));
+  gcode::ResumeOptions& ro = plan.options;
+  ro.machine_safe_z = in.machine_safe_z;
+  ro.plunge_feed = in.plunge_feed;
+  ro.dwell_s = in.dwell_s;
+  if (in.safe_z) {
+    ro.safe_z = *in.safe_z;
+  } else {
+    // The program's own highest point (its retract height) clears everything it cuts.
+    double top = plan.state.work_position().z;
+    for (const auto& s : trace.segments) top = std::max({top, s.work_from().z, s.work_to().z});
+    ro.safe_z = top;
+  }
+
+  run.stage("preamble", 0.95, 1.0);
+  plan.preamble = gcode::resume_preamble(plan.state, ro);
+  for (const auto& l : plan.preamble) {
+    plan.lines.push_back(l);
+    plan.source_lines.push_back(n);
+  }
+  for (long k = n; k < plan.total_lines; ++k) {
+    plan.lines.push_back(in.lines[static_cast<std::size_t>(k)]);
+    plan.source_lines.push_back(k + 1);
+  }
+  run.finish();
+  return plan;
+}
+
+}  // namespace cncstream::jobs

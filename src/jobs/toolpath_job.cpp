@@ -1,0 +1,89 @@
+#include "cncstream/jobs/toolpath_job.hpp"
+
+#include <chrono>
+
+#include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/thread_limit.hpp"
+#include "cncstream/gcode/gcode_writer.hpp"
+#include "cncstream/jobs/output_file.hpp"
+#include "cncstream/jobs/work_setup.hpp"
+#include "job_run.hpp"
+
+namespace cncstream::jobs {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Share of the whole job at the start of each stage (measured on the plaque:
+// the CL grid and the rows take most of it).
+constexpr double kPathFrom = 0.05, kGcodeFrom = 0.85, kWriteFrom = 0.97;
+
+}  // namespace
+
+ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& control) {
+  ToolpathProgram r;
+  JobRun run(control);
+  run_with_thread_limit(control.threads, [&] {
+    r.cutter = p.cutter;
+    const double end_of_gcode = p.output.empty() ? 1.0 : kWriteFrom;
+    run.stage("load", 0, kPathFrom);
+    auto t0 = std::chrono::steady_clock::now();
+    const std::shared_ptr<const Mesh> mesh = load_part(p.part);
+    r.facets = mesh->triangles.size();
+    r.seconds_load = seconds_since(t0);
+
+    run.stage("tool path", kPathFrom, kGcodeFrom);
+    t0 = std::chrono::steady_clock::now();
+    ClOptions clo;
+    clo.floor = p.floor;
+    const ClEngine engine(*mesh, r.cutter, clo);
+    const Box3 box = mesh->bounds();
+    const WorkSetup work = work_setup(box, p.origin, p.z_zero);
+    RasterOptions ro;
+    ro.stepover = p.stepover;
+    ro.step = p.step;
+    ro.direction = p.direction;
+    ro.tolerance = p.tolerance;
+    ro.lattice = work.lattice;
+    r.path = build_raster(engine, p.bounds.value_or(default_bounds(*mesh, r.cutter)), ro, run.checkpoint());
+    r.seconds_path = seconds_since(t0);
+
+    run.stage("G-code", kGcodeFrom, end_of_gcode);
+    t0 = std::chrono::steady_clock::now();
+    r.work_offset = work.offset;
+    r.work_mesh = *mesh;
+    r.work_mesh.translate(work.offset);
+    MachiningParams mp;
+    mp.feed = p.feed;
+    mp.plunge_feed = p.plunge_feed;
+    mp.rpm = p.rpm;
+    mp.safe_z = p.safe_z.value_or(box.hi.z + work.offset.z + 5.0);
+    const XYOrigin xy = p.origin;
+    const ZZero zz = p.z_zero;
+    mp.header_comments = {
+        "cncstream raster finishing",
+        "part: " + p.part.stl + " (" + std::to_string(r.facets) + " facets)",
+        "tool: " + r.cutter.description() + " [" + r.cutter.spec() + "]",
+        "stepover " + format_gcode_number(r.path.stepover, 4) + " mm along " +
+            (p.direction == RasterDirection::Y ? "Y" : "X") + ", step " + format_gcode_number(r.path.step, 4) +
+            " mm, tolerance " + format_gcode_number(p.tolerance, 4) + " mm",
+        std::string("work origin: XY at ") +
+            (xy == XYOrigin::PartMin ? "part minimum" : xy == XYOrigin::PartCenter ? "part centre" : "model origin") +
+            ", Z0 at " + (zz == ZZero::PartTop ? "part top" : zz == ZZero::PartBottom ? "part bottom" : "model origin"),
+    };
+    r.gcode = finishing_program(r.path, work.offset, mp, &r.stats);
+    r.seconds_gcode = seconds_since(t0);
+
+    if (!p.output.empty()) {
+      run.stage("write", kWriteFrom, 1.0);
+      write_text_file_atomically(p.output, r.gcode);
+    }
+  });
+  run.finish();
+  return r;
+}
+
+}  // namespace cncstream::jobs

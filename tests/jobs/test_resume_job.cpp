@@ -1,0 +1,122 @@
+// Resume planning on a small program with known answers: the line chosen from
+// the journaled status report or by backing off, the operator's line, the
+// preamble and what follows it, and the travel height.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cncstream/gcode/program.hpp"
+#include "cncstream/gcode/resume.hpp"
+#include "cncstream/jobs/resume_job.hpp"
+
+using namespace cncstream;
+
+namespace {
+
+// A square at Z-1 with the spindle on: line 7 cuts from (10, 0) to (10, 10).
+const std::vector<std::string> kProgram = {
+    "G21 G90 G94 G17",  // 1
+    "G0 Z5",            // 2
+    "M3 S12000",        // 3
+    "G0 X0 Y0",         // 4
+    "G1 Z-1 F300",      // 5
+    "G1 X10 F800",      // 6
+    "G1 Y10",           // 7
+    "G1 X0",            // 8
+    "G0 Z5",            // 9
+    "M5",               // 10
+    "M2",               // 11
+};
+
+jobs::ResumeInput input() {
+  jobs::ResumeInput in;
+  in.file = "square.nc";
+  in.file_sha256 = "abc";
+  in.lines = kProgram;
+  in.last_line = 8;
+  return in;
+}
+
+}  // namespace
+
+TEST(ResumeJob, StatusReportPicksTheLineBeingCut) {
+  jobs::ResumeInput in = input();
+  in.status_work_pos = Vec3{10, 5, -1};  // half-way along line 7
+  in.status_line = 8;
+  const jobs::ResumePlan plan = jobs::plan_resume(in);
+  EXPECT_EQ(plan.from_line, 6);
+  EXPECT_EQ(plan.reason, "the controller last reported the tool at X10 Y5 Z-1, on line 7");
+  EXPECT_EQ(plan.total_lines, 11);
+  EXPECT_EQ(plan.file, "square.nc");
+  EXPECT_EQ(plan.file_sha256, "abc");
+  // The state after line 6: at (10, 0, -1), spindle on, G1 at F800.
+  const Vec3 p = plan.state.work_position();
+  EXPECT_EQ(p.x, 10);
+  EXPECT_EQ(p.y, 0);
+  EXPECT_EQ(p.z, -1);
+  // Travel at the program's highest point, then spindle, dwell, plunge.
+  EXPECT_EQ(plan.options.safe_z, 5);
+  const std::vector<std::string> head = {"G21 G90 G94 G17", "G54", "G92.1", "G49", "G0 Z5", "G0 X10 Y0",
+                                         "M3 S12000", "M9", "G4 P2", "G1 Z-1 F300"};
+  ASSERT_GE(plan.preamble.size(), head.size());
+  EXPECT_EQ(std::vector<std::string>(plan.preamble.begin(), plan.preamble.begin() + long(head.size())), head);
+  // Preamble, then the file from line 7, each with its file line.
+  ASSERT_EQ(plan.lines.size(), plan.preamble.size() + 5);
+  ASSERT_EQ(plan.source_lines.size(), plan.lines.size());
+  for (std::size_t k = 0; k < plan.preamble.size(); ++k) {
+    EXPECT_EQ(plan.lines[k], plan.preamble[k]);
+    EXPECT_EQ(plan.source_lines[k], 6);
+  }
+  for (std::size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(plan.lines[plan.preamble.size() + k], kProgram[6 + k]);
+    EXPECT_EQ(plan.source_lines[plan.preamble.size() + k], long(7 + k));
+  }
+  // The same preamble as the G-code layer gives for that state.
+  std::string text;
+  for (const auto& l : kProgram) text += l + "\n";
+  gcode::ResumeOptions ro;
+  ro.safe_z = 5;
+  EXPECT_EQ(plan.preamble, gcode::resume_preamble(gcode::state_before_line(text, 6), ro));
+}
+
+TEST(ResumeJob, WithoutAStatusReportBacksOffThePlannerQueue) {
+  const jobs::ResumePlan plan = jobs::plan_resume(input());
+  // The five motion lines before line 8 may all have been queued unmade: back
+  // to the first of them (line 2), continuing after line 1.
+  EXPECT_EQ(plan.from_line, 1);
+  EXPECT_EQ(plan.reason,
+            "no position report was journaled; backing off 5 motion lines from the last answered one (the planner "
+            "may have held them unmade)");
+  EXPECT_EQ(plan.lines.size(), plan.preamble.size() + 10);
+}
+
+TEST(ResumeJob, OperatorsLineAndTravelHeight) {
+  jobs::ResumeInput in = input();
+  in.from_line = 7;
+  in.safe_z = 12;
+  in.machine_safe_z = -2;
+  in.plunge_feed = 150;
+  in.dwell_s = 0;
+  const jobs::ResumePlan plan = jobs::plan_resume(in);
+  EXPECT_EQ(plan.from_line, 7);
+  EXPECT_EQ(plan.reason, "--from-line");
+  EXPECT_EQ(plan.options.safe_z, 12);
+  const std::vector<std::string> head = {"G21 G90 G94 G17", "G53 G0 Z-2", "G54", "G92.1", "G49", "G0 Z12",
+                                         "G0 X10 Y10", "M3 S12000", "M9", "G1 Z-1 F150"};
+  ASSERT_GE(plan.preamble.size(), head.size());
+  EXPECT_EQ(std::vector<std::string>(plan.preamble.begin(), plan.preamble.begin() + long(head.size())), head);
+  EXPECT_EQ(plan.lines.back(), "M2");
+}
+
+TEST(ResumeJob, NothingLeftAfterTheLastLine) {
+  jobs::ResumeInput in = input();
+  in.from_line = 11;
+  try {
+    jobs::plan_resume(in);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "--from-line 11: square.nc has only 11 lines; nothing left to run");
+  }
+}

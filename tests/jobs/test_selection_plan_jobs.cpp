@@ -1,0 +1,184 @@
+// The selection and plan jobs called directly: the same numbers and programs
+// as `cncstream select` / `plan` printed and wrote before the jobs layer
+// existed (plaque, stepover 1 mm, step 0.2 mm, scallop tolerance 0.05 mm),
+// whatever the thread limit; the report and plan files; and the G-code
+// lattice shared with the tool path job.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <stop_token>
+#include <string>
+
+#include "cncstream/cam/cutter.hpp"
+#include "cncstream/geometry/stl.hpp"
+#include "cncstream/jobs/plan_job.hpp"
+#include "cncstream/jobs/selection_job.hpp"
+#include "cncstream/jobs/selection_report.hpp"
+#include "cncstream/jobs/toolpath_job.hpp"
+#include "cncstream/transport/sha256.hpp"
+#include "jobs_test_util.hpp"
+
+using namespace cncstream;
+using namespace jobstest;
+
+namespace {
+
+jobs::SelectionParams coarse_plaque() {
+  jobs::SelectionParams p;
+  p.part.stl = plaque();
+  p.cutters = CutterPair(parse_cutter_spec("ball:3.175"), parse_cutter_spec("bull:3.175:0.79"));
+  p.stepover = 1;
+  p.step = 0.2;
+  p.scallop_tol = 0.05;
+  return p;
+}
+
+// The table without its last line (the timings).
+std::string without_time(const std::string& table) {
+  const auto p = table.rfind("time: ");
+  return p == std::string::npos ? table : table.substr(0, p);
+}
+
+// As printed by `cncstream select` before the jobs layer.
+const char* const kSelectTable =
+    "cutters: 3.175 mm ball-nose end mill [ball:3.175] vs 3.175 mm bull-nose end mill, 0.79 mm corner radius [bull:3.175:0.79]\n"
+    "d_base: volume 0.4183 mm, area 0.5412 mm (corrected forms)\n"
+    "radiused removes more on 82.1 % of the part by volume, 73.7 % by area (ball: the rest)\n"
+    "switch slope: volume 34.6 deg (plane), 37.0 deg measured on the part; area 21.7 deg (plane), 26.9 deg measured\n"
+    "scallop heights, stepover 1.000 mm (Table 4.1 form):\n"
+    "  cutter                   method            max mm    min mm    mean mm\n"
+    "  ball:3.175               cut simulation    2.0134    0.0000    0.1392\n"
+    "  ball:3.175               2-D estimate      1.8455    0.0808    0.1228\n"
+    "  bull:3.175:0.79          cut simulation    2.4290    0.0000    0.1256\n"
+    "  bull:3.175:0.79          2-D estimate      2.4031    0.0000    0.1317\n"
+    "material no stepover removes (gaps and inside corners narrower than the cutter; not counted as scallop):\n"
+    "  ball:3.175               max 2.5000 mm at (44.00, 23.41) work, mean 0.0782 mm, more than 0.01 mm on 20.1 % of the part\n"
+    "  bull:3.175:0.79          max 2.5000 mm at (42.00, 23.04) work, mean 0.0440 mm, more than 0.01 mm on 11.2 % of the part\n";
+
+}  // namespace
+
+TEST(SelectionJob, SameTableAsTheCliAndTheReportFiles) {
+  ProgressLog log;
+  jobs::JobControl control;
+  control.progress = log.callback();
+  const jobs::SelectionResult r = jobs::run_selection(coarse_plaque(), control);
+  EXPECT_EQ(without_time(r.table()), kSelectTable);
+  ASSERT_FALSE(log.reports.empty());
+  for (std::size_t k = 1; k < log.reports.size(); ++k) EXPECT_GE(log.reports[k].second, log.reports[k - 1].second);
+  EXPECT_EQ(log.reports.back(), std::make_pair(std::string("done"), 1.0));
+
+  const fs::path dir = temp_dir("select");
+  const auto files = jobs::write_selection_report(r, dir / "report");
+  ASSERT_EQ(files.size(), 8u);
+  EXPECT_EQ(files.front().filename(), "selection.json");
+  for (const auto& f : files) {
+    EXPECT_TRUE(fs::exists(f)) << f;
+    EXPECT_FALSE(fs::exists(f.string() + ".part")) << f;
+  }
+  std::ifstream csv(dir / "report" / "table_4_1.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "cutter,method,max_mm,min_mm,mean_mm,samples");
+}
+
+TEST(SelectionJob, SelectionPathsLieOnTheToolpathJobsLattice) {
+  // Both jobs place the part and the G-code lattice the same way: the
+  // selection's ball path is the tool path job's, point for point.
+  jobs::SelectionParams s = coarse_plaque();
+  s.reach_pitch = 0;
+  const jobs::SelectionResult sel = jobs::run_selection(s);
+  jobs::ToolpathParams t;
+  t.part.stl = plaque();
+  t.cutter = s.cutters.ball;
+  t.stepover = s.stepover;
+  t.step = s.step;
+  const jobs::ToolpathProgram tp = jobs::generate_toolpath(t);
+  ASSERT_EQ(sel.ball.path.rows.size(), tp.path.rows.size());
+  for (std::size_t r = 0; r < tp.path.rows.size(); ++r) {
+    ASSERT_EQ(sel.ball.path.rows[r].size(), tp.path.rows[r].size()) << "row " << r;
+    for (std::size_t k = 0; k < tp.path.rows[r].size(); ++k) {
+      EXPECT_EQ(sel.ball.path.rows[r][k].x, tp.path.rows[r][k].x);
+      EXPECT_EQ(sel.ball.path.rows[r][k].y, tp.path.rows[r][k].y);
+      EXPECT_EQ(sel.ball.path.rows[r][k].z, tp.path.rows[r][k].z);
+    }
+  }
+  EXPECT_EQ(sel.work_offset.x, tp.work_offset.x);
+  EXPECT_EQ(sel.work_offset.y, tp.work_offset.y);
+  EXPECT_EQ(sel.work_offset.z, tp.work_offset.z);
+}
+
+TEST(PlanJob, SameOptionsAndProgramsAsTheCliWithAnyThreadLimit) {
+  jobs::PlanParams p;
+  p.selection = coarse_plaque();
+  // The part as the CLI was given it (it names the part in the programs'
+  // headers), from a mesh already loaded.
+  p.selection.part.stl = "examples/plaque.stl";
+  p.selection.part.mesh = std::make_shared<const Mesh>(load_stl(plaque()).mesh);
+  for (unsigned threads : {0u, 1u}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    jobs::JobControl control;
+    control.threads = threads;
+    ProgressLog log;
+    control.progress = log.callback();
+    const jobs::PlanResult plan = jobs::run_plan(p, control);
+    ASSERT_FALSE(log.reports.empty());
+    for (std::size_t k = 1; k < log.reports.size(); ++k) EXPECT_GE(log.reports[k].second, log.reports[k - 1].second);
+    EXPECT_EQ(log.reports.back(), std::make_pair(std::string("done"), 1.0));
+
+    // As `cncstream plan` printed and wrote them before the jobs layer.
+    EXPECT_TRUE(plan.radiused_first);
+    EXPECT_EQ(plan.cleanup_pieces.size(), 224u);
+    EXPECT_EQ(transport::sha256_hex(plan.program_first),
+              "585e0e8913a55f434771c6020424d27f03e824b0f73338a58d839cc940149705");
+    EXPECT_EQ(transport::sha256_hex(plan.program_second),
+              "b41ce5fd029644bc1729d02db3aa5654e16ce329d2858f264c3ecd464bae78fe");
+    ASSERT_EQ(plan.options.size(), 3u);
+    const struct {
+      const char* name;
+      double seconds, max_residual, share, max_scallop, scallop_share;
+    } want[] = {
+        {"ball only (ball:3.175)", 3112.225532044086, 2.580750451536238, 0.30937572036295813, 2.0346131368697353,
+         0.23328234036756848},
+        {"radiused only (bull:3.175:0.79)", 3091.5846154932897, 2.500000000000001, 0.19293572790712296,
+         2.4432813238216067, 0.14087260839497895},
+        {"combined (bull:3.175:0.79 then ball:3.175 clean-up)", 4975.19335288766, 2.500000000000001,
+         0.14845239841572538, 2.3406261907085852, 0.10294431987258744},
+    };
+    for (std::size_t k = 0; k < 3; ++k) {
+      const jobs::PlanOption& o = plan.options[k];
+      EXPECT_EQ(o.name, want[k].name);
+      EXPECT_NEAR(o.seconds, want[k].seconds, 1e-6);
+      EXPECT_NEAR(o.max_residual, want[k].max_residual, 1e-12);
+      EXPECT_NEAR(o.share_above_tol, want[k].share, 1e-12);
+      EXPECT_NEAR(o.max_scallop, want[k].max_scallop, 1e-12);
+      EXPECT_NEAR(o.scallop_share_above_tol, want[k].scallop_share, 1e-12);
+    }
+
+    const fs::path dir = temp_dir("plan");
+    const jobs::PlanFiles files = jobs::write_plan(plan, dir);
+    EXPECT_EQ(files.first, dir / "plaque-1-bull_3.175_0.79.nc");
+    EXPECT_EQ(files.second, dir / "plaque-2-ball_3.175.nc");
+    EXPECT_EQ(transport::sha256_file(files.first), transport::sha256_hex(plan.program_first));
+    EXPECT_TRUE(fs::exists(files.json));
+  }
+}
+
+TEST(SelectionJob, StopInsideATaskArenaCancels) {
+  // With a thread limit the job runs in a task arena of its own; the stop,
+  // requested from a worker's progress report, still leaves through it.
+  std::stop_source stop;
+  jobs::JobControl control;
+  control.threads = 1;
+  control.stop = stop.get_token();
+  std::string stage_at_stop;
+  control.progress = [&](std::string_view stage, double) {
+    if (stage == "cut simulation" && stage_at_stop.empty()) {
+      stage_at_stop = stage;
+      stop.request_stop();
+    }
+    EXPECT_NE(stage, "done");
+  };
+  EXPECT_THROW(jobs::run_selection(coarse_plaque(), control), jobs::Cancelled);
+  EXPECT_EQ(stage_at_stop, "cut simulation");
+}
