@@ -186,6 +186,7 @@ void MachineSession::on_port_closed(const std::string& reason) {
   if (engine_) {
     engine_->disconnected();  // a running job ends as Disconnected; a jog is forgotten
     drain();
+    if (link_ == LinkState::Closed) return;  // a subscriber closed the session on the job's end
   }
   engine_.reset();
   identifier_.reset();
