@@ -37,7 +37,8 @@ void JobJournal::record(const std::string& reason) {
   p.last_line = checking ? 0 : engine->progress().last_answered_line;
   p.reason = reason;
   p.modal = engine->modal();
-  if (const auto st = session_.snapshot().status; st && st->wco) p.wco = std::array<double, 3>{(*st->wco)[0], (*st->wco)[1], (*st->wco)[2]};
+  if (const auto st = session_.status(); st && st->wco)
+    p.wco = std::array<double, 3>{(*st->wco)[0], (*st->wco)[1], (*st->wco)[2]};
   p.status_work_pos = status_work_pos_;
   p.status_line = status_line_;
   p.machine_state = machine_state_;

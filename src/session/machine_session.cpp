@@ -143,10 +143,10 @@ void MachineSession::connect_transport() {
   pending_after_id_.clear();
   settings_phase_ = SettingsPhase::NotStarted;
   settings_.clear();
+  report_inches_ = false;  // until this controller's $13 is read
   alarm_ = false;
   banner_.clear();
-  set_link(LinkState::Connecting, "opened " + opt_.port->describe() + " at " + std::to_string(opt_.serial.baud) +
-                                      " baud");
+  set_link(LinkState::Connecting, "identifying the controller on " + opt_.port->describe());
   log("opened " + path + " at " + std::to_string(opt_.serial.baud) + " baud");
   std::weak_ptr<bool> alive = alive_;
   transport::SerialTransport* self = transport_.get();
@@ -298,12 +298,7 @@ void MachineSession::drain() {
     if (ev.kind == EventKind::Alarm) alarm_ = true;
     if (ev.kind == EventKind::Status && ev.status) {
       alarm_ = ev.status->state == MachineState::Alarm;
-      if (report_inches_) {
-        // Positions in mm inside: $13=1 reports inches.
-        for (auto* axes : {&ev.status->mpos, &ev.status->wpos, &ev.status->wco})
-          if (*axes)
-            for (auto& v : **axes) v *= 25.4;
-      }
+      in_mm(*ev.status);
     }
     SessionEvent e;
     e.kind = SessionEventKind::Controller;
@@ -409,7 +404,6 @@ CommandResult MachineSession::start_job(JobInput job, JobMode mode) {
     return CommandResult::refused(std::string("start a job: ") + e.what());
   }
   job_ = std::move(job);
-  ++jobs_started_;
   SessionEvent e;
   e.kind = SessionEventKind::JobStarted;
   e.text = mode == JobMode::Check ? "check" : mode == JobMode::CheckThenRun ? "check+run" : "run";
@@ -543,6 +537,20 @@ CommandResult MachineSession::reset() {
   return CommandResult::ok();
 }
 
+// Positions are millimetres inside; a controller with $13=1 reports inches.
+void MachineSession::in_mm(StatusReport& r) const {
+  if (!report_inches_) return;
+  for (auto* axes : {&r.mpos, &r.wpos, &r.wco})
+    if (*axes)
+      for (auto& v : **axes) v *= 25.4;
+}
+
+std::optional<StatusReport> MachineSession::status() const {
+  auto r = engine_ ? engine_->status() : std::nullopt;
+  if (r) in_mm(*r);
+  return r;
+}
+
 MachineSnapshot MachineSession::snapshot() const {
   MachineSnapshot s;
   s.name = opt_.name;
@@ -554,11 +562,7 @@ MachineSnapshot MachineSession::snapshot() const {
     s.banner = banner_;
     s.progress = engine_->progress();
     s.progress.check_errors.clear();
-    s.status = engine_->status();
-    if (s.status && report_inches_)
-      for (auto* axes : {&s.status->mpos, &s.status->wpos, &s.status->wco})
-        if (*axes)
-          for (auto& v : **axes) v *= 25.4;
+    s.status = status();
     s.overrides = engine_->overrides();
     s.buffer = engine_->buffer();
     s.jogging = engine_->jogging();

@@ -219,6 +219,7 @@ RunResult StreamRunner::run(const JobInput& job) {
     journal->journal().end_job(result.job_id, failure ? "error" : to_string(result.outcome),
                                failure ? "runner failure" : result.message);
   }
+  stop_before_start_ = false;  // a stop asked for this run does not carry over to the next
   if (failure) std::rethrow_exception(failure);
   if (!done) {
     // The loop ran dry without a job end (the port closed before identification finished).

@@ -93,6 +93,8 @@ class MachineSession {
   bool job_active() const;
   bool in_alarm() const { return alarm_; }
   MachineSnapshot snapshot() const;
+  // The last status report, positions in mm (nullopt: none yet, or not connected).
+  std::optional<protocol::StatusReport> status() const;
   const protocol::ProtocolEngine* engine() const { return engine_.get(); }
   const protocol::GrblSettings& settings() const { return settings_; }
   // Seconds since the session was made: the clock of every event and snapshot.
@@ -118,6 +120,7 @@ class MachineSession {
   void set_link(LinkState s, const std::string& why);
   void schedule_reconnect();
   void log(const std::string& text);
+  void in_mm(protocol::StatusReport& r) const;
   CommandResult needs_engine(const char* what) const;
   CommandResult refuse_in_alarm(const char* what) const;
 
@@ -142,7 +145,6 @@ class MachineSession {
   bool alarm_ = false;
 
   std::optional<JobInput> job_;  // the running job (its lines stay with the engine)
-  std::int64_t jobs_started_ = 0;
 
   boost::asio::steady_timer timer_;
   double timer_at_ = 0;
