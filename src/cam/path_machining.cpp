@@ -9,7 +9,6 @@
 #include <stdexcept>
 
 #include "cncstream/cam/stock.hpp"
-#include "cncstream/cam/thread_limit.hpp"
 
 namespace cncstream {
 
@@ -32,7 +31,7 @@ std::vector<Polyline> raster_pieces(const RasterPath& path) {
 }
 
 std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
-                                 const Cutter& cutter, unsigned threads, const Checkpoint& checkpoint) {
+                                 const Cutter& cutter, const Checkpoint& checkpoint) {
   if (heights.size() != grid.size()) throw std::invalid_argument("machine_path: heights do not match the grid");
   if (grid.size() == 0) return heights;
   double top = -HUGE_VAL;
@@ -66,18 +65,16 @@ std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heigh
     for (std::size_t b = b0; b <= b1; ++b) band_moves[b].push_back(k);
   }
   std::atomic<std::size_t> done{0};
-  run_with_thread_limit(threads, [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bands, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t b = r.begin(); b != r.end(); ++b) {
-        const std::size_t j0 = b * kBandRows, j1 = std::min(grid.ny, j0 + kBandRows);
-        const auto first = heights.begin() + static_cast<std::ptrdiff_t>(j0 * grid.nx);
-        const auto end = heights.begin() + static_cast<std::ptrdiff_t>(j1 * grid.nx);
-        HeightFieldStock stock = HeightFieldStock::band(grid, j0, top, std::vector<double>(first, end));
-        for (std::size_t k : band_moves[b]) stock.cut_segment(moves[k].a, moves[k].b, cutter);
-        std::copy(stock.heights().begin(), stock.heights().end(), first);
-        if (checkpoint) checkpoint(double(++done) / double(bands));
-      }
-    });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bands, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b != r.end(); ++b) {
+      const std::size_t j0 = b * kBandRows, j1 = std::min(grid.ny, j0 + kBandRows);
+      const auto first = heights.begin() + static_cast<std::ptrdiff_t>(j0 * grid.nx);
+      const auto end = heights.begin() + static_cast<std::ptrdiff_t>(j1 * grid.nx);
+      HeightFieldStock stock = HeightFieldStock::band(grid, j0, top, std::vector<double>(first, end));
+      for (std::size_t k : band_moves[b]) stock.cut_segment(moves[k].a, moves[k].b, cutter);
+      std::copy(stock.heights().begin(), stock.heights().end(), first);
+      if (checkpoint) checkpoint(double(++done) / double(bands));
+    }
   });
   return heights;
 }

@@ -11,8 +11,6 @@
 #include <stdexcept>
 #include <utility>
 
-#include "cncstream/cam/thread_limit.hpp"
-
 namespace cncstream {
 
 namespace {
@@ -57,8 +55,7 @@ GridSpec reach_lattice(const GridSpec& at, double x0, double y0, double x1, doub
 }
 
 std::vector<double> reach_heights(const ClGrid& cl, const Cutter& cutter, const GridSpec& at,
-                                  const std::vector<std::uint8_t>& wanted, unsigned threads,
-                                  const Checkpoint& checkpoint) {
+                                  const std::vector<std::uint8_t>& wanted, const Checkpoint& checkpoint) {
   if (wanted.size() != at.size()) throw std::invalid_argument("reach_heights: mask size differs from the grid");
   const GridSpec& g = cl.spec;
   std::vector<double> out(at.size(), std::numeric_limits<double>::quiet_NaN());
@@ -127,13 +124,11 @@ std::vector<double> reach_heights(const ClGrid& cl, const Cutter& cutter, const 
   const std::size_t band = 16;
   const std::size_t bands = (at.ny + band - 1) / band;
   std::atomic<std::size_t> done{0};
-  run_with_thread_limit(threads, [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bands, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t b = r.begin(); b != r.end(); ++b) {
-        rows(b * band, std::min(at.ny, (b + 1) * band));
-        if (checkpoint) checkpoint(double(++done) / double(bands));
-      }
-    });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bands, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b != r.end(); ++b) {
+      rows(b * band, std::min(at.ny, (b + 1) * band));
+      if (checkpoint) checkpoint(double(++done) / double(bands));
+    }
   });
   return out;
 }

@@ -23,6 +23,7 @@ void JobRun::stage(std::string_view name, double from, double to) {
 
 void JobRun::within(double fraction) {
   check();
+  if (!control_.progress) return;  // nobody listens: a checkpoint is only the stop check
   std::lock_guard lock(mutex_);
   report(from_ + (to_ - from_) * std::clamp(fraction, 0.0, 1.0));
 }

@@ -1,5 +1,8 @@
 #include "cncstream/jobs/output_file.hpp"
 
+#include <unistd.h>
+
+#include <atomic>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -16,8 +19,11 @@ void write_file_atomically(const fs::path& path, const std::function<void(const 
     write(path);
     return;
   }
+  // A name of its own: two jobs writing the same target (or a user's own
+  // X.part) never share the temporary file.
+  static std::atomic<unsigned long> serial{0};
   fs::path temporary = path;
-  temporary += ".part";
+  temporary += ".part-" + std::to_string(::getpid()) + "-" + std::to_string(++serial);
   try {
     write(temporary);
     fs::rename(temporary, path);

@@ -14,6 +14,7 @@
 #include "cncstream/gcode/program.hpp"
 #include "cncstream/jobs/output_file.hpp"
 #include "job_run.hpp"
+#include "job_text.hpp"
 
 namespace cncstream::jobs {
 
@@ -46,12 +47,6 @@ PlanOption evaluate(const std::string& name, const std::vector<const std::string
   o.share_above_tol = on ? double(above) / double(on) : 0;
   o.scallop_share_above_tol = on ? double(scallop_above) / double(on) : 0;
   return o;
-}
-
-std::string safe_name(std::string s) {
-  for (char& c : s)
-    if (c == ':' || c == '/') c = '_';
-  return s;
 }
 
 // Share of the whole plan job taken by the selection (measured on the plaque).
@@ -107,7 +102,7 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
       s.push_back({pl.back().x, pl.back().y, sim_safe});
       sim_pieces.push_back(std::move(s));
     }
-    const std::vector<double> combined = machine_path(sg, first.machined, sim_pieces, second.cutter, 0, run.checkpoint());
+    const std::vector<double> combined = machine_path(sg, first.machined, sim_pieces, second.cutter, run.checkpoint());
 
     run.stage("programs", 0.85, 0.88);
     auto header = [&](const Cutter& c, const std::string& what, int tool) {
@@ -158,13 +153,9 @@ PlanFiles write_plan(const PlanResult& plan, const fs::path& dir) {
   const CutterRun& first = plan.first();
   const CutterRun& second = plan.second();
   const bool cleanup = !plan.cleanup_pieces.empty();
-  auto write = [](const fs::path& p, const std::string& text) {
-    try {
-      write_text_file_atomically(p, text);
-    } catch (const std::runtime_error&) {
-      throw std::runtime_error("cannot write " + p.string());
-    }
-  };
+  const auto write = write_text_file_atomically;  // its errors name the file and what failed
+  // plan.json is written last: an earlier plan's must not vouch for files of a plan that fails half-way.
+  fs::remove(dir / "plan.json", ec);
   PlanFiles files;
   const std::string stem = fs::path(plan.params.selection.part.stl).stem().string();
   files.first = dir / (stem + "-1-" + safe_name(first.cutter.spec()) + ".nc");

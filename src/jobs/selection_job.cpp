@@ -14,14 +14,11 @@
 #include "cncstream/jobs/work_setup.hpp"
 #include "fixed_text.hpp"
 #include "job_run.hpp"
+#include "job_text.hpp"
 
 namespace cncstream::jobs {
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Scallop of the 2-D estimate as a function of the cross slope, tabulated.
 std::vector<double> scallop_table(const Cutter& c, double s) {
@@ -102,7 +99,7 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     const double stock_top = box.hi.z + 1;
     for (CutterRun* cr : {&r.ball, &r.radiused}) {
       const double base = cr == &r.ball ? 0 : 0.5;
-      cr->machined = machine_path(sg, std::vector<double>(sg.size(), stock_top), raster_pieces(cr->path), cr->cutter, 0,
+      cr->machined = machine_path(sg, std::vector<double>(sg.size(), stock_top), raster_pieces(cr->path), cr->cutter,
                                   [&](double f) { run.within(base + 0.5 * f); });
     }
     r.timings.push_back({"cut simulation", seconds_since(t0)});
@@ -128,7 +125,7 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
           wanted[k] = !r.design.off_part[k] && cr->machined[k] - r.design.z[k] > kReachSplitMin;
         const ClGrid dense = e.compute(reach_lattice(sg, b.x0, b.y0, b.x1, b.y1, pitch, pitch),
                                        [&](double f) { run.within(base + 0.25 * f); });
-        reach = reach_heights(dense, cr->cutter, sg, wanted, 0, [&](double f) { run.within(base + 0.25 + 0.25 * f); });
+        reach = reach_heights(dense, cr->cutter, sg, wanted, [&](double f) { run.within(base + 0.25 + 0.25 * f); });
       }
       cr->scallops = scallops_from_cut(sg, cr->machined, r.design, rows, along_x, pitch > 0 ? &reach : nullptr);
       cr->reach = std::move(reach);

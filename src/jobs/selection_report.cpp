@@ -22,6 +22,7 @@
 #include "cncstream/jobs/output_file.hpp"
 #include "fixed_text.hpp"
 #include "job_run.hpp"
+#include "job_text.hpp"
 
 namespace cncstream::jobs {
 
@@ -128,11 +129,9 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error("cannot create report folder " + dir.string() + ": " + ec.message());
     const std::string ball = r.pair.ball.spec(), rad = r.pair.radiused.spec();
-    auto safe = [](std::string s) {
-      for (char& c : s)
-        if (c == ':' || c == '/') c = '_';
-      return s;
-    };
+    // selection.json is written last and vouches for the folder: an earlier report's goes first.
+    fs::remove(dir / "selection.json", ec);
+    const auto safe = safe_name;
 
     // Numbers: JSON (written last) and CSV.
     const fs::path json_path = dir / "selection.json";

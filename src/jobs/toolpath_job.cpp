@@ -8,14 +8,11 @@
 #include "cncstream/jobs/output_file.hpp"
 #include "cncstream/jobs/work_setup.hpp"
 #include "job_run.hpp"
+#include "job_text.hpp"
 
 namespace cncstream::jobs {
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Share of the whole job at the start of each stage (measured on the plaque:
 // the CL grid and the rows take most of it).

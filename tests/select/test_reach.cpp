@@ -13,6 +13,7 @@
 #include "cncstream/cam/path_machining.hpp"
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/cam/reach.hpp"
+#include "cncstream/cam/thread_limit.hpp"
 #include "cncstream/cam/scallop.hpp"
 
 using namespace cncstream;
@@ -33,7 +34,8 @@ double brute_reach(const ClGrid& cl, const Cutter& c, double x, double y) {
 void expect_brute(const GridSpec& at, const Cutter& c, const ClGrid& cl) {
   std::vector<std::uint8_t> wanted(at.size(), 1);
   wanted[3] = 0;
-  const std::vector<double> reach = reach_heights(cl, c, at, wanted, 2);
+  std::vector<double> reach;
+  run_with_thread_limit(2, [&] { reach = reach_heights(cl, c, at, wanted); });
   ASSERT_EQ(reach.size(), at.size());
   EXPECT_TRUE(std::isnan(reach[3]));
   for (std::size_t k = 0; k < at.size(); ++k) {

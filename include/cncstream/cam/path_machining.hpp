@@ -16,11 +16,11 @@ namespace cncstream {
 // `pieces` are cut in order; consecutive pieces are joined by a straight move
 // from one's last point to the next's first (as in a raster: row, link,
 // row...). `heights` (grid.size() values) is the stock before; returns it after.
-// threads = 0: the caller's oneTBB task arena (all cores unless the caller
-// limited it); n: a task arena of n slots. `checkpoint` is called as bands
-// are done (see checkpoint.hpp).
+// Runs in the caller's oneTBB task arena (a job limits it with
+// run_with_thread_limit). `checkpoint` is called as bands are done (see
+// checkpoint.hpp).
 std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
-                                 const Cutter& cutter, unsigned threads = 0, const Checkpoint& checkpoint = {});
+                                 const Cutter& cutter, const Checkpoint& checkpoint = {});
 
 // A raster's pieces in cutting order: row 0, link 0, row 1, ...
 std::vector<Polyline> raster_pieces(const RasterPath& path);

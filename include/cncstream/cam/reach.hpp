@@ -23,12 +23,10 @@ GridSpec reach_lattice(const GridSpec& at, double x0, double y0, double x1, doub
 // Per node of `at` with wanted[k] != 0: the lowest height any placement of the
 // cutter's tip on a node of `cl` leaves there (min over CL nodes within R of
 // CL + profile(distance)); +inf where no CL node is within R; NaN where not
-// wanted. threads = 0: the caller's oneTBB task arena (all cores unless the
-// caller limited it); n: a task arena of n slots. `checkpoint` is called as
-// bands of rows are done (see checkpoint.hpp). Throws std::invalid_argument
-// on a mask of the wrong size.
+// wanted. Runs in the caller's oneTBB task arena (a job limits it with
+// run_with_thread_limit). `checkpoint` is called as bands of rows are done
+// (see checkpoint.hpp). Throws std::invalid_argument on a mask of the wrong size.
 std::vector<double> reach_heights(const ClGrid& cl, const Cutter& cutter, const GridSpec& at,
-                                  const std::vector<std::uint8_t>& wanted, unsigned threads = 0,
-                                  const Checkpoint& checkpoint = {});
+                                  const std::vector<std::uint8_t>& wanted, const Checkpoint& checkpoint = {});
 
 }  // namespace cncstream

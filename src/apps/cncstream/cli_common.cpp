@@ -40,4 +40,10 @@ std::array<double, 4> parse_bounds(const std::string& text) {
   return v;
 }
 
+jobs::JobControl thread_limited(unsigned threads) {
+  jobs::JobControl c;
+  c.threads = threads;
+  return c;
+}
+
 }  // namespace cncstream::app

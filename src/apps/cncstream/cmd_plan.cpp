@@ -34,7 +34,7 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("-o,--output", o->out, "Folder for the G-code files and plan.json")->capture_default_str();
   registry.add(sub, [o] {
     const jobs::PlanParams params = plan_params(o->sel);
-    const jobs::PlanResult plan = jobs::run_plan(params, selection_control(o->sel));
+    const jobs::PlanResult plan = jobs::run_plan(params, thread_limited(o->sel.threads));
     const jobs::SelectionResult& r = plan.selection;
     std::cout << r.table();
     const jobs::PlanFiles files = jobs::write_plan(plan, o->out);

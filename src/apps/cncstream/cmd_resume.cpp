@@ -63,11 +63,11 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
       throw std::invalid_argument(file.string() + " changed since job " + std::to_string(o->job) +
                                   " streamed it (SHA-256 " + sha.substr(0, 16) + "..., journal " +
                                   rec->file_sha256.substr(0, 16) + "...): refusing to resume a different program");
-    const session::JobInput whole = session::job_from_file(file);
+    session::JobInput whole = session::job_from_file(file);
     jobs::ResumeInput in;
     in.file = file;
     in.file_sha256 = sha;
-    in.lines = whole.lines;
+    in.lines = std::move(whole.lines);
     if (last) {
       in.last_line = last->last_line;
       if (last->status_work_pos)
@@ -79,7 +79,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     in.safe_z = o->safe_z;
     in.plunge_feed = o->plunge_feed;
     in.dwell_s = o->dwell;
-    const jobs::ResumePlan plan = jobs::plan_resume(in);
+    jobs::ResumePlan plan = jobs::plan_resume(in);
     const long n = plan.from_line;
     const gcode::ParserState& at = plan.state;
     const gcode::ResumeOptions& ro = plan.options;
@@ -91,8 +91,8 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     job.total_lines = plan.total_lines;
     job.resumed_from = o->job;
     job.from_line = n;
-    job.lines = plan.lines;
-    job.source_lines = plan.source_lines;
+    job.lines = std::move(plan.lines);
+    job.source_lines = std::move(plan.source_lines);
     const auto limits = planning_limits(o->conn, o->sim);
     EtaEstimator eta = estimate_job(job, limits);
     const Vec3 p = at.work_position();

@@ -21,7 +21,7 @@ void register_select(CLI::App& app, CommandRegistry& registry) {
   add_selection_options(sub, o->sel);
   sub->add_option("-o,--output", o->out, "Report folder")->capture_default_str();
   registry.add(sub, [o] {
-    const jobs::JobControl control = selection_control(o->sel);
+    const jobs::JobControl control = thread_limited(o->sel.threads);
     const jobs::SelectionResult r = jobs::run_selection(selection_params(o->sel), control);
     std::cout << r.table();
     jobs::SelectionReportOptions ro;

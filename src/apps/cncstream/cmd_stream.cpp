@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "cncstream/gcode/gcode_writer.hpp"
+#include "cncstream/jobs/output_file.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "cncstream/transport/sha256.hpp"
 #include "commands.hpp"
@@ -76,16 +77,10 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       if (o->tp.tool.empty())
         throw std::invalid_argument(o->file + " is a part: say which cutter machines it with --tool (e.g. ball:3.175)");
       o->tp.part.stl = o->file;
-      const jobs::ToolpathProgram r = jobs::generate_toolpath(toolpath_params(o->tp), toolpath_control(o->tp));
+      const jobs::ToolpathProgram r = jobs::generate_toolpath(toolpath_params(o->tp), thread_limited(o->tp.threads));
       const std::string sha = transport::sha256_hex(r.gcode);
       const std::filesystem::path out = o->output.empty() ? program_path(c, o->file, sha) : std::filesystem::path(o->output);
-      {
-        std::ofstream f(out, std::ios::binary);
-        if (!f) throw std::runtime_error(out.string() + ": cannot open for writing");
-        f << r.gcode;
-        f.close();
-        if (!f) throw std::runtime_error(out.string() + ": write failed");
-      }
+      jobs::write_text_file_atomically(out, r.gcode);
       job = session::job_from_file(out);
       EtaEstimator eta = estimate_job(job, limits);
       std::cout << "plan for " << o->file << ":\n"

@@ -23,7 +23,7 @@ void register_toolpath(CLI::App& app, CommandRegistry& registry) {
     const auto t0 = std::chrono::steady_clock::now();
     jobs::ToolpathParams params = toolpath_params(o->tp);
     params.output = o->out;
-    const jobs::ToolpathProgram r = jobs::generate_toolpath(params, toolpath_control(o->tp));
+    const jobs::ToolpathProgram r = jobs::generate_toolpath(params, thread_limited(o->tp.threads));
     std::cout << toolpath_report(r);
     std::cout << "wrote " << o->out << " in "
               << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s total\n";

@@ -63,10 +63,4 @@ jobs::PlanParams plan_params(const SelectionOptions& o) {
   return p;
 }
 
-jobs::JobControl selection_control(const SelectionOptions& o) {
-  jobs::JobControl c;
-  c.threads = o.threads;
-  return c;
-}
-
 }  // namespace cncstream::app

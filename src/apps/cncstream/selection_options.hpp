@@ -31,7 +31,5 @@ void add_selection_options(CLI::App* sub, SelectionOptions& o);
 // Throws for a --tools that is not one ball and one radiused cutter.
 jobs::SelectionParams selection_params(const SelectionOptions& o);
 jobs::PlanParams plan_params(const SelectionOptions& o);
-// --threads: the whole job in a oneTBB task arena of that many slots.
-jobs::JobControl selection_control(const SelectionOptions& o);
 
 }  // namespace cncstream::app

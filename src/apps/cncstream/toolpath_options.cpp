@@ -52,12 +52,6 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   return p;
 }
 
-jobs::JobControl toolpath_control(const ToolpathOptions& o) {
-  jobs::JobControl c;
-  c.threads = o.threads;
-  return c;
-}
-
 std::string toolpath_report(const jobs::ToolpathProgram& r) {
   const auto& cutter = r.cutter;
   const auto& path = r.path;

@@ -36,8 +36,6 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required 
 
 // Throws for a bad cutter spec or bounds (before the part is read).
 jobs::ToolpathParams toolpath_params(const ToolpathOptions& o);
-// --threads: the whole job in a oneTBB task arena of that many slots.
-jobs::JobControl toolpath_control(const ToolpathOptions& o);
 
 // Human-readable summary of a finished tool path.
 std::string toolpath_report(const jobs::ToolpathProgram& r);
