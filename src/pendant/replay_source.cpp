@@ -81,4 +81,42 @@ std::vector<ReplayEntry> load_replay(const std::filesystem::path& path) {
   return parse_replay(f, path.string());
 }
 
+ReplayPlayer::ReplayPlayer(boost::asio::io_context& io, std::vector<ReplayEntry> entries)
+    : timer_(io), entries_(std::move(entries)), alive_(std::make_shared<bool>(true)) {}
+
+ReplayPlayer::~ReplayPlayer() {
+  *alive_ = false;
+  timer_.cancel();
+}
+
+void ReplayPlayer::start(std::function<void(const ReplayEntry&)> deliver, std::function<void()> done) {
+  deliver_ = std::move(deliver);
+  done_ = std::move(done);
+  next_ = 0;
+  t0_ = std::chrono::steady_clock::now();
+  arm();
+}
+
+void ReplayPlayer::arm() {
+  if (finished()) {
+    if (done_) done_();
+    return;
+  }
+  timer_.expires_at(t0_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double, std::milli>(entries_[next_].at_ms)));
+  std::weak_ptr<bool> alive = alive_;
+  timer_.async_wait([this, alive](const boost::system::error_code& ec) {
+    if (ec || !alive.lock()) return;
+    // Every entry that is due now, in file order (several may share a time).
+    const double now_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_).count();
+    while (!finished() && entries_[next_].at_ms <= now_ms) {
+      const ReplayEntry& e = entries_[next_++];
+      if (deliver_) deliver_(e);
+      if (!alive.lock()) return;  // the consumer ended the replay
+    }
+    arm();
+  });
+}
+
 }  // namespace cncstream::pendant

@@ -9,8 +9,14 @@
 // The time is in milliseconds from the start of the replay (not
 // decreasing); `#` starts a comment; blank lines are skipped. Bytes are hex,
 // one or two digits each, exactly eight.
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <chrono>
 #include <filesystem>
+#include <functional>
 #include <istream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -32,5 +38,31 @@ struct ReplayEntry {
 std::vector<ReplayEntry> parse_replay(std::istream& in, const std::string& name);
 // Reads a file; throws std::runtime_error when it cannot be read.
 std::vector<ReplayEntry> load_replay(const std::filesystem::path& path);
+
+// Plays entries at their times on an asio timer (the replay's clock starts
+// at start()); each entry goes to `deliver` on the context's thread, and
+// `done` is called after the last one.
+class ReplayPlayer {
+ public:
+  ReplayPlayer(boost::asio::io_context& io, std::vector<ReplayEntry> entries);
+  ~ReplayPlayer();
+  ReplayPlayer(const ReplayPlayer&) = delete;
+  ReplayPlayer& operator=(const ReplayPlayer&) = delete;
+  void start(std::function<void(const ReplayEntry&)> deliver, std::function<void()> done);
+  bool finished() const { return next_ >= entries_.size(); }
+  // When the last entry is due, in ms from the start.
+  double length_ms() const { return entries_.empty() ? 0 : entries_.back().at_ms; }
+
+ private:
+  void arm();
+
+  boost::asio::steady_timer timer_;
+  std::vector<ReplayEntry> entries_;
+  std::size_t next_ = 0;
+  std::chrono::steady_clock::time_point t0_;
+  std::function<void(const ReplayEntry&)> deliver_;
+  std::function<void()> done_;
+  std::shared_ptr<bool> alive_;
+};
 
 }  // namespace cncstream::pendant
