@@ -91,6 +91,7 @@ void PendantController::command(const char* what, const session::CommandResult& 
 // ---- input -----------------------------------------------------------------
 
 void PendantController::connected() {
+  if (input_tap_) input_tap_(Input::Plug, {});
   plugged_ = true;
   tracker_.reset();  // the knobs are unknown until the pendant reports them
   // A receiver that comes back starts in step mode, like a new one: the
@@ -104,6 +105,7 @@ void PendantController::connected() {
 void PendantController::unplugged(const std::string& why) {
   // First the machine, then the bookkeeping: this is the dead man.
   release_jog("the pendant's receiver is gone", true);
+  if (input_tap_) input_tap_(Input::Unplug, {});
   plugged_ = false;
   tracker_.reset();
   display_timer_.cancel();
@@ -111,6 +113,7 @@ void PendantController::unplugged(const std::string& why) {
 }
 
 void PendantController::report(const InputReport& bytes) {
+  if (input_tap_) input_tap_(Input::Report, bytes);
   std::string why;
   const auto r = decode_report(bytes, &why);
   if (!r) {

@@ -69,6 +69,10 @@ class PendantController {
   // Each LCD frame (the three feature reports) goes here while connected.
   void set_display_sink(std::function<void(const DisplayReports&)> sink) { display_sink_ = std::move(sink); }
   void set_log(std::function<void(LogLevel, const std::string&)> log) { log_ = std::move(log); }
+  // Every input as it arrives (before it is decoded), to record a session
+  // in the replay format: a report, an unplug or a (re)connection.
+  enum class Input { Report, Unplug, Plug };
+  void set_input_tap(std::function<void(Input, const InputReport&)> tap) { input_tap_ = std::move(tap); }
   // A line for the operator's log through the same sink (the reader's USB messages).
   void log(LogLevel level, const std::string& text);
 
@@ -114,6 +118,7 @@ class PendantController {
   boost::asio::steady_timer display_timer_;
   std::function<void(const DisplayReports&)> display_sink_;
   std::function<void(LogLevel, const std::string&)> log_;
+  std::function<void(Input, const InputReport&)> input_tap_;
   Counters counters_;
   std::shared_ptr<bool> alive_;
 };

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -31,6 +32,7 @@ namespace {
 struct PendantOptions {
   std::string port = "auto";
   std::string replay;
+  std::string record;
   std::string serial = "115200";
   std::string profile;
   SimCliOptions sim;
@@ -132,6 +134,26 @@ int run_pendant(const PendantOptions& o) {
     if (level != pendant::LogLevel::Debug || verbose) say(text);
   });
 
+  // --record: every input in the replay format, timed from the first one.
+  std::ofstream record;
+  std::optional<std::chrono::steady_clock::time_point> record_t0;
+  if (!o.record.empty()) {
+    record.open(o.record);
+    if (!record) throw std::runtime_error("cannot write the recording " + o.record);
+    record << "# cncstream pendant recording: replay with `cncstream pendant PORT --replay " << o.record << "`\n";
+    controller.set_input_tap([&](pendant::PendantController::Input kind, const pendant::InputReport& bytes) {
+      const auto now = std::chrono::steady_clock::now();
+      if (!record_t0) record_t0 = now;
+      record << std::llround(std::chrono::duration<double, std::milli>(now - *record_t0).count()) << " ";
+      switch (kind) {
+        case pendant::PendantController::Input::Report: record << pendant::hex_bytes(bytes.data(), bytes.size()); break;
+        case pendant::PendantController::Input::Unplug: record << "unplug"; break;
+        case pendant::PendantController::Input::Plug: record << "plug"; break;
+      }
+      record << std::endl;  // flushed: a recording cut short by Ctrl-C keeps what it has
+    });
+  }
+
   int code = 0;
   std::unique_ptr<pendant::PendantUsb> usb;
   std::unique_ptr<pendant::UsbPendantReader> reader;
@@ -225,6 +247,7 @@ void register_pendant(CLI::App& app, CommandRegistry& registry) {
                   "Read timestamped reports from FILE instead of USB ('MS B0 .. B7' per line, '#' comments), "
                   "then print the final position")
       ->check(CLI::ExistingFile);
+  sub->add_option("--record", o->record, "Write every pendant input to FILE in the --replay format (to debug a pendant)");
   sub->add_option("--settle", o->settle_s, "With --replay: seconds after the last report before the machine must be still")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
