@@ -157,7 +157,8 @@ void PendantController::on_key(Key key, bool fn) {
   switch (key) {
     case Key::Reset: command("reset", session_.reset()); return;
     case Key::Stop:
-      release_jog("Stop", true);
+      // The session's stop cancels every jog (held and queued steps) and stops a job.
+      continuous_.reset();
       command("stop", session_.stop());
       return;
     case Key::StartPause: {
@@ -324,9 +325,8 @@ void PendantController::release_jog(const char* why, bool always) {
   const bool had = continuous_.has_value();
   continuous_.reset();
   const auto* engine = session_.engine();
-  // Step jogs may still be queued too: the cancel stops them as well. The
-  // dead man (unplug, sleep, Stop) does not trust this bookkeeping: it
-  // always cancels.
+  // The dead man (unplug, sleep) does not trust this bookkeeping: it always
+  // cancels. (A release ends the held jog; the at most two queued steps run out.)
   if (!always && !had && !(engine && engine->jogging())) return;
   session_.jog_release();
   ++counters_.releases;

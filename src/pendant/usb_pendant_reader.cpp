@@ -38,8 +38,8 @@ void UsbPendantReader::post(std::function<void(PendantController&)> fn) {
 }
 
 void UsbPendantReader::lost(const std::string& why) {
+  post([why](PendantController& c) { c.unplugged(why); });  // first: the jog cancel must not wait for libusb
   usb_.close();
-  post([why](PendantController& c) { c.unplugged(why); });
   usb_.wait_for_arrival(opt_.reopen_delay);
 }
 

@@ -16,6 +16,7 @@
 #include "cncstream/pendant/usb_pendant_reader.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/session/machine_session.hpp"
+#include "cncstream/session/simulator_port.hpp"
 #include "fake_pendant_usb.hpp"
 #include "session/fake_grbl.hpp"
 
@@ -290,4 +291,60 @@ TEST(PendantController, TheLcdShowsTheMachineEvery200ms) {
     const auto g = rig.usb.features();
     return g.size() >= 3 && g[g.size() - 3][4] == 0x01;
   }, 2));
+}
+
+// The same dead man against the simulated machine: the jog really stops. The
+// built-in simulator runs in real time (rates 500 mm/min, 10 mm/s^2); the
+// lease is 5 s, so only the unplug can stop the jog this soon.
+TEST(PendantController, UnpluggedTheSimulatedMachineStopsWithinItsDeceleration) {
+  boost::asio::io_context io;
+  cncstream::session::SimulatorOptions so;
+  so.speed = "1";
+  auto sim = std::make_shared<cncstream::session::SimulatorPort>(so);
+  MachineOptions o;
+  o.name = "sim";
+  o.port = sim;
+  o.profiles_dir = cncstream::protocol::default_profiles_dir();
+  MachineSession session(io, o);
+  session.open();
+  ASSERT_TRUE(run_until(io, [&] { return session.ready() && session.status().has_value(); }));
+  FakePendantUsb usb;
+  PendantController controller(session, config(5.0));
+  ReaderOptions ro;
+  ro.reopen_delay = std::chrono::milliseconds(100);
+  auto reader = std::make_unique<UsbPendantReader>(usb, controller, ro);
+  usb.plug();
+  usb.send(report(0x1b, 0x11, 0, 0x0e));  // MPG, 100 %, X
+  usb.send(report(0x1b, 0x11));
+  ASSERT_TRUE(run_until(io, [&] { return controller.mode() == JogMode::Continuous; }));
+  // The wheel turns for 0.6 s.
+  for (int i = 0; i < 6; ++i) {
+    usb.send(report(0x1b, 0x11, 4));
+    io.run_for(std::chrono::milliseconds(100));
+  }
+  const auto mx = [&] {
+    const auto st = session.status();
+    return st && st->mpos ? (*st->mpos)[0] : 0.0;
+  };
+  ASSERT_GT(mx(), 0.3) << "the jog did not move";
+  usb.unplug();
+  const auto unplugged_at = Clock::now();
+  ASSERT_TRUE(run_until(io, [&] {
+    const auto st = session.status();
+    return st && st->state == cncstream::protocol::MachineState::Idle && !session.snapshot().jogging;
+  }, 10));
+  const double s = std::chrono::duration<double>(Clock::now() - unplugged_at).count();
+  // Deceleration from at most 500 mm/min at 10 mm/s^2 takes 0.83 s; status polls add a little.
+  EXPECT_LT(s, 1.5) << "still moving " << s << " s after the unplug";
+  // At most: full speed for the whole time the wheel turned, plus the stop
+  // and one increment; the 5 s lease alone would have gone far beyond.
+  const double v = 500.0 / 60;
+  EXPECT_LT(mx(), v * 0.8 + v * v / 20 + 1.0);
+  const double stopped_at = mx();
+  io.run_for(std::chrono::milliseconds(500));
+  EXPECT_DOUBLE_EQ(mx(), stopped_at);  // nothing queued runs on later
+  reader.reset();
+  session.close();
+  io.run_for(std::chrono::milliseconds(50));
+  sim->finish(false);
 }

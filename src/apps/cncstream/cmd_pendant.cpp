@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -217,16 +218,35 @@ int run_pendant(const PendantOptions& o) {
             [&] { settler->start(o.settle_s); });
       });
     });
+    // A controller that never answers must not leave the replay waiting forever.
+    boost::asio::steady_timer ready_limit(io, std::chrono::seconds(30));
+    ready_limit.async_wait([&](const boost::system::error_code& ec) {
+      if (ec || started) return;
+      std::cerr << "cncstream: error: the controller on " << o.port << " was not ready within 30 s\n";
+      finish(1);
+    });
     session.open();
     io.run();
   } else {
     usb = pendant::make_libusb_pendant();
     reader = std::make_unique<pendant::UsbPendantReader>(*usb, controller);
-    try {
-      session.open();
-    } catch (const std::exception& e) {
-      std::cerr << "cncstream: " << e.what() << " (trying again every second)\n";
-    }
+    // The controller may be switched on after the pendant: try its port every
+    // second until it opens (after that the session reconnects by itself).
+    boost::asio::steady_timer open_retry(io);
+    std::string last_open_error;
+    std::function<void()> try_open = [&] {
+      try {
+        session.open();
+      } catch (const std::exception& e) {
+        if (e.what() != last_open_error) std::cerr << "cncstream: " << e.what() << " (trying again every second)\n";
+        last_open_error = e.what();
+        open_retry.expires_after(std::chrono::seconds(1));
+        open_retry.async_wait([&](const boost::system::error_code& ec) {
+          if (!ec) try_open();
+        });
+      }
+    };
+    try_open();
     std::cerr << "pendant: running until Ctrl-C\n";
     io.run();
     reader.reset();  // the io_context has stopped: no handler runs beside it
