@@ -109,6 +109,31 @@ EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimit
   return EtaEstimator(std::move(by_line));
 }
 
+session::SimulatorOptions simulator_options(const SimCliOptions& s) {
+  session::SimulatorOptions so;
+  so.speed = s.speed;
+  so.strict = !s.lenient;
+  so.settings_file = s.settings;
+  so.faults.drop_every = s.drop_every;
+  so.faults.corrupt_every = s.corrupt_every;
+  so.faults.vanish_after = s.vanish_after;
+  parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
+  parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
+  parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
+  return so;
+}
+
+std::optional<std::string> resolve_device_port(const std::string& port) {
+  if (port != "auto") return port;
+  const auto choice = transport::choose_auto_port(transport::list_ports());
+  if (!choice.port) {
+    std::cerr << "cncstream: error: " << choice.message << "\n";
+    return std::nullopt;
+  }
+  std::cerr << choice.message << "\n";
+  return choice.port->path;
+}
+
 bool confirm(const std::string& question, bool yes) {
   if (yes) return true;
   if (!::isatty(STDIN_FILENO)) {
@@ -126,16 +151,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
   std::shared_ptr<session::SimulatorPort> sim;
   session::RunnerOptions ro;
   if (c.port == "sim") {
-    session::SimulatorOptions so;
-    so.speed = s.speed;
-    so.strict = !s.lenient;
-    so.settings_file = s.settings;
-    so.faults.drop_every = s.drop_every;
-    so.faults.corrupt_every = s.corrupt_every;
-    so.faults.vanish_after = s.vanish_after;
-    parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
-    parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
-    parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
+    session::SimulatorOptions so = simulator_options(s);
     if (!s.design.empty()) {
       if (s.tool.empty()) throw std::invalid_argument("--sim-design needs --sim-tool (the cutter that cuts it)");
       verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool)};
@@ -156,16 +172,10 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     ro.machine_port = sim;
     std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << s.speed << ", "
               << (s.lenient ? "lenient" : "strict") << " RX buffer)\n";
-  } else if (c.port == "auto") {
-    const auto choice = transport::choose_auto_port(transport::list_ports());
-    if (!choice.port) {
-      std::cerr << "cncstream: error: " << choice.message << "\n";
-      return 2;
-    }
-    std::cerr << choice.message << "\n";
-    ro.port = choice.port->path;
   } else {
-    ro.port = c.port;
+    const auto device = resolve_device_port(c.port);
+    if (!device) return 2;
+    ro.port = *device;
   }
   ro.serial = transport::parse_serial_settings(c.serial);
   ro.profiles_dir = protocol::default_profiles_dir();

@@ -13,6 +13,7 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/gcode/motion_planner.hpp"
 #include "cncstream/geometry/mesh.hpp"
+#include "cncstream/session/simulator_port.hpp"
 #include "cncstream/session/stream_runner.hpp"
 #include "job_display.hpp"
 
@@ -58,6 +59,15 @@ gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOpti
 
 // When each file line's motion ends, for the lines the job sends.
 EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits);
+
+// The built-in simulator's options from --sim-speed, --sim-lenient,
+// --sim-settings and the fault options (the cut to verify is the caller's).
+session::SimulatorOptions simulator_options(const SimCliOptions& s);
+
+// The serial device for PORT: PORT itself, or for `auto` the one known
+// controller board. nullopt, with the reason printed, when `auto` finds none
+// or several.
+std::optional<std::string> resolve_device_port(const std::string& port);
 
 // Asks "question [y/N]" on the terminal unless `yes`. Without a TTY and
 // without --yes, refuses (returns false) with a message saying so.
