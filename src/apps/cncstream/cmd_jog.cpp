@@ -219,6 +219,11 @@ int run_jog(const JogCliOptions& o) {
   io.run();
   dro.draw(format_dro_line(control.view()));
   dro.finish();
+  if (jo.trace) {
+    char line[48];
+    std::snprintf(line, sizeof line, "%.4f exit", session.now());
+    jo.trace(line);
+  }
   return 0;
 }
 
