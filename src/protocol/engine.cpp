@@ -46,3 +46,31 @@ const char* to_string(JobOutcome o) {
 }
 
 }  // namespace cncstream::protocol
+
+namespace cncstream::protocol {
+
+std::string ProtocolEngine::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min, double now) {
+  if (is_active(progress().state)) return "jog: a job is running";
+  std::string why = jog_.step(dir, distance_mm, feed_mm_min, now);
+  pump_jog();
+  return why;
+}
+
+std::string ProtocolEngine::jog_start(const JogDirection& dir, double feed_mm_min, double lease_s, double now) {
+  if (is_active(progress().state)) return "jog: a job is running";
+  std::string why = jog_.start(dir, feed_mm_min, lease_s, now);
+  pump_jog();
+  return why;
+}
+
+void ProtocolEngine::jog_release() {
+  jog_.release();
+  pump_jog();
+}
+
+void ProtocolEngine::jog_cancel() {
+  jog_.cancel_all();
+  pump_jog();
+}
+
+}  // namespace cncstream::protocol

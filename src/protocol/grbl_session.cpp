@@ -62,7 +62,8 @@ void GrblSession::tick(double now) {
     emit({EventKind::Warning, "no banner within 3 s after the soft reset; assuming the controller restarted"});
     on_banner();
   }
-  pump();
+  jog_.tick(now);
+  pump_jog();
 }
 
 void GrblSession::on_line(std::string_view line, double now) {
@@ -83,7 +84,7 @@ void GrblSession::on_line(std::string_view line, double now) {
       e.info = info;
       e.source_line = progress_.last_answered_line;
       emit(e);
-      jog_dir_.reset();
+      jog_.forget();  // an alarm ends every jog in the controller
       if (is_active(progress_.state))
         finish_job(JobOutcome::Alarm, "job stopped by ALARM:" + std::to_string(r.code) + " after file line " +
                                           std::to_string(progress_.last_answered_line) + " was answered. " +
@@ -185,13 +186,9 @@ void GrblSession::on_answer(bool ok, int code, double) {
       emit(std::move(e));
       break;
     }
-    case Origin::JogStep:
     case Origin::Jog:
-      if (!ok) {
-        const CodeInfo info = profile_.error_info(code);
-        emit({EventKind::Warning, "jog refused: " + describe(info, "error:")});
-        jog_dir_.reset();
-      }
+      jog_.on_answer(ok, ok ? std::string() : describe(profile_.error_info(code), "error:"), now_);
+      emit_jog_notes();
       break;
     case Origin::CheckToggle:
       if (check_phase_ == CheckPhase::Entering) {
@@ -231,7 +228,7 @@ void GrblSession::maybe_complete() {
 void GrblSession::on_banner() {
   counter_.clear();
   in_flight_origin_.clear();
-  jog_dir_.reset();
+  jog_.forget();
   const bool leaving_check = check_phase_ == CheckPhase::Leaving;
   const bool expected = expect_reset_ || leaving_check;
   expect_reset_ = false;
@@ -269,6 +266,7 @@ void GrblSession::on_status(const StatusReport& raw) {
   Event e{EventKind::Status, r.state_text};
   e.status = r;
   emit(std::move(e));
+  jog_.on_status(r, now_);
   if (r.mpg) {
     if (*r.mpg && !mpg_owned_) emit({EventKind::Warning, "a pendant (MPG) owns the controller; sending paused"});
     if (!*r.mpg && mpg_owned_) emit({EventKind::Info, "MPG released; sending continues"});
@@ -312,6 +310,9 @@ void GrblSession::soft_reset() {
 }
 
 void GrblSession::pump() {
+  // 0x85 goes out even behind a full receive buffer: it is a real-time byte.
+  if (jog_.take_cancel() && !realtime(Realtime::JogCancel))
+    emit({EventKind::Warning, "this controller has no jog-cancel byte; the queued jog moves will finish"});
   if (expect_reset_ || mpg_owned_) return;
   for (;;) {
     if (!commands_.empty()) {
@@ -343,11 +344,16 @@ void GrblSession::pump() {
       ++progress_.lines_sent;
       continue;
     }
-    if (jog_dir_ && !is_active(progress_.state) &&
-        in_flight_of(Origin::Jog) < static_cast<std::size_t>(opt_.jog_max_in_flight)) {
+    if (!is_active(progress_.state) && jog_pending()) {
+      // A jog line is at most ~60 bytes: ask the jog engine only when one fits,
+      // so a move it hands out is always sent.
+      PreparedLine room;
+      room.text.assign(64, ' ');
+      if (!counter_.can_send(room)) return;
+      auto move = jog_.next_move(now_);
+      if (!move) break;
       PreparedLine l;
-      l.text = jog_segment_line(*jog_dir_, jog_feed_, opt_.jog_segment_s);
-      if (!counter_.can_send(l)) return;
+      l.text = grbl_jog_line(move->delta, move->feed_mm_min);
       write(counter_.send(l));
       in_flight_origin_.push_back(Origin::Jog);
       continue;
@@ -370,7 +376,8 @@ void GrblSession::start_job(PreparedProgram program, JobMode mode, double now) {
       throw std::invalid_argument("file line " + std::to_string(l.source_line) + " needs " +
                                   std::to_string(CharacterCountingStream::cost(l)) + " bytes but the controller's " +
                                   "receive buffer holds " + std::to_string(counter_.capacity()));
-  jog_release();
+  jog_.cancel_all();
+  pump_jog();
   program_ = std::move(program);
   next_index_ = 0;
   progress_ = JobProgress{};
@@ -474,7 +481,7 @@ void GrblSession::disconnected() {
   counter_.clear();
   in_flight_origin_.clear();
   commands_.clear();
-  jog_dir_.reset();
+  jog_.forget();
   expect_reset_ = false;
   if (is_active(progress_.state))
     finish_job(JobOutcome::Disconnected, "controller disconnected; the last line it answered is file line " +
@@ -493,31 +500,14 @@ double GrblSession::next_deadline() const {
   double t = opt_.poll_status ? next_poll_ : std::numeric_limits<double>::infinity();
   if (draining_ && progress_.state == JobState::Running && !expect_reset_) t = std::min(t, drain_poll_at_);
   if (expect_reset_) t = std::min(t, reset_deadline_);
-  return t;
+  return std::min(t, jog_.next_deadline());
 }
 
-void GrblSession::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) {
-  if (is_active(progress_.state)) throw std::logic_error("cannot jog while a job is running");
-  PreparedLine l;
-  l.text = jog_step_line(dir, distance_mm, feed_mm_min);  // validates
-  commands_.emplace_back(std::move(l), Origin::JogStep);
+void GrblSession::pump_jog() {
   pump();
+  emit_jog_notes();
 }
 
-void GrblSession::jog_start(const JogDirection& dir, double feed_mm_min) {
-  if (is_active(progress_.state)) throw std::logic_error("cannot jog while a job is running");
-  (void)jog_segment_line(dir, feed_mm_min, opt_.jog_segment_s);  // validates
-  jog_dir_ = dir;
-  jog_feed_ = feed_mm_min;
-  pump();
-}
-
-void GrblSession::jog_release() {
-  if (!jog_dir_) return;
-  jog_dir_.reset();
-  // 0x85 cancels the jog and flushes the jog blocks; `!` would hold instead.
-  if (!realtime(Realtime::JogCancel))
-    emit({EventKind::Warning, "this controller has no jog-cancel byte; the queued jog segments will finish"});
-}
+bool GrblSession::jog_pending() const { return jog_.busy(); }
 
 }  // namespace cncstream::protocol

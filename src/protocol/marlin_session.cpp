@@ -30,7 +30,24 @@ std::string marlin_frame(long n, std::string_view text) {
   return body;
 }
 
-MarlinSession::MarlinSession(FirmwareProfile profile) : profile_(std::move(profile)) {
+namespace {
+// Marlin is not polled for state: a jog step counts as done once its motion
+// time has passed (plus this margin).
+JogConfig marlin_jog_config() {
+  JogConfig c;
+  c.settle_by_time_s = 0.2;
+  return c;
+}
+}  // namespace
+
+MarlinSession::MarlinSession(FirmwareProfile profile)
+    : ProtocolEngine(marlin_jog_config()), profile_(std::move(profile)) {
+  // Marlin's settings are not read: cap jog feeds at a router's usual rates, and
+  // size increments for a modest acceleration (M410 discards them anyway).
+  JogLimits l;
+  l.max_rate_mm_min = {3000, 3000, 600};  // an MPCNC-class router: a guess, said in docs/jogging.md
+  l.accel_mm_s2 = {100, 100, 100};
+  jog_.set_limits(l);
   if (profile_.flow != FlowControl::SendResponse)
     throw std::invalid_argument("MarlinSession needs a send-response profile, not '" + profile_.id + "'");
   for (const auto& l : profile_.startup_lines) {
@@ -41,7 +58,8 @@ MarlinSession::MarlinSession(FirmwareProfile profile) : profile_(std::move(profi
 }
 
 bool MarlinSession::busy() const {
-  return !outstanding_.empty() || !commands_.empty() || !resend_queue_.empty() || is_active(progress_.state);
+  return !outstanding_.empty() || !commands_.empty() || !resend_queue_.empty() || is_active(progress_.state) ||
+         jog_.busy() || !jog_lines_.empty();
 }
 
 void MarlinSession::on_bytes(std::string_view bytes, double now) {
@@ -59,7 +77,8 @@ void MarlinSession::tick(double now) {
     emit({EventKind::Warning, "no answer from the controller for " + std::to_string(profile_.busy_timeout_s) +
                                   " s while line N" + std::to_string(outstanding_.front().n) + " is in flight"});
   }
-  pump();
+  jog_.tick(now);
+  pump_jog();
 }
 
 void MarlinSession::on_line(std::string_view line, double now) {
@@ -156,8 +175,12 @@ void MarlinSession::on_ok(const Response& r) {
     e.source_line = s.line.source_line;
     e.line_text = s.line.text;
     emit(std::move(e));
-  } else if (s.jog_segment) {
-    if (jog_segments_queued_ > 0) --jog_segments_queued_;
+  } else if (s.jog == JogRole::Move) {
+    jog_.on_answer(true, {}, now_);
+    emit_jog_notes();
+  } else if (s.jog == JogRole::QuickStop) {
+    jog_.settled(now_);
+  } else if (s.jog == JogRole::Frame) {
   } else {
     Event e{EventKind::CommandAnswered, s.line.text + ": ok"};
     e.line_text = s.line.text;
@@ -213,15 +236,20 @@ void MarlinSession::pump() {
       send_numbered(std::move(l), false);
       continue;
     }
-    if (jog_dir_ && !is_active(progress_.state) && jog_segments_queued_ < 2) {
-      PreparedLine l;
-      // One segment covers 0.1 s at the jog feed, as GRBL's continuous jog does.
-      l.text = "G1" + relative_move_words(*jog_dir_, jog_feed_ / 60.0 * 0.1, jog_feed_);
-      const long n = next_n_;
-      send_numbered(std::move(l), false);
-      history_[n].jog_segment = true;
-      outstanding_.back().jog_segment = true;
-      ++jog_segments_queued_;
+    // A jog move is three lines (Marlin acts on one G-code per line): G91,
+    // the move, G90, so the modal state is absolute again whatever happens.
+    if (!jog_lines_.empty()) {
+      auto [text, role] = std::move(jog_lines_.front());
+      jog_lines_.pop_front();
+      send_jog_line(std::move(text), role);
+      continue;
+    }
+    if (!is_active(progress_.state) && jog_.busy()) {
+      auto move = jog_.next_move(now_);
+      if (!move) break;
+      jog_lines_.emplace_back("G91", JogRole::Frame);
+      jog_lines_.emplace_back("G1" + move_words(move->delta, move->feed_mm_min), JogRole::Move);
+      jog_lines_.emplace_back("G90", JogRole::Frame);
       continue;
     }
     if (progress_.state == JobState::Running && next_index_ < program_.lines.size()) {
@@ -244,7 +272,7 @@ void MarlinSession::pump() {
 void MarlinSession::start_job(PreparedProgram program, JobMode mode, double now) {
   now_ = now;
   if (is_active(progress_.state)) throw std::logic_error("a job is already running");
-  if (jog_dir_) throw std::logic_error("a jog is running: release it first");
+  if (jog_.busy()) throw std::logic_error("a jog is running: release it first");
   if (mode != JobMode::Run) throw std::invalid_argument("Marlin has no check mode ($C)");
   if (!program.errors.empty()) {
     std::string all = "the program cannot be sent:";
@@ -300,49 +328,37 @@ void MarlinSession::send_command(const std::string& line) {
 bool MarlinSession::realtime(Realtime) { return false; }
 
 double MarlinSession::next_deadline() const {
-  if (!outstanding_.empty() && !warned_silence_) return last_rx_ + profile_.busy_timeout_s;
-  return std::numeric_limits<double>::infinity();
+  double t = jog_.next_deadline();
+  if (!outstanding_.empty() && !warned_silence_) t = std::min(t, last_rx_ + profile_.busy_timeout_s);
+  return t;
 }
 
-void MarlinSession::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) {
-  if (is_active(progress_.state)) throw std::logic_error("cannot jog while a job is running");
-  for (std::string text : {std::string("G91"), "G1" + relative_move_words(dir, distance_mm, feed_mm_min),
-                           std::string("G90")}) {
-    PreparedLine l;
-    l.text = std::move(text);
-    commands_.push_back(std::move(l));
+void MarlinSession::send_jog_line(std::string text, JogRole role) {
+  PreparedLine l;
+  l.text = std::move(text);
+  const long n = next_n_;
+  send_numbered(std::move(l), false);
+  history_[n].jog = role;
+  outstanding_.back().jog = role;
+}
+
+void MarlinSession::pump_jog() {
+  if (jog_.take_cancel()) {
+    // M410 at once, past the window: the emergency parser acts on it as the
+    // bytes arrive and discards every queued move; G90 follows in turn.
+    jog_lines_.clear();  // moves not sent yet are simply dropped
+    send_jog_line("M410", JogRole::QuickStop);
+    PreparedLine absolute;
+    absolute.text = "G90";
+    commands_.push_front(std::move(absolute));
   }
   pump();
-}
-
-void MarlinSession::jog_start(const JogDirection& dir, double feed_mm_min) {
-  if (is_active(progress_.state)) throw std::logic_error("cannot jog while a job is running");
-  (void)relative_move_words(dir, 1.0, feed_mm_min);  // validates
-  if (!jog_dir_) {
-    PreparedLine l;
-    l.text = "G91";
-    commands_.push_back(std::move(l));
-  }
-  jog_dir_ = dir;
-  jog_feed_ = feed_mm_min;
-  pump();
-}
-
-void MarlinSession::jog_release() {
-  if (!jog_dir_) return;
-  jog_dir_.reset();
-  // M410 discards every queued move at once; G90 restores absolute moves.
-  PreparedLine stop, absolute;
-  stop.text = "M410";
-  absolute.text = "G90";
-  commands_.push_front(std::move(absolute));
-  commands_.push_front(std::move(stop));
-  pump();
+  emit_jog_notes();
 }
 
 void MarlinSession::disconnected() {
-  jog_dir_.reset();
-  jog_segments_queued_ = 0;
+  jog_.forget();
+  jog_lines_.clear();
   outstanding_.clear();
   resend_queue_.clear();
   commands_.clear();

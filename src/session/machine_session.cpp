@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
 #include "cncstream/protocol/grbl_session.hpp"
+#include "cncstream/protocol/machine_actions.hpp"
 #include "cncstream/protocol/marlin_session.hpp"
 #include "cncstream/protocol/response.hpp"
 
@@ -20,6 +22,12 @@ namespace {
 constexpr double kNever = std::numeric_limits<double>::infinity();
 
 bool marlin_family(const FirmwareProfile& p) { return p.flow == FlowControl::SendResponse; }
+
+std::string fixed3(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", v);
+  return buf;
+}
 
 }  // namespace
 
@@ -145,6 +153,7 @@ void MachineSession::connect_transport() {
   settings_.clear();
   report_inches_ = false;  // until this controller's $13 is read
   alarm_ = false;
+  probe_pending_ = false;
   banner_.clear();
   set_link(LinkState::Connecting, "identifying the controller on " + opt_.port->describe());
   log("opened " + path + " at " + std::to_string(opt_.serial.baud) + " baud");
@@ -191,6 +200,7 @@ void MachineSession::on_port_closed(const std::string& reason) {
   engine_.reset();
   identifier_.reset();
   alarm_ = false;
+  probe_pending_ = false;
   timer_.cancel();
   timer_armed_ = false;
   set_link(LinkState::Disconnected, "controller disconnected (" + reason + ")");
@@ -272,6 +282,7 @@ void MachineSession::settings_done(const std::string& why) {
     return;
   }
   if (const auto it = settings_.find(13); it != settings_.end()) report_inches_ = it->second == 1;
+  if (engine_) engine_->set_jog_limits(protocol::jog_limits_from(settings_));
   SessionEvent e;
   e.kind = SessionEventKind::Settings;
   e.text = std::to_string(settings_.size()) + " settings read";
@@ -283,6 +294,7 @@ void MachineSession::start_engine() {
       std::to_string(profile_.rx_buffer_size) + " bytes, lines up to " + std::to_string(profile_.line_length_limit));
   if (marlin_family(profile_)) engine_ = std::make_unique<MarlinSession>(profile_);
   else engine_ = std::make_unique<GrblSession>(profile_, opt_.grbl);
+  if (settings_phase_ == SettingsPhase::Done) engine_->set_jog_limits(protocol::jog_limits_from(settings_));
   set_link(LinkState::Ready, "controller " + profile_.id + " ready");
   if (!pending_after_id_.empty()) engine_->on_bytes(std::exchange(pending_after_id_, {}), now());
   engine_->tick(now());
@@ -295,7 +307,12 @@ void MachineSession::drain() {
   if (!engine_) return;
   if (transport_) transport_->write(engine_->take_output());
   for (auto& ev : engine_->take_events()) {
-    if (ev.kind == EventKind::Alarm) alarm_ = true;
+    if (ev.kind == EventKind::Alarm) {
+      alarm_ = true;
+      probe_pending_ = false;  // a probe that misses alarms (ALARM:4/5)
+    }
+    if (probe_pending_ && ev.kind == EventKind::Info)
+      if (auto p = protocol::parse_probe_report(ev.text)) on_probe_report(*p);
     if (ev.kind == EventKind::Status && ev.status) {
       alarm_ = ev.status->state == MachineState::Alarm;
       in_mm(*ev.status);
@@ -442,7 +459,7 @@ CommandResult MachineSession::toggle_hold() {
 
 CommandResult MachineSession::stop() {
   if (auto r = needs_engine("stop"); !r) return r;
-  if (engine_->jogging()) engine_->jog_release();
+  if (engine_->jogging()) engine_->jog_cancel();
   if (job_active()) engine_->stop();
   drain();
   arm_timer();
@@ -460,29 +477,33 @@ CommandResult MachineSession::realtime(Realtime rt) {
   return CommandResult::ok();
 }
 
-CommandResult MachineSession::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) {
+CommandResult MachineSession::refuse_jog() const {
   if (auto r = needs_engine("jog"); !r) return r;
   if (job_active()) return CommandResult::refused("jog: a job is running");
   if (auto r = refuse_in_alarm("jog"); !r) return r;
-  try {
-    engine_->jog_step(dir, distance_mm, feed_mm_min);
-  } catch (const std::exception& e) {
-    return CommandResult::refused(e.what());
-  }
-  drain();
+  if (probe_pending_) return CommandResult::refused("jog: probing Z; wait for it to finish");
   return CommandResult::ok();
 }
 
-CommandResult MachineSession::jog_start(const JogDirection& dir, double feed_mm_min) {
-  if (auto r = needs_engine("jog"); !r) return r;
-  if (job_active()) return CommandResult::refused("jog: a job is running");
-  if (auto r = refuse_in_alarm("jog"); !r) return r;
-  try {
-    engine_->jog_start(dir, feed_mm_min);
-  } catch (const std::exception& e) {
-    return CommandResult::refused(e.what());
-  }
+CommandResult MachineSession::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) {
+  if (auto r = refuse_jog(); !r) return r;
+  std::string why = engine_->jog_step(dir, distance_mm, feed_mm_min, now());
   drain();
+  arm_timer();
+  return why.empty() ? CommandResult::ok() : CommandResult::refused(std::move(why));
+}
+
+CommandResult MachineSession::jog_start(const JogDirection& dir, double feed_mm_min, double lease_s) {
+  if (auto r = refuse_jog(); !r) return r;
+  std::string why = engine_->jog_start(dir, feed_mm_min, lease_s, now());
+  drain();
+  arm_timer();
+  return why.empty() ? CommandResult::ok() : CommandResult::refused(std::move(why));
+}
+
+CommandResult MachineSession::jog_renew() {
+  if (!engine_ || !engine_->jog_renew(now())) return CommandResult::refused("jog: no continuous jog is running");
+  arm_timer();
   return CommandResult::ok();
 }
 
@@ -490,8 +511,84 @@ CommandResult MachineSession::jog_release() {
   if (engine_) {
     engine_->jog_release();
     drain();
+    arm_timer();
   }
   return CommandResult::ok();
+}
+
+double MachineSession::max_jog_feed() const {
+  const auto l = engine_ ? engine_->jog().limits() : protocol::JogLimits{};
+  return std::min({l.max_rate_mm_min[0], l.max_rate_mm_min[1], l.max_rate_mm_min[2]});
+}
+
+// ---- machine actions ---------------------------------------------------------
+
+CommandResult MachineSession::action(const char* what, const std::function<std::vector<std::string>()>& lines) {
+  if (auto r = needs_engine(what); !r) return r;
+  if (job_active()) return CommandResult::refused(std::string(what) + ": a job is running");
+  if (engine_->jogging()) return CommandResult::refused(std::string(what) + ": a jog is running");
+  if (auto r = refuse_in_alarm(what); !r) return r;
+  if (probe_pending_) return CommandResult::refused(std::string(what) + ": probing Z; wait for it to finish");
+  try {
+    for (const auto& l : lines()) engine_->send_command(l);
+  } catch (const std::exception& e) {
+    return CommandResult::refused(e.what());
+  }
+  drain();
+  return CommandResult::ok();
+}
+
+std::optional<double> MachineSession::work_z() const {
+  const auto st = status();
+  if (!st || !st->wpos) return std::nullopt;
+  return (*st->wpos)[2];
+}
+
+CommandResult MachineSession::zero_axes(const std::string& axes) {
+  const auto family = marlin_family(profile_) ? protocol::ActionFamily::Marlin : protocol::ActionFamily::Grbl;
+  return action("zero", [&] { return protocol::zero_axes_lines(axes, family); });
+}
+
+CommandResult MachineSession::safe_z() {
+  return action("safe Z", [&] { return protocol::safe_z_lines(opt_.actions, work_z()); });
+}
+
+CommandResult MachineSession::go_to_work_zero() {
+  return action("go to work zero", [&] { return protocol::go_to_work_zero_lines(opt_.actions, work_z()); });
+}
+
+CommandResult MachineSession::spindle(bool on) {
+  if (!on && engine_ && !job_active()) {
+    // Stopping the spindle is never refused for a jog or an alarm.
+    engine_->send_command("M5");
+    drain();
+    return CommandResult::ok();
+  }
+  return action(on ? "spindle on" : "spindle off", [&] { return protocol::spindle_lines(on, opt_.actions); });
+}
+
+CommandResult MachineSession::probe_z() {
+  if (engine_ && marlin_family(profile_))
+    return CommandResult::refused("probe Z: not supported on " + profile_.id + " (no G38.2 in its profile)");
+  auto r = action("probe Z", [&] { return protocol::probe_z_lines(opt_.actions); });
+  if (r) {
+    probe_pending_ = true;
+    log("probing Z: searching down up to " + fixed3(opt_.actions.probe_travel_mm) + " mm for the touch plate");
+  }
+  return r;
+}
+
+// The probe's answer: set work Z at the touch point, or say it missed.
+void MachineSession::on_probe_report(const protocol::ProbeReport& p) {
+  probe_pending_ = false;
+  if (!p.touched) {
+    log("probe Z: no touch within " + fixed3(opt_.actions.probe_travel_mm) + " mm; work Z unchanged");
+    return;
+  }
+  const double touch = p.z * (report_inches_ ? 25.4 : 1.0);
+  for (const auto& l : protocol::probe_finish_lines(opt_.actions, touch)) engine_->send_command(l);
+  log("probe Z: touched at machine Z " + fixed3(touch) + "; work Z set to the plate's " +
+      fixed3(opt_.actions.probe_plate_mm) + " mm there");
 }
 
 CommandResult MachineSession::console(const std::string& line) {

@@ -343,36 +343,56 @@ TEST(GrblSession, CheckThenRunStreamsOnlyAfterACleanPass) {
   EXPECT_TRUE(f.take_output().empty());
 }
 
-TEST(GrblSession, JogKeepsTwoSegmentsAndCancelsOnRelease) {
+TEST(GrblSession, HeldJogSendsOneIncrementAtATimeAndCancelsOnRelease) {
   GrblSession s(grbl(), no_poll());
-  s.jog_start(JogDirection{{1, 1, 0}}, 600);
+  // GRBL's defaults (500 mm/min, 10 mm/s^2): 600 mm/min on a diagonal is
+  // limited to what the axes allow; increments last 25 ms or more.
+  ASSERT_EQ(s.jog_start(JogDirection{{1, 1, 0}}, 600, 0.3, 0), "");
   Wire w;
   w.take(s.take_output());
-  ASSERT_EQ(w.lines.size(), 2u);
-  // 600 mm/min for 0.1 s = 1 mm along the diagonal: 0.707 on each axis.
-  EXPECT_EQ(w.lines[0], "$J=G91G21X0.707Y0.707F600");
-  s.on_bytes("ok\n", 0.1);
+  ASSERT_EQ(w.lines.size(), 1u);
+  EXPECT_EQ(w.lines[0].rfind("$J=G91G21X", 0), 0u) << w.lines[0];
+  EXPECT_NE(w.lines[0].find("F600"), std::string::npos) << w.lines[0];
+  s.on_bytes("ok\n", 0.01);
   w.take(s.take_output());
-  EXPECT_EQ(w.lines.size(), 3u);
+  EXPECT_EQ(w.lines.size(), 2u);
   s.jog_release();
   w.take(s.take_output());
   EXPECT_EQ(w.rt, "\x85");
-  s.on_bytes("ok\nok\n", 0.2);
+  // The increment in flight at the release was parsed after it: cancel again.
+  s.on_bytes("ok\n", 0.02);
   w.take(s.take_output());
-  EXPECT_EQ(w.lines.size(), 3u);
-  EXPECT_THROW(s.jog_start(JogDirection{{0, 0, 0}}, 100), std::invalid_argument);
+  EXPECT_EQ(w.rt, "\x85\x85");
+  EXPECT_EQ(w.lines.size(), 2u);
+  EXPECT_NE(s.jog_start(JogDirection{{0, 0, 0}}, 100, 0.3, 0.03), "");
+}
+
+TEST(GrblSession, SilentHolderIsCancelledByTheDeadline) {
+  GrblSession s(grbl(), no_poll());
+  ASSERT_EQ(s.jog_start(JogDirection{{1, 0, 0}}, 300, 0.2, 0), "");
+  Wire w;
+  w.take(s.take_output());
+  s.on_bytes("ok\n", 0.01);
+  w.take(s.take_output());
+  EXPECT_LE(s.next_deadline(), 0.2 + 1e-9);  // the session's timer wakes for the lease
+  s.tick(0.2);
+  w.take(s.take_output());
+  EXPECT_EQ(w.rt, "\x85");
+  bool told = false;
+  for (const auto& e : s.take_events()) told |= e.text.find("dead man") != std::string::npos;
+  EXPECT_TRUE(told);
 }
 
 TEST(GrblSession, StepJogIsOneLineAndRefusedDuringAJob) {
   GrblSession s(grbl(), no_poll());
-  s.jog_step(JogDirection{{0, 0, 1}}, 5, 300);
+  ASSERT_EQ(s.jog_step(JogDirection{{0, 0, 1}}, 5, 300, 0), "");
   Wire w;
   w.take(s.take_output());
   ASSERT_EQ(w.lines.size(), 1u);
   EXPECT_EQ(w.lines[0], "$J=G91G21Z5.000F300");
   s.on_bytes("ok\n", 0.1);
   s.start_job(program({"G1 X1 F100"}), JobMode::Run, 0.2);
-  EXPECT_THROW(s.jog_step(JogDirection{{1, 0, 0}}, 1, 300), std::logic_error);
+  EXPECT_NE(s.jog_step(JogDirection{{1, 0, 0}}, 1, 300, 0.2).find("job is running"), std::string::npos);
 }
 
 TEST(GrblSession, NextDeadlineIsTheStatusPollOrTheResetTimeOut) {

@@ -101,7 +101,7 @@ TEST(Marlin, JogsAreRelativeMovesAndReleaseIsAQuickStop) {
   s.tick(0);
   s.take_output();
   s.on_bytes("ok\n", 0);  // M110
-  s.jog_step(JogDirection{{1, 0, 0}}, 2.5, 600);
+  ASSERT_EQ(s.jog_step(JogDirection{{1, 0, 0}}, 2.5, 600, 0), "");
   EXPECT_EQ(s.take_output(), marlin_frame(1, "G91") + "\n");
   s.on_bytes("ok\n", 0.1);
   EXPECT_EQ(s.take_output(), marlin_frame(2, "G1X2.500F600") + "\n");
@@ -109,23 +109,26 @@ TEST(Marlin, JogsAreRelativeMovesAndReleaseIsAQuickStop) {
   EXPECT_EQ(s.take_output(), marlin_frame(3, "G90") + "\n");
   s.on_bytes("ok\n", 0.3);
 
-  // Continuous: G91, then 0.1 s segments (1000 mm/min: 1.667 mm) while held.
-  s.jog_start(JogDirection{{0, -1, 0}}, 1000);
+  // Continuous: each increment is G91, a relative G1, G90 (Marlin acts on
+  // one G-code a line), one line in flight (this profile's window).
+  ASSERT_EQ(s.jog_start(JogDirection{{0, -1, 0}}, 1000, 0.3, 0.3), "");
   EXPECT_TRUE(s.jogging());
   EXPECT_EQ(s.take_output(), marlin_frame(4, "G91") + "\n");
-  s.on_bytes("ok\n", 0.4);
-  EXPECT_EQ(s.take_output(), marlin_frame(5, "G1Y-1.667F1000") + "\n");
-  s.on_bytes("ok\n", 0.5);
-  EXPECT_EQ(s.take_output(), marlin_frame(6, "G1Y-1.667F1000") + "\n");
-  EXPECT_THROW(s.start_job(program({"G1 X1"}), JobMode::Run, 0.5), std::logic_error);
-  // Release: M410 goes before any further segment, then G90.
+  s.on_bytes("ok\n", 0.31);
+  const std::string move = s.take_output();
+  EXPECT_NE(move.find("G1Y-"), std::string::npos) << move;
+  EXPECT_NE(move.find("F1000"), std::string::npos) << move;
+  s.on_bytes("ok\n", 0.32);
+  EXPECT_EQ(s.take_output(), marlin_frame(6, "G90") + "\n");
+  EXPECT_THROW(s.start_job(program({"G1 X1"}), JobMode::Run, 0.33), std::logic_error);
+  // Release: M410 at once (the emergency parser acts on it), then G90.
   s.jog_release();
-  EXPECT_FALSE(s.jogging());
-  s.on_bytes("ok\n", 0.6);
   EXPECT_EQ(s.take_output(), marlin_frame(7, "M410") + "\n");
-  s.on_bytes("ok\n", 0.7);
+  s.on_bytes("ok\n", 0.34);  // G90 of the increment
+  s.on_bytes("ok\n", 0.35);  // M410
   EXPECT_EQ(s.take_output(), marlin_frame(8, "G90") + "\n");
-  s.on_bytes("ok\n", 0.8);
+  s.on_bytes("ok\n", 0.36);
+  EXPECT_FALSE(s.jogging());
   EXPECT_EQ(s.take_output(), "");
   EXPECT_FALSE(s.modal().modal.incremental);
   EXPECT_FALSE(s.realtime(Realtime::FeedHold));  // Marlin has no real-time bytes

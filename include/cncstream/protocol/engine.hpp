@@ -11,6 +11,7 @@
 #include "cncstream/gcode/interpreter.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/protocol/jog.hpp"
+#include "cncstream/protocol/jog_engine.hpp"
 #include "cncstream/protocol/line_cleaner.hpp"
 #include "cncstream/protocol/status_report.hpp"
 
@@ -96,14 +97,19 @@ class ProtocolEngine {
   // controller has no such byte (nothing is sent then).
   virtual bool realtime(Realtime r) = 0;
 
-  // Jogging, only while no job runs (std::logic_error otherwise; bad
-  // direction or feed: std::invalid_argument). A step moves `distance_mm`
-  // along `dir`; a continuous jog runs until jog_release(), which stops the
-  // motion at once (GRBL: jog cancel 0x85; Marlin: M410 quick stop).
-  virtual void jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) = 0;
-  virtual void jog_start(const JogDirection& dir, double feed_mm_min) = 0;
-  virtual void jog_release() = 0;
-  virtual bool jogging() const = 0;
+  // Jogging (jog_engine.hpp), only while no job runs. Each request returns
+  // "" when accepted, else why not. A step moves `distance_mm` along `dir`
+  // (at most JogConfig::max_steps queued); a continuous jog runs while its
+  // holder renews it within lease_s, and jog_release() stops the motion at
+  // once (GRBL: jog cancel 0x85; Marlin: M410 quick stop).
+  std::string jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min, double now);
+  std::string jog_start(const JogDirection& dir, double feed_mm_min, double lease_s, double now);
+  bool jog_renew(double now) { return jog_.renew(now); }
+  void jog_release();
+  void jog_cancel();  // steps too: a stop
+  bool jogging() const { return jog_.busy(); }
+  const JogEngine& jog() const { return jog_; }
+  void set_jog_limits(const JogLimits& l) { jog_.set_limits(l); }
 
   virtual const FirmwareProfile& profile() const = 0;
   virtual const JobProgress& progress() const = 0;
@@ -127,10 +133,17 @@ class ProtocolEngine {
   virtual double next_deadline() const = 0;
 
  protected:
+  explicit ProtocolEngine(JogConfig jog = {}) : jog_(jog) {}
+  // Sends what the jog engine has due (the family's line format) and its notes.
+  virtual void pump_jog() = 0;
+  void emit_jog_notes() {
+    for (auto& n : jog_.take_notes()) emit({EventKind::Warning, std::move(n)});
+  }
   void emit(Event e) { events_.push_back(std::move(e)); }
   void write(std::string_view bytes) { output_.append(bytes); }
   std::string output_;
   std::vector<Event> events_;
+  JogEngine jog_;
 };
 
 }  // namespace cncstream::protocol

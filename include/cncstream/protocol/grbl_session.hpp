@@ -16,8 +16,7 @@ namespace cncstream::protocol {
 
 struct GrblSessionOptions {
   std::optional<std::size_t> rx_margin;  // overrides the profile's margin
-  double jog_segment_s = 0.1;            // continuous-jog segment duration
-  int jog_max_in_flight = 2;
+  JogConfig jog;
   bool poll_status = true;
 };
 
@@ -37,13 +36,6 @@ class GrblSession final : public ProtocolEngine {
   void disconnected() override;
 
   bool realtime(Realtime r) override;
-  // Continuous jog: short $J= segments of jog_segment_s each, at most
-  // jog_max_in_flight queued, topped up as they are answered.
-  void jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) override;
-  void jog_start(const JogDirection& dir, double feed_mm_min) override;
-  void jog_release() override;
-  bool jogging() const override { return jog_dir_.has_value(); }
-
   const FirmwareProfile& profile() const override { return profile_; }
   const JobProgress& progress() const override { return progress_; }
   bool busy() const override;
@@ -61,9 +53,11 @@ class GrblSession final : public ProtocolEngine {
 
  private:
   enum class CheckPhase { None, Entering, Streaming, Leaving };
-  enum class Origin { File, Command, Jog, JogStep, CheckToggle };
+  enum class Origin { File, Command, Jog, CheckToggle };
 
   void pump();
+  void pump_jog() override;
+  bool jog_pending() const;
   void on_answer(bool ok, int code, double now);
   void on_banner();
   void on_status(const StatusReport& r);
@@ -103,9 +97,6 @@ class GrblSession final : public ProtocolEngine {
   double drain_poll_at_ = 0;
   bool mpg_owned_ = false;
   std::optional<Axes> last_mpos_;
-
-  std::optional<JogDirection> jog_dir_;
-  double jog_feed_ = 0;
 };
 
 }  // namespace cncstream::protocol

@@ -36,14 +36,6 @@ class MarlinSession final : public ProtocolEngine {
 
   // No real-time bytes: always false.
   bool realtime(Realtime r) override;
-  // Jogs are relative G1 moves between G91 and G90; a continuous jog keeps
-  // at most two segments queued and its release sends M410 (quick stop),
-  // which Marlin's emergency parser acts on as the bytes arrive.
-  void jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min) override;
-  void jog_start(const JogDirection& dir, double feed_mm_min) override;
-  void jog_release() override;
-  bool jogging() const override { return jog_dir_.has_value(); }
-
   const FirmwareProfile& profile() const override { return profile_; }
   const JobProgress& progress() const override { return progress_; }
   bool busy() const override;
@@ -57,13 +49,18 @@ class MarlinSession final : public ProtocolEngine {
   std::size_t resends() const { return resends_; }
 
  private:
+  // Jogs are relative G1 moves between G91 and G90; a release sends M410
+  // (quick stop), which Marlin's emergency parser acts on as the bytes arrive.
+  enum class JogRole { None, Frame, Move, QuickStop };
   struct Sent {
     long n;
     PreparedLine line;
     bool file;
-    bool jog_segment = false;
+    JogRole jog = JogRole::None;
   };
   void pump();
+  void pump_jog() override;
+  void send_jog_line(std::string text, JogRole role);
   void send_numbered(PreparedLine line, bool file);
   void quick_stop();
   void on_ok(const Response& r);
@@ -87,13 +84,10 @@ class MarlinSession final : public ProtocolEngine {
   std::size_t next_index_ = 0;
   JobProgress progress_;
   std::deque<PreparedLine> commands_;
+  std::deque<std::pair<std::string, JogRole>> jog_lines_;  // the lines of a jog move not sent yet
   double now_ = 0;
   double last_rx_ = 0;
   bool warned_silence_ = false;
-
-  std::optional<JogDirection> jog_dir_;
-  double jog_feed_ = 0;
-  std::size_t jog_segments_queued_ = 0;  // continuous-jog moves not yet answered
 };
 
 }  // namespace cncstream::protocol

@@ -27,6 +27,7 @@
 #include "cncstream/protocol/grbl_session.hpp"
 #include "cncstream/protocol/grbl_settings.hpp"
 #include "cncstream/protocol/identifier.hpp"
+#include "cncstream/protocol/machine_actions.hpp"
 #include "cncstream/session/job_input.hpp"
 #include "cncstream/session/machine_port.hpp"
 #include "cncstream/session/session_events.hpp"
@@ -49,6 +50,8 @@ struct MachineOptions {
   // After the port vanishes, try to open it again this often (0: stay
   // disconnected until open() is called). A job is never resumed by itself.
   double reconnect_interval_s = 0;
+  // Safe Z, spindle speed and the touch plate for the machine actions.
+  protocol::MachineActionSettings actions;
 };
 
 class MachineSession {
@@ -79,9 +82,22 @@ class MachineSession {
   CommandResult toggle_hold();  // the operator's one key: resume when holding, else hold
   CommandResult stop();         // controlled stop: hold, wait for motion to stop, reset
   CommandResult realtime(protocol::Realtime r);  // overrides and other real-time bytes
+  // Jogs (protocol/jog_engine.hpp): refused during a job, in alarm, in
+  // check mode or hold. At most two steps are queued (more are refused: a
+  // fast-spun wheel does not keep the machine moving). A continuous jog has a
+  // dead man: it runs while its holder calls jog_renew() within lease_s, and
+  // silence, a release, a lost link or an alarm cancel it.
   CommandResult jog_step(const protocol::JogDirection& dir, double distance_mm, double feed_mm_min);
-  CommandResult jog_start(const protocol::JogDirection& dir, double feed_mm_min);
+  CommandResult jog_start(const protocol::JogDirection& dir, double feed_mm_min, double lease_s = 0.3);
+  CommandResult jog_renew();    // refused when no continuous jog is running
   CommandResult jog_release();  // always accepted: stopping is never refused
+  double max_jog_feed() const;  // mm/min: the slowest of $110-$112 (GRBL's defaults before `$$`)
+  // Machine actions (protocol/machine_actions.hpp), refused during a job or jog.
+  CommandResult zero_axes(const std::string& axes);  // "X", "XY", "XYZ": work zero here
+  CommandResult safe_z();
+  CommandResult go_to_work_zero();  // safe Z first
+  CommandResult spindle(bool on);   // off is never refused outside a job
+  CommandResult probe_z();          // G38.2 to the touch plate; sets work Z at the touch
   CommandResult console(const std::string& line);  // an operator's line; refused during a job
   CommandResult unlock();  // $X (Marlin: M999)
   CommandResult home();    // $H (Marlin: G28)
@@ -122,6 +138,10 @@ class MachineSession {
   void log(const std::string& text);
   void in_mm(protocol::StatusReport& r) const;
   CommandResult needs_engine(const char* what) const;
+  CommandResult refuse_jog() const;
+  CommandResult action(const char* what, const std::function<std::vector<std::string>()>& lines);
+  std::optional<double> work_z() const;
+  void on_probe_report(const protocol::ProbeReport& p);
   CommandResult refuse_in_alarm(const char* what) const;
 
   boost::asio::io_context& io_;
@@ -143,6 +163,7 @@ class MachineSession {
   std::unique_ptr<protocol::ProtocolEngine> engine_;
   bool report_inches_ = false;
   bool alarm_ = false;
+  bool probe_pending_ = false;  // G38.2 sent, its [PRB:] not seen yet
 
   std::optional<JobInput> job_;  // the running job (its lines stay with the engine)
 
