@@ -264,8 +264,9 @@ TEST(HeldKeyDetector, DecodedBytesEndToEnd) {
 // ---- feed ladder and DRO ----------------------------------------------------------
 
 TEST(JogFeed, DefaultAndLadder) {
-  EXPECT_EQ(default_jog_feed({}), 1000);
-  EXPECT_EQ(default_jog_feed({{110, 500}, {111, 800}, {112, 200}}), 500);  // Z's rate is its own
+  EXPECT_EQ(default_jog_feed(0), 1000);  // not known yet
+  EXPECT_EQ(default_jog_feed(500), 500);
+  EXPECT_EQ(default_jog_feed(3000), 1000);
   EXPECT_EQ(next_jog_feed(500, +1, 0), 1000);
   EXPECT_EQ(next_jog_feed(500, -1, 0), 200);
   EXPECT_EQ(next_jog_feed(700, +1, 0), 1000);

@@ -162,6 +162,10 @@ int run_jog(const JogCliOptions& o) {
     quit_deadline.cancel();
     session.close();  // the loop ends once the last byte is out
   };
+  auto moving = [&] {
+    const auto st = session.status();
+    return session.snapshot().jogging || (st && st->state == protocol::MachineState::Jog);
+  };
   auto quit = [&](const std::string& why) {
     if (quitting) return;
     quitting = true;
@@ -169,10 +173,9 @@ int run_jog(const JogCliOptions& o) {
     boost::system::error_code ignored;
     keys.cancel(ignored);
     signals.cancel(ignored);
-    // Leave the machine idle: a step still moving is cancelled as well.
-    const auto st = session.status();
-    if (!st || st->state != protocol::MachineState::Jog) return close_port();
-    session.realtime(protocol::Realtime::JogCancel);
+    // Leave the machine idle: steps still queued or moving are cancelled too.
+    if (!moving()) return close_port();
+    session.stop();
     quit_deadline.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
         std::chrono::duration<double>(o.quit_wait_s)));
     quit_deadline.async_wait([&](const boost::system::error_code& ec) {
@@ -191,9 +194,7 @@ int run_jog(const JogCliOptions& o) {
       const auto& c = e.controller;
       if (c.kind == EventKind::Alarm) dro.print("ALARM: " + c.text);
       else if (c.kind == EventKind::Warning || (verbose && c.kind != EventKind::Status)) dro.print(c.text);
-      if (quitting && !closed && c.kind == EventKind::Status && c.status &&
-          c.status->state != protocol::MachineState::Jog)
-        close_port();
+      if (quitting && !closed && c.kind == EventKind::Status && !moving()) close_port();
     }
   });
 

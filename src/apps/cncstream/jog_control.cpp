@@ -18,12 +18,7 @@ constexpr char kCtrlX = 0x18;
 
 }  // namespace
 
-double default_jog_feed(const protocol::GrblSettings& settings) {
-  double feed = 1000;
-  for (int n : {110, 111})
-    if (const auto it = settings.find(n); it != settings.end() && it->second > 0) feed = std::min(feed, it->second);
-  return feed;
-}
+double default_jog_feed(double max_jog_feed) { return max_jog_feed > 0 ? std::min(1000.0, max_jog_feed) : 1000.0; }
 
 double next_jog_feed(double feed, int direction, double max_feed) {
   std::vector<double> ladder;
@@ -60,6 +55,8 @@ JogControl::~JogControl() {
   *alive_ = false;
   if (continuous_) session_.jog_release();
 }
+
+double JogControl::feed_cap() const { return session_.ready() ? session_.max_jog_feed() : 0; }
 
 void JogControl::trace(const char* fmt, ...) {
   if (!opt_.trace) return;
@@ -129,15 +126,23 @@ void JogControl::apply(const JogIntent& intent) {
       break;
     }
     case JogIntentKind::Start: {
-      const auto r = session_.jog_start(direction(intent.key), feed_mm_min_);
+      // The session's own lease is a backstop (this class's lease, at most
+      // HeldKeyTiming::max_lease_s, is the one that ends a released key).
+      const auto r = session_.jog_start(direction(intent.key), feed_mm_min_, opt_.session_lease_s);
       continuous_ = r.accepted;
       trace("lease %.3f s (repeat period %.3f s)", detector_.lease_s(), detector_.repeat_period_s());
       result(r, std::string("jog ") + key + " held");
       break;
     }
     case JogIntentKind::Renew:
-      // Today's session has no lease of its own: the renewal is this class's
-      // lease timer, re-armed in arm_timers().
+      if (continuous_) {
+        if (const auto r = session_.jog_renew(); !r) {
+          // The session ended it (soft limit, alarm, its lease): say so once;
+          // the key's further repeats do nothing until it is let go.
+          continuous_ = false;
+          result(r, "renew");
+        }
+      }
       break;
     case JogIntentKind::Release:
       if (continuous_) {
@@ -169,19 +174,22 @@ void JogControl::handle_command_key(char c) {
       return show("step " + format_step(opt_.steps_mm[i]) + " mm");
     }
     case '+': case '=': case '-': {
-      feed_mm_min_ = next_jog_feed(feed_mm_min_, c == '-' ? -1 : 1, 0);
+      feed_mm_min_ = next_jog_feed(feed_mm_min_, c == '-' ? -1 : 1, feed_cap());
       feed_given_ = true;
       char buf[48];
       std::snprintf(buf, sizeof buf, "jog feed %.0f mm/min", feed_mm_min_);
       return show(buf);
     }
-    case '0': return result(session_.console("G10 L20 P0 X0 Y0 Z0"), "work zero set at XYZ");
+    case '0': return result(session_.zero_axes("XYZ"), "work zero set at XYZ");
     case 'X': case 'Y': case 'Z': {
-      const char line[] = {'G', '1', '0', ' ', 'L', '2', '0', ' ', 'P', '0', ' ', c, '0', 0};
-      return result(session_.console(line), std::string("work zero set at ") + c);
+      const std::string axis(1, c);
+      return result(session_.zero_axes(axis), "work zero set at " + axis);
     }
     case 'h': return result(session_.home(), "homing ($H)");
     case 'u': return result(session_.unlock(), "unlock ($X)");
+    case 'p': return result(session_.probe_z(), "probing Z");
+    case 'g': return result(session_.go_to_work_zero(), "going to work zero (safe Z first)");
+    case 's': return result(session_.safe_z(), "up to safe Z");
     case ' ': case '!': return result(session_.hold(), "hold");
     case '~': return result(session_.resume(), "resume");
     case kCtrlX: return result(session_.reset(), "soft reset");
@@ -239,11 +247,8 @@ void JogControl::on_session_event(const session::SessionEvent& e) {
         detector_.reset();
         lease_timer_.cancel();
       }
-      if (!feed_given_ && e.link == session::LinkState::Ready) feed_mm_min_ = default_jog_feed(session_.settings());
+      if (!feed_given_ && e.link == session::LinkState::Ready) feed_mm_min_ = default_jog_feed(feed_cap());
       show(e.text);
-      return;
-    case SessionEventKind::Settings:
-      if (!feed_given_) feed_mm_min_ = default_jog_feed(session_.settings());
       return;
     case SessionEventKind::Controller: {
       using protocol::EventKind;

@@ -4,7 +4,8 @@
 // no hop in between (a key reaches the port in the same call). Held keys are
 // found from the terminal's auto-repeat (terminal_keys.hpp); a continuous jog
 // lives only while its repeats keep coming: this class's lease timer releases
-// it at most HeldKeyTiming::max_lease_s after the last repeat, and a lost
+// it at most HeldKeyTiming::max_lease_s after the last repeat (each repeat
+// also renews the session's own, longer lease: belt and braces), and a lost
 // link, a quit, a signal or a closed stdin release it too (fail closed).
 // Used by `cncstream jog`; the display (DRO) is the caller's.
 #include <boost/asio/steady_timer.hpp>
@@ -27,14 +28,17 @@ struct JogControlOptions {
   std::size_t step_index = 1;                      // 0.1 mm to start with
   double feed_mm_min = 0;                          // jog feed; 0: from the controller's rates (see default_feed)
   HeldKeyTiming timing;
+  // The lease given to the session's continuous jog: a backstop should this
+  // class's own lease (timing.max_lease_s at most, the one tested) not run.
+  double session_lease_s = 0.3;
   // Called with each thing that happened, for --trace (null: nothing is
   // formatted). Written after the command went to the session, never before.
   std::function<void(const std::string&)> trace;
 };
 
-// The jog feed when none is given: 1000 mm/min, or the slowest of the
-// controller's X/Y maximum rates ($110, $111) when lower.
-double default_jog_feed(const protocol::GrblSettings& settings);
+// The jog feed when none is given: 1000 mm/min, or the controller's
+// maximum jog feed (MachineSession::max_jog_feed, $110-$112) when lower.
+double default_jog_feed(double max_jog_feed);
 // The next feed up (+1) or down (-1) on a 1-2-5 ladder, within [10, max].
 double next_jog_feed(double feed, int direction, double max_feed);
 
@@ -69,6 +73,7 @@ class JogControl {
   void arm_timers();
   void trace(const char* fmt, ...) __attribute__((format(printf, 2, 3)));
   protocol::JogDirection direction(JogKey k) const;
+  double feed_cap() const;  // 0 before the controller is ready
 
   session::MachineSession& session_;
   JogControlOptions opt_;
