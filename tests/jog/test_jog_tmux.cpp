@@ -420,3 +420,31 @@ TEST_F(JogTerminal, LostControllerWhileJoggingEndsTheJogAndTheDroSaysSo) {
   tmux_->send("q");
   ASSERT_TRUE(wait_for([&] { return exited(); }, 10)) << read_file(trace_);
 }
+
+// The streaming display while a job runs: the jog keys are refused with a
+// note, and an arrow's escape sequence is not taken for its '[' (feed -1 %).
+TEST_F(JogTerminal, JogKeysDuringAStreamedJobAreRefusedAndChangeNothing) {
+  const fs::path prog = dir_ / "slow.nc";
+  {
+    std::ofstream f(prog);
+    f << "G21 G90 G94\n";
+    for (int i = 0; i < 100; ++i) f << "G1 X" << (i % 2 ? 0 : 20) << " Y" << i * 0.1 << " F600\n";
+    f << "M2\n";
+  }
+  const std::string cmd = "XDG_STATE_HOME=" + shell_quote((dir_ / "state").string()) + " " +
+                          shell_quote((fs::path(CNCSTREAM_BINARY_DIR) / "cncstream").string()) + " stream " +
+                          shell_quote(prog.string()) + " sim --sim-speed 1 --no-journal; sleep 30";
+  tmux_ = std::make_unique<Tmux>(cmd, 220, 20);
+  const auto screen_has = [&](const std::string& s) { return tmux_->screen().find(s) != std::string::npos; };
+  ASSERT_TRUE(wait_for([&] { return screen_has("Ov feed 100%"); }, 20)) << tmux_->screen();
+  tmux_->send("Right");
+  tmux_->send("PageUp");
+  ASSERT_TRUE(wait_for([&] { return screen_has("jog: a job is running (PgUp refused)"); }, 10)) << tmux_->screen();
+  // Then feed +1 %: keys are handled in order, so once it shows, the arrows
+  // were handled too. Read byte by byte, ESC [ C and ESC [ 5 ~ each lowered
+  // the feed by 1 % ('['): that would show 99 % here.
+  tmux_->send("]");
+  ASSERT_TRUE(wait_for([&] { return screen_has("Ov feed 101%"); }, 10)) << tmux_->screen();
+  tmux_->send("s");  // the controlled stop
+  ASSERT_TRUE(wait_for([&] { return screen_has("outcome: "); }, 20)) << tmux_->screen();
+}

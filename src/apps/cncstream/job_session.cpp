@@ -261,6 +261,8 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     if (snap.buffer.bytes && snap.buffer.capacity > 0)
       view.buffer_fill = double(snap.buffer.in_flight) / double(snap.buffer.capacity);
     view.show_help = keys && keys->help_shown();
+    if (keys)
+      if (auto note = keys->take_note()) panel.message(*note);
     panel.update(view, snap.now);
   };
 
