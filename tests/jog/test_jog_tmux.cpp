@@ -448,3 +448,39 @@ TEST_F(JogTerminal, JogKeysDuringAStreamedJobAreRefusedAndChangeNothing) {
   tmux_->send("s");  // the controlled stop
   ASSERT_TRUE(wait_for([&] { return screen_has("outcome: "); }, 20)) << tmux_->screen();
 }
+
+// The machine-action keys, each checked by where the machine ends up: zero
+// one axis (X), probe Z on a plate (p), safe Z (s), go to work zero (g).
+TEST_F(JogTerminal, ZeroProbeSafeZAndGoToWorkZeroKeys) {
+  // The simulated touch plate's top is at machine Z -10.
+  simtest::SimProcess sim({"--speed", "1", "--settings", settings_.string(), "--probe-z", "-10"});
+  start_jog(sim.slave(), "--step 1 --probe-plate 2 --safe-z 10 --probe-feed 500");
+  tmux_->send("Right");
+  ASSERT_TRUE(wait_wpos("Idle", {1, 0, 0})) << dro();
+  tmux_->send("X");  // zero X only
+  ASSERT_TRUE(wait_wpos("Idle", {0, 0, 0})) << dro();
+  tmux_->send("Up");
+  ASSERT_TRUE(wait_wpos("Idle", {0, 1, 0})) << dro();
+  // Probe: down to the plate (machine Z -10), work Z there = the plate's 2
+  // mm, then 2 mm up: work Z 4.
+  tmux_->send("p");
+  ASSERT_TRUE(wait_wpos("Idle", {0, 1, 4}, 30)) << tmux_->screen();
+  EXPECT_NE(tmux_->screen().find("probe Z: touched at machine Z -10.000"), std::string::npos) << tmux_->screen();
+  const auto mpos = dro_axes(dro(), "MPos");
+  ASSERT_TRUE(mpos);
+  EXPECT_NEAR((*mpos)[2], -8, 1e-3);
+  tmux_->send("s");  // up to work Z 10
+  ASSERT_TRUE(wait_wpos("Idle", {0, 1, 10}, 20)) << dro();
+  tmux_->send("Left");
+  ASSERT_TRUE(wait_wpos("Idle", {-1, 1, 10})) << dro();
+  tmux_->send("g");  // X0 Y0 at safe Z, then down to Z0
+  ASSERT_TRUE(wait_wpos("Idle", {0, 0, 0}, 20)) << dro();
+  tmux_->send("q");
+  ASSERT_TRUE(wait_for([&] { return exited(); }, 10)) << read_file(trace_);
+  const auto st = ask_sim(sim.slave());
+  ASSERT_TRUE(st);
+  EXPECT_EQ(st->state, "Idle");
+  EXPECT_NEAR(st->mpos[0], 1, 1e-3);   // work X0 was set at machine X 1
+  EXPECT_NEAR(st->mpos[1], 0, 1e-3);   // Y was never zeroed
+  EXPECT_NEAR(st->mpos[2], -12, 1e-3);  // work Z0 is 2 mm below the plate's top
+}

@@ -13,13 +13,16 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <csignal>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <memory>
 
 #include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/protocol/machine_actions.hpp"
 #include "cncstream/session/machine_session.hpp"
 #include "cncstream/transport/serial_transport.hpp"
 #include "commands.hpp"
@@ -96,6 +99,7 @@ struct JogCliOptions {
   double step_mm = 0.1;
   double feed_mm_min = 0;
   std::string trace;
+  protocol::MachineActionSettings actions;
   double quit_wait_s = 2.0;  // how long `q` waits for a moving jog to stop before closing the port
 };
 
@@ -123,6 +127,7 @@ int run_jog(const JogCliOptions& o) {
   mo.serial = transport::parse_serial_settings(o.conn.serial);
   mo.profiles_dir = protocol::default_profiles_dir();
   if (!o.conn.profile.empty()) mo.force_profile = o.conn.profile;
+  mo.actions = o.actions;
 
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace_file(nullptr, &std::fclose);
   if (!o.trace.empty()) {
@@ -246,6 +251,16 @@ void register_jog(CLI::App& app, CommandRegistry& registry) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--trace", o->trace,
                   "Write a line per key, jog command and link change here, with the session's time in seconds");
+  const char* g = "Machine actions";
+  sub->add_option("--safe-z", o->actions.safe_z_mm, "Work Z that clears clamps and stock (keys s and g), mm")
+      ->capture_default_str()->group(g);
+  sub->add_option("--probe-plate", o->actions.probe_plate_mm,
+                  "Touch plate thickness, mm (key p sets work Z to it at the touch; 0: probing the stock itself)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber)->group(g);
+  sub->add_option("--probe-travel", o->actions.probe_travel_mm, "How far down key p searches for the plate, mm")
+      ->capture_default_str()->check(CLI::PositiveNumber)->group(g);
+  sub->add_option("--probe-feed", o->actions.probe_feed_mm_min, "Probing feed, mm/min")
+      ->capture_default_str()->check(CLI::PositiveNumber)->group(g);
   registry.add(sub, [o] { return run_jog(*o); });
 }
 

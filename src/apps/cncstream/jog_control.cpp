@@ -190,7 +190,11 @@ void JogControl::handle_command_key(char c) {
     case 'p': return result(session_.probe_z(), "probing Z");
     case 'g': return result(session_.go_to_work_zero(), "going to work zero (safe Z first)");
     case 's': return result(session_.safe_z(), "up to safe Z");
-    case ' ': case '!': return result(session_.hold(), "hold");
+    case ' ': case '!':
+      // Jogging: cancel every jog, steps queued too (the session's stop).
+      // Otherwise a feed hold (a go-to-work-zero move, a probe); ~ resumes.
+      if (session_.snapshot().jogging) return result(session_.stop(), "jog cancelled");
+      return result(session_.hold(), "feed hold (~ resumes)");
     case '~': return result(session_.resume(), "resume");
     case kCtrlX: return result(session_.reset(), "soft reset");
     case '?':

@@ -36,7 +36,7 @@ std::string format_dro_line(const DroView& v, int width) {
 const char* jog_keys_help() {
   return "keys: arrows X/Y, PgUp/PgDn Z (tap: one step, hold: continuous) | 1-4 step 0.01/0.1/1/10 mm | "
          "+/- jog feed | 0 zero XYZ, X/Y/Z zero one axis | h home | u unlock | p probe Z | g go to work zero | "
-         "s safe Z | space or ! hold | ~ resume | Esc stop jog | ? keys | q quit";
+         "s safe Z | space or ! cancel jogs / feed hold | ~ resume | Ctrl-X reset | Esc stop jog | ? keys | q quit";
 }
 
 }  // namespace cncstream::app
