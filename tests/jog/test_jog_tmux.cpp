@@ -39,10 +39,13 @@ using Clock = std::chrono::steady_clock;
 // numbers are easy to check (default jog feed = the X/Y rate, 1000 mm/min).
 constexpr double kRate = 1000;   // $110-$112, mm/min
 constexpr double kAccel = 100;   // $120-$122, mm/s^2
-// Today's continuous jog keeps segments of 0.1 s at the feed queued
-// (GrblSessionOptions::jog_segment_s): one may reach the controller just
-// before the cancel and run after it (GRBL's RX buffer is not flushed).
-constexpr double kIncrement_s = 0.1;
+// After a release the machine stops within its stopping distance plus at
+// most one jog increment (one may reach the controller just before the
+// cancel and run after it: GRBL's RX buffer is not flushed). An increment is
+// never more than what the jog engine keeps queued: 1.25 x the stopping
+// distance, or 0.1 s at the feed (protocol/jog_engine.hpp, JogConfig).
+double stopping_mm(double v) { return v * v / (2 * kAccel); }
+double overrun_bound_mm(double v) { return stopping_mm(v) + std::max(1.25 * stopping_mm(v), 0.1 * v); }
 
 std::string shell_quote(const std::string& s) {
   std::string q = "'";
@@ -337,7 +340,7 @@ TEST_F(JogTerminal, TapsStepExactlyHeldKeyJogsAndStopsOnReleaseZeroAndQuit) {
   // The machine moved at no more than the feed from the first press to the
   // release, then stopped within its stopping distance plus one increment.
   const double v = kRate / 60;
-  const double bound = v * (release->t - first_up->t) + v * v / (2 * kAccel) + v * kIncrement_s + 0.01;
+  const double bound = v * (release->t - first_up->t) + overrun_bound_mm(v) + 0.01;
   const auto after_hold = dro_axes(dro(), "WPos");
   ASSERT_TRUE(after_hold);
   EXPECT_GT((*after_hold)[1], 2.0 + 1.0) << "a held key jogs further than its two steps";
@@ -393,7 +396,7 @@ TEST_F(JogTerminal, KillingTheTerminalWhileJoggingStopsTheMachine) {
   ASSERT_TRUE(wait_for([&] { return (st = ask_sim(sim.slave())) && st->state == "Idle"; }, 5));
   const double v = kRate / 60;
   EXPECT_GT(st->mpos[0], 0.05);
-  EXPECT_LE(st->mpos[0], v * (killed_after + 0.3) + v * v / (2 * kAccel) + v * kIncrement_s);
+  EXPECT_LE(st->mpos[0], v * (killed_after + 0.3) + overrun_bound_mm(v));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   const auto again = ask_sim(sim.slave());
   ASSERT_TRUE(again);
