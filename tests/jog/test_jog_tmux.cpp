@@ -95,7 +95,9 @@ class Tmux {
  public:
   Tmux(const std::string& command, int width, int height) {
     static int n = 0;
-    base_ = "tmux -L cncstream_jog_" + std::to_string(::getpid()) + "_" + std::to_string(n++) + " -f /dev/null";
+    // Its own server whatever the caller runs in: not nested in a $TMUX, any $TERM.
+    base_ = "env -u TMUX TERM=xterm tmux -L cncstream_jog_" + std::to_string(::getpid()) + "_" +
+            std::to_string(n++) + " -f /dev/null";
     const std::string cmd = base_ + " new-session -d -s jog -x " + std::to_string(width) + " -y " +
                             std::to_string(height) + " " + shell_quote(command);
     if (std::system(cmd.c_str()) != 0) throw std::runtime_error("cannot start tmux (is it installed? scripts/setup.sh)");
