@@ -9,6 +9,7 @@ packages=(
   libsqlite3-dev libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   libspdlog-dev libfmt-dev libtbb-dev libpng-dev nettle-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
+  tmux  # the terminal jog tests drive `cncstream jog` in a tmux session
 )
 missing=()
 for p in "${packages[@]}"; do
