@@ -117,7 +117,7 @@ int run_jog(const JogCliOptions& o) {
     std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << o.sim.speed << ")\n";
     mo.port = sim;
   } else {
-    const auto device = resolve_device_port(o.conn.port);
+    const auto device = device_path(o.conn.port);
     if (!device) return 2;
     mo.port = std::make_shared<session::DevicePort>(*device);
     // A board that comes back (a USB cable re-plugged) is opened again; a

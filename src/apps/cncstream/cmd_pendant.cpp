@@ -103,7 +103,7 @@ int run_pendant(const PendantOptions& o) {
     mo.port = sim;
     std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << o.sim.speed << ")\n";
   } else {
-    const auto device = resolve_device_port(o.port);
+    const auto device = device_path(o.port);
     if (!device) return 2;
     mo.port = std::make_shared<session::DevicePort>(*device);
   }
@@ -284,12 +284,7 @@ void register_pendant(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("--profile", o->profile, "Force a firmware profile (grbl-1.1, grblhal, fluidnc, marlin)");
   sub->add_option("--timeout", o->timeout_s, "Give up after this many seconds (0: never)")->check(CLI::NonNegativeNumber);
   sub->add_flag("-v,--verbose", o->verbose, "Print every pendant event and controller message");
-  const char* g = "Simulator (PORT=sim)";
-  sub->add_option("--sim-speed", o->sim.speed, "Simulator time scale: 'max' or K (1 = real time; jogs want 1)")
-      ->group(g)
-      ->capture_default_str();
-  sub->add_flag("--sim-lenient", o->sim.lenient, "Drop overflowing RX bytes like the firmware instead of failing")->group(g);
-  sub->add_option("--sim-settings", o->sim.settings, "Simulator settings file ($$, offsets) kept across runs")->group(g);
+  add_sim_machine_options(sub, o->sim);  // jogs want --sim-speed 1 (real time)
   registry.add(sub, [o] { return run_pendant(*o); });
 }
 

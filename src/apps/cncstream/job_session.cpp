@@ -93,6 +93,31 @@ void add_sim_options(CLI::App* sub, SimCliOptions& o) {
   sub->add_option("--sim-tolerance", o.tolerance, "Verify tolerance, mm")->check(CLI::PositiveNumber)->group(g);
 }
 
+session::SimulatorOptions simulator_options(const SimCliOptions& s) {
+  session::SimulatorOptions so;
+  so.speed = s.speed;
+  so.strict = !s.lenient;
+  so.settings_file = s.settings;
+  so.faults.drop_every = s.drop_every;
+  so.faults.corrupt_every = s.corrupt_every;
+  so.faults.vanish_after = s.vanish_after;
+  parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
+  parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
+  parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
+  return so;
+}
+
+std::optional<std::string> device_path(const std::string& port) {
+  if (port != "auto") return port;
+  const auto choice = transport::choose_auto_port(transport::list_ports());
+  if (!choice.port) {
+    std::cerr << "cncstream: error: " << choice.message << "\n";
+    return std::nullopt;
+  }
+  std::cerr << choice.message << "\n";
+  return choice.port->path;
+}
+
 std::filesystem::path journal_path(const ConnectionOptions& o) {
   return o.journal.empty() ? transport::Journal::default_path() : std::filesystem::path(o.journal);
 }
@@ -116,31 +141,6 @@ EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimit
       by_line[static_cast<std::size_t>(src)] = std::max(by_line[static_cast<std::size_t>(src)], ends[i]);
   }
   return EtaEstimator(std::move(by_line));
-}
-
-session::SimulatorOptions simulator_options(const SimCliOptions& s) {
-  session::SimulatorOptions so;
-  so.speed = s.speed;
-  so.strict = !s.lenient;
-  so.settings_file = s.settings;
-  so.faults.drop_every = s.drop_every;
-  so.faults.corrupt_every = s.corrupt_every;
-  so.faults.vanish_after = s.vanish_after;
-  parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
-  parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
-  parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
-  return so;
-}
-
-std::optional<std::string> resolve_device_port(const std::string& port) {
-  if (port != "auto") return port;
-  const auto choice = transport::choose_auto_port(transport::list_ports());
-  if (!choice.port) {
-    std::cerr << "cncstream: error: " << choice.message << "\n";
-    return std::nullopt;
-  }
-  std::cerr << choice.message << "\n";
-  return choice.port->path;
 }
 
 bool confirm(const std::string& question, bool yes) {
@@ -182,7 +182,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << s.speed << ", "
               << (s.lenient ? "lenient" : "strict") << " RX buffer)\n";
   } else {
-    const auto device = resolve_device_port(c.port);
+    const auto device = device_path(c.port);
     if (!device) return 2;
     ro.port = *device;
   }

@@ -51,6 +51,15 @@ void add_sim_machine_options(CLI::App* sub, SimCliOptions& o);
 
 std::filesystem::path journal_path(const ConnectionOptions& o);
 
+// PORT=sim: the simulator's speed, RX buffer, settings file and faults (the
+// cut and its verify are a job's, added by run_session). Throws
+// std::invalid_argument for a malformed fault.
+session::SimulatorOptions simulator_options(const SimCliOptions& s);
+// The device for a PORT other than `sim`: `auto` picks the one known
+// controller board (saying which on stderr); nullopt, after saying why on
+// stderr, when there is not exactly one.
+std::optional<std::string> device_path(const std::string& port);
+
 // What the simulator should verify the cut against (from an STL job).
 struct VerifyTarget {
   Mesh design;  // in work = machine coordinates of the sim
@@ -64,15 +73,6 @@ gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOpti
 
 // When each file line's motion ends, for the lines the job sends.
 EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits);
-
-// The built-in simulator's options from --sim-speed, --sim-lenient,
-// --sim-settings and the fault options (the cut to verify is the caller's).
-session::SimulatorOptions simulator_options(const SimCliOptions& s);
-
-// The serial device for PORT: PORT itself, or for `auto` the one known
-// controller board. nullopt, with the reason printed, when `auto` finds none
-// or several.
-std::optional<std::string> resolve_device_port(const std::string& port);
 
 // Asks "question [y/N]" on the terminal unless `yes`. Without a TTY and
 // without --yes, refuses (returns false) with a message saying so.
