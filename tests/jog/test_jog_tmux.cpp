@@ -328,10 +328,19 @@ TEST_F(JogTerminal, TapsStepExactlyHeldKeyJogsAndStopsOnReleaseZeroAndQuit) {
   const TraceLine* last_up = find_last(tr, "key Up");
   const TraceLine* release = find_last(tr, "release Y+");
   ASSERT_TRUE(first_up && held && lease && last_up && release) << read_file(trace_);
-  // The press and the first repeat were steps; the continuous jog started on
-  // the second repeat (the one that proves auto-repeat).
-  EXPECT_EQ(std::count_if(tr.begin(), tr.end(), [](const auto& l) { return l.what == "step Y+ 1 mm: accepted"; }), 2);
-  EXPECT_LT(held->t - first_up->t, 0.7);
+  // The press and the first repeat were steps (a third if a loaded machine
+  // delivered the first repeat more than 0.7 s late); the continuous jog
+  // started on the repeat that came within 0.1 s of the one before it (the
+  // trace lists a key after what it caused).
+  const auto steps = std::count_if(tr.begin(), tr.end(), [](const auto& l) { return l.what == "step Y+ 1 mm: accepted"; });
+  EXPECT_TRUE(steps == 2 || steps == 3) << steps;
+  const auto held_at = static_cast<std::size_t>(held - tr.data());
+  const TraceLine* confirming = find_first(tr, "key Up", held_at);
+  const TraceLine* before = nullptr;
+  for (std::size_t i = 0; i < held_at; ++i)
+    if (tr[i].what == "key Up") before = &tr[i];
+  ASSERT_TRUE(confirming && before) << read_file(trace_);
+  EXPECT_LE(confirming->t - before->t, 0.1);
   // The lease is the design's bound: at most 100 ms after a repeat.
   EXPECT_LE(std::stod(lease->what.substr(6)), 0.1);
   // Measured: the release went out at most 100 ms after the last repeat was
