@@ -9,6 +9,7 @@ packages=(
   libsqlite3-dev libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   libspdlog-dev libfmt-dev libtbb-dev libpng-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
+  chromium chromium-driver python3-selenium libjs-three
 )
 missing=()
 for p in "${packages[@]}"; do

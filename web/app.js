@@ -106,6 +106,8 @@ async function errorOf(r) {
 // Commands that move or configure a machine need this tab to hold its control.
 // Acquire it when nobody holds it; when another screen does, ask the operator.
 async function controlled(machine, fn) {
+  // Known not to be ours: ask first rather than be refused (one round trip less).
+  if (S.control.get(machine) !== S.clientId && !(await takeControl(machine, false))) return undefined;
   try {
     return await fn();
   } catch (e) {
@@ -386,6 +388,8 @@ function renderRunning(mine) {
   $('#btn-resume').disabled = st !== 'held';
   $('#btn-stop').disabled = !active;
   $('#panel-job').dataset.job = active ? active.id : '';
+  // While a job runs its controls matter more than the (disabled) jog pad.
+  document.body.classList.toggle('job-active', !!active);
 }
 
 function setProgress(frac, lines, eta) {
@@ -606,18 +610,36 @@ function drawPreview(m) {
   const X = (x) => pad + (x - m.x0) * s, Y = (y) => H - pad - (y - m.y0) * s;
   const zr = m.zCutMax - m.zMin || 1;
   // Height map: every cutting point splatted into a grid cell, the highest wins.
-  const gw = Math.max(1, Math.round(sx * s / 3)), gh = Math.max(1, Math.round(sy * s / 3));
+  const cell = 2;
+  const gw = Math.max(1, Math.round(sx * s / cell)), gh = Math.max(1, Math.round(sy * s / cell));
   const grid = new Float32Array(gw * gh).fill(NaN);
   const p = m.pts;
   for (let i = 4; i < p.length; i += 4) {
     if (p[i + 3]) continue;
     // Sample along the move so long straight moves fill their cells too.
-    const n = Math.max(1, Math.ceil(Math.hypot(p[i] - p[i - 4], p[i + 1] - p[i - 3]) * s / 3));
+    const n = Math.max(1, Math.ceil(Math.hypot(p[i] - p[i - 4], p[i + 1] - p[i - 3]) * s / cell));
     for (let k = 1; k <= n; k++) {
       const f = k / n, x = p[i - 4] + (p[i] - p[i - 4]) * f, y = p[i - 3] + (p[i + 1] - p[i - 3]) * f, z = p[i - 2] + (p[i + 2] - p[i - 2]) * f;
       const gx = Math.min(gw - 1, Math.floor((x - m.x0) / sx * gw)), gy = Math.min(gh - 1, Math.floor((y - m.y0) / sy * gh));
       const c = gy * gw + gx;
       if (!(grid[c] >= z)) grid[c] = z;
+    }
+  }
+  // Rows are a stepover apart, wider than a cell: grow each row's heights
+  // into the empty cells beside it (a few passes, so a sparse contour
+  // program is not smeared across the whole box).
+  for (let pass = 0, grew = true; grew && pass < 16; pass++) {
+    grew = false;
+    const prev = grid.slice();
+    for (let gy = 0; gy < gh; gy++) for (let gx = 0; gx < gw; gx++) {
+      const c = gy * gw + gx;
+      if (!isNaN(prev[c])) continue;
+      let best = NaN;
+      if (gx > 0 && !(best >= prev[c - 1])) best = prev[c - 1];
+      if (gx < gw - 1 && !(best >= prev[c + 1])) best = prev[c + 1];
+      if (gy > 0 && !(best >= prev[c - gw])) best = prev[c - gw];
+      if (gy < gh - 1 && !(best >= prev[c + gw])) best = prev[c + gw];
+      if (!isNaN(best)) { grid[c] = best; grew = true; }
     }
   }
   const img = ctx.createImageData(gw, gh);

@@ -364,7 +364,7 @@ class Handler(BaseHTTPRequestHandler):
                 return self.api(method, path, q)
         except ApiErr as e:
             extra = {"WWW-Authenticate": "Bearer"} if e.status == 401 else None
-            if method == "POST" and path == "/api/v1/files":
+            if method != "GET":
                 self.close_connection = True   # the body may not have been read
             self.reply(e.status, {"error": {"status": e.status, "code": e.code, "message": e.message}}, extra=extra)
 

@@ -1,0 +1,412 @@
+#!/usr/bin/python3
+"""The web page in a real browser (headless Chromium through chromedriver)
+against a real cncstreamd with a simulated machine:
+
+  load the page -> upload examples/plaque.stl -> fill the tool-path form ->
+  generate -> preview -> start on the sim -> progress reaches 100 % ->
+  a step jog moves the DRO by the step -> a press-and-hold jog moves while
+  held (past the daemon's 0.3 s lease, so the page renews it) and stops when
+  released -> a hold released by the window losing focus -> the page at a
+  390x844 phone viewport shows the DRO and the jog pad without horizontal
+  scrolling -> with a token required, the page works from #token=... and
+  from the prompt.
+
+Screenshots are kept in the output folder (the test's artefacts).
+Exit codes: 0 passed, 1 failed, 77 skipped (no Chromium on this machine).
+
+  test_page.py --daemon build/release/cncstreamd --source . --output build/release/test-output/web
+  test_page.py --mock ...   (develop against tests/web/mock_daemon.py instead)
+"""
+import argparse
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+import urllib.request
+
+SKIP = 77
+CHROMIUM = next((p for p in ("/usr/bin/chromium", "/usr/bin/chromium-browser") if os.path.exists(p)), None)
+CHROMEDRIVER = shutil.which("chromedriver") or ("/usr/bin/chromedriver" if os.path.exists("/usr/bin/chromedriver") else None)
+if not CHROMIUM or not CHROMEDRIVER:
+    print("SKIP: Chromium or chromedriver is not installed (scripts/setup.sh installs chromium chromium-driver)")
+    sys.exit(SKIP)
+# Chromium is here, so selenium must be too (the same setup installs both):
+# a missing module is a failure, not a skip.
+from selenium import webdriver  # noqa: E402
+from selenium.common.exceptions import TimeoutException  # noqa: E402
+from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
+
+T0 = time.monotonic()
+
+
+def say(msg):
+    print(f"[{time.monotonic() - T0:6.1f} s] {msg}", flush=True)
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Daemon:
+    """The daemon under test on a free loopback port with a fresh data folder."""
+
+    def __init__(self, args, out, name, require_token=False):
+        self.data = tempfile.mkdtemp(prefix="cncstream-web-")
+        self.port = free_port()
+        self.url = f"http://127.0.0.1:{self.port}/"
+        self.log_path = os.path.join(out, f"{name}.log")
+        self.log = open(self.log_path, "w")
+        web = os.path.join(args.source, "web")
+        if args.mock:
+            cmd = [sys.executable, os.path.join(args.source, "tests", "web", "mock_daemon.py"),
+                   "--port", str(self.port), "--web", web]
+            if require_token:
+                self.token = "mocktoken"
+                cmd += ["--token", self.token]
+        else:
+            cfg = os.path.join(self.data, "cncstreamd.toml")
+            with open(cfg, "w") as f:
+                f.write(f'listen = "127.0.0.1:{self.port}"\n'
+                        f'data_dir = {json.dumps(os.path.join(self.data, "state"))}\n'
+                        '[[machine]]\nname = "sim"\nport = "sim"\nsim_speed = "max"\n'
+                        f'[security]\nrequire_token = {"true" if require_token else "false"}\n'
+                        f'[web]\nroot = {json.dumps(web)}\n')
+            cmd = [args.daemon, "--config", cfg]
+        say(f"starting {' '.join(cmd)}")
+        self.proc = subprocess.Popen(cmd, stdout=self.log, stderr=subprocess.STDOUT)
+        deadline = time.monotonic() + 30
+        while True:
+            if self.proc.poll() is not None:
+                raise AssertionError(f"the daemon exited with {self.proc.returncode}; its log:\n{open(self.log_path).read()}")
+            try:
+                with urllib.request.urlopen(self.url + "api/v1/health", timeout=2) as r:
+                    if json.load(r).get("ok"):
+                        break
+            except OSError:
+                pass
+            if time.monotonic() > deadline:
+                raise AssertionError("the daemon did not answer /api/v1/health within 30 s")
+            time.sleep(0.1)  # polling a process that has no readiness signal
+        if require_token and not args.mock:
+            # The daemon writes its token at first start (docs/api-v1.md).
+            with open(os.path.join(self.data, "state", "token")) as f:
+                self.token = f.read().strip()
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.log.close()
+        shutil.rmtree(self.data, ignore_errors=True)
+
+
+def browser():
+    o = webdriver.ChromeOptions()
+    o.binary_location = CHROMIUM
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+              "--window-size=1400,1000", "--hide-scrollbars", "--force-device-scale-factor=1"):
+        o.add_argument(a)
+    o.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    d = webdriver.Chrome(service=Service(CHROMEDRIVER), options=o)
+    d.set_page_load_timeout(30)
+    return d
+
+
+class Page:
+    def __init__(self, d, out):
+        self.d = d
+        self.out = out
+        self.shots = []
+
+    def q(self, css):
+        return self.d.find_element(By.CSS_SELECTOR, css)
+
+    def text(self, css):
+        return self.q(css).text.strip()
+
+    def wait(self, what, fn, timeout=20):
+        """Waits for fn() to be truthy; the failure names what was awaited."""
+        try:
+            return WebDriverWait(self.d, timeout, poll_frequency=0.05).until(lambda _: fn())
+        except TimeoutException:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}") from None
+
+    def shot(self, name):
+        path = os.path.join(self.out, name + ".png")
+        self.d.save_screenshot(path)
+        self.shots.append(path)
+        say(f"screenshot {path}")
+
+    def full_shot(self, name):
+        """The whole page, not only the viewport (Chrome DevTools)."""
+        import base64
+        m = self.d.execute_cdp_cmd("Page.getLayoutMetrics", {})
+        w, h = m["cssContentSize"]["width"], m["cssContentSize"]["height"]
+        r = self.d.execute_cdp_cmd("Page.captureScreenshot", {"format": "png", "captureBeyondViewport": True,
+                                                              "clip": {"x": 0, "y": 0, "width": w, "height": h, "scale": 1}})
+        path = os.path.join(self.out, name + ".png")
+        with open(path, "wb") as f:
+            f.write(base64.b64decode(r["data"]))
+        self.shots.append(path)
+        say(f"screenshot {path}")
+
+    def dro(self, axis):
+        t = self.text(f"#dro-{axis}")
+        return float(t) if t not in ("", "—") else None
+
+    def state(self):
+        return self.q("#state").get_attribute("data-state")
+
+    def status_seq(self):
+        return self.d.execute_script(
+            "const r = window.cncstream.state.machines.get(window.cncstream.state.current);"
+            "return r && r.status ? (r.status.seq ?? null) : null;")
+
+    def connected(self):
+        return self.q("#link").get_attribute("data-up") == "1" and self.dro("x") is not None and self.state() == "idle"
+
+    def console_errors(self):
+        try:
+            return [e for e in self.d.get_log("browser") if e["level"] == "SEVERE"]
+        except Exception:  # not every driver keeps the log
+            return []
+
+
+def wait_stopped(p, axis):
+    """The machine is idle and the DRO holds still over several status reports."""
+    p.wait("the state to return to Idle", lambda: p.state() == "idle", 15)
+    v = p.dro(axis)
+    seq = p.status_seq()
+    p.wait("three more status reports", lambda: (p.status_seq() or 0) >= (seq or 0) + 3, 10)
+    assert abs(p.dro(axis) - v) < 0.0005, f"{axis} still moving after release: {v} -> {p.dro(axis)}"
+    return p.dro(axis)
+
+
+def main_flow(args, out):
+    daemon = Daemon(args, out, "daemon")
+    d = browser()
+    p = Page(d, out)
+    try:
+        # ---- load
+        d.get(daemon.url)
+        p.wait("the page to connect and show an idle machine with a DRO", p.connected, 30)
+        p.shot("01-loaded")
+        say(f"loaded: state {p.text('#state')}, X {p.dro('x')} Y {p.dro('y')} Z {p.dro('z')}")
+
+        # ---- upload through the file chooser
+        part = os.path.join(args.source, "examples", "plaque.stl")
+        p.q("#file-input").send_keys(part)
+        p.wait("the tool-path form for plaque.stl", lambda: p.q("#toolpath-form").is_displayed() and p.text("#tp-part") == "plaque.stl", 60)
+        assert "STL" in p.text("#upload-status") and "34,908 facets" in p.text("#upload-status").replace("\u202f", ","), p.text("#upload-status")
+
+        # ---- the tool-path form: a coarse stepover keeps the job short
+        def fill(css, v):
+            e = p.q(css)
+            e.clear()
+            e.send_keys(str(v))
+        d.find_element(By.CSS_SELECTOR, "#tp-cutter option[value=ball]").click()
+        fill("#tp-diameter", 6)
+        fill("#tp-stepover", 2)
+        d.find_element(By.CSS_SELECTOR, "#tp-direction option[value=y]").click()
+        fill("#tp-feed", 2500)
+        fill("#tp-plunge", 500)
+        fill("#tp-rpm", 12000)
+        p.shot("02-form")
+        p.q("#tp-generate").click()
+
+        # ---- generated: in the queue as ready, with its preview drawn
+        ready = "#queue li[data-state=ready]"
+        p.wait("the job to be generated (ready in the queue)", lambda: d.find_elements(By.CSS_SELECTOR, ready), 90)
+        job_id = p.q(ready).get_attribute("data-job")
+        meta = p.q(ready + " .meta").text
+        assert "ball:6" in meta and "stepover 2 mm" in meta and "along Y" in meta, meta
+        p.wait("the preview of the job", lambda: p.q("#preview").is_displayed() and p.q("#preview").get_attribute("data-job") == job_id, 30)
+        # The preview must have drawn something: count coloured (height map) pixels.
+        coloured = d.execute_script("""
+            const c = document.getElementById('preview-canvas'), x = c.getContext('2d');
+            const d = x.getImageData(0, 0, c.width, c.height).data; let n = 0;
+            for (let i = 0; i < d.length; i += 4) if (d[i] + d[i+1] + d[i+2] > 120) n++;
+            return n / (c.width * c.height);""")
+        assert coloured > 0.2, f"the preview is mostly empty ({coloured:.0%} coloured)"
+        d.execute_script("document.getElementById('preview').scrollIntoView()")
+        p.shot("03-ready-preview")
+        say(f"job #{job_id} ready: {meta}")
+
+        # ---- start on the sim and see it through to 100 %
+        p.q(ready + " button[data-act=start]").click()
+        p.wait("the job to run", lambda: p.q("#progressbar").get_attribute("data-state") in ("running", "done"), 20)
+        d.execute_script("window.scrollTo(0, 0)")
+        if p.q("#progressbar").get_attribute("data-state") == "running":
+            p.shot("04-running")
+        p.wait("the job to finish", lambda: p.q("#progressbar").get_attribute("data-state") == "done", 90)
+        assert p.text("#progress-pct") == "100 %", p.text("#progress-pct")
+        lines = p.text("#progress-lines").replace(",", "").replace("\u202f", "").split(" ")
+        assert lines[0] == lines[2] and int(lines[0]) > 1000, f"answered lines {p.text('#progress-lines')}"
+        assert p.q("#progressbar").get_attribute("aria-valuenow") == "100"
+        p.wait("the job in the history as done", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{job_id}'][data-state=done]"), 10)
+        p.wait("the machine idle after the job", lambda: p.state() == "idle", 30)
+        p.shot("05-done")
+        say(f"job #{job_id} done: {p.text('#progress-lines')}")
+
+        # ---- a step jog: the DRO moves by exactly the step
+        d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value='10']").find_element(By.XPATH, "..").click()
+        x0 = p.dro("x")
+        p.q("#jogpad [data-axis=X][data-dir='1']").click()
+        p.wait("X to move by the 10 mm step", lambda: p.dro("x") is not None and abs(p.dro("x") - (x0 + 10)) < 0.002, 20)
+        wait_stopped(p, "x")
+        say(f"step jog: X {x0} -> {p.dro('x')}")
+
+        # ---- press and hold: moves for longer than one lease, stops on release
+        d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value=hold]").find_element(By.XPATH, "..").click()
+        feed = 1200  # mm/min: 20 mm/s, 6 mm in one 0.3 s lease
+        p.q("#jog-feed").clear()
+        p.q("#jog-feed").send_keys(str(feed))
+        y0 = p.dro("y")
+        btn = p.q("#jogpad [data-axis=Y][data-dir='1']")
+        ActionChains(d).click_and_hold(btn).perform()
+        t_press = time.monotonic()
+        p.wait("the state to show Jog while held", lambda: p.state() == "jog", 10)
+        # 15 mm is more than two leases' travel: only a renewed jog gets there.
+        p.wait("Y to move 15 mm while held", lambda: p.dro("y") - y0 > 15, 20)
+        assert p.state() == "jog", f"state {p.state()} while still held"
+        p.shot("06-jog-held")
+        ActionChains(d).release().perform()
+        t_release = time.monotonic()
+        y1 = wait_stopped(p, "y")
+        say(f"hold jog: Y {y0} -> {y1} in a {t_release - t_press:.1f} s hold")
+        assert y1 - y0 > 15
+
+        # ---- a hold ended by the window losing focus (the mouse stays down)
+        ActionChains(d).click_and_hold(btn).perform()
+        p.wait("the state to show Jog while held", lambda: p.state() == "jog", 10)
+        d.execute_script("window.dispatchEvent(new Event('blur'))")
+        y2 = wait_stopped(p, "y")
+        ActionChains(d).release().perform()
+        assert not d.find_elements(By.CSS_SELECTOR, "#jogpad .held"), "a jog button still shows held"
+        say(f"blur released the jog: Y {y1} -> {y2}")
+        p.shot("07-after-jog")
+        p.full_shot("08-desktop-full")
+
+        # ---- a phone: 390x844 CSS pixels, touch
+        d.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {"width": 390, "height": 844, "deviceScaleFactor": 2, "mobile": True})
+        d.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": True, "maxTouchPoints": 5})
+        d.get(daemon.url)
+        p.wait("the page to connect on the phone", p.connected, 30)
+        geo = d.execute_script("""
+            const r = (s) => { const b = document.querySelector(s).getBoundingClientRect(); return [b.left, b.right, b.width, b.height]; };
+            return {scrollW: document.documentElement.scrollWidth, innerW: window.innerWidth,
+                    dro: r('#dro'), pad: r('#jogpad'),
+                    buttons: [...document.querySelectorAll('#jogpad .jog')].map(b => { const x = b.getBoundingClientRect(); return [x.width, x.height, x.right]; }),
+                    droFont: getComputedStyle(document.querySelector('#dro-x')).fontFamily};""")
+        say(f"phone geometry: {geo}")
+        assert geo["innerW"] == 390, geo
+        assert geo["scrollW"] <= geo["innerW"], f"horizontal scrolling on the phone: content {geo['scrollW']} px > {geo['innerW']} px"
+        for name in ("dro", "pad"):
+            left, right, w, h = geo[name]
+            assert left >= 0 and right <= 390 and w > 200 and h > 100, f"{name} does not fit the phone: {geo[name]}"
+        for w, h, right in geo["buttons"]:
+            assert w >= 44 and h >= 44 and right <= 390, f"a jog button is too small or off screen: {w}x{h} at {right}"
+        assert "mono" in geo["droFont"].lower(), geo["droFont"]
+        p.shot("09-phone-top")
+        d.execute_script("document.getElementById('panel-jog').scrollIntoView()")
+        p.shot("10-phone-jog")
+        d.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
+        errs = p.console_errors()
+        assert not errs, f"errors in the browser console: {errs}"
+        return p.shots
+    except Exception:
+        try:
+            p.shot("FAILED-main")
+            with open(os.path.join(out, "FAILED-main.html"), "w") as f:
+                f.write(d.page_source)
+            for e in p.console_errors():
+                say(f"browser console: {e}")
+        except Exception:
+            pass
+        raise
+    finally:
+        d.quit()
+        daemon.stop()
+
+
+def token_flow(args, out):
+    """Off loopback the daemon needs a token: the page takes it from the URL
+    fragment, else asks for it, and keeps it for the tab only."""
+    daemon = Daemon(args, out, "daemon-token", require_token=True)
+    d = browser()
+    p = Page(d, out)
+    try:
+        # From the fragment: connects, and the token leaves the address bar.
+        d.get(daemon.url + "#token=" + daemon.token)
+        p.wait("the page to connect with the token from the URL", p.connected, 30)
+        assert "token" not in d.current_url, d.current_url
+        assert d.execute_script("return sessionStorage.getItem('cncstream.token')") == daemon.token
+        # A fresh tab state with no token: the page asks; the typed token works.
+        d.execute_script("sessionStorage.clear()")
+        d.get(daemon.url)
+        alert = p.wait("the page to ask for the token", lambda: _alert(d), 20)
+        alert.send_keys(daemon.token)
+        alert.accept()
+        p.wait("the page to connect with the typed token", p.connected, 30)
+        p.shot("11-token-prompt-connected")
+        errs = [e for e in p.console_errors() if "401" not in e["message"]]  # the first, refused request is expected
+        assert not errs, f"errors in the browser console: {errs}"
+    except Exception:
+        try:
+            p.shot("FAILED-token")
+        except Exception:
+            pass
+        raise
+    finally:
+        d.quit()
+        daemon.stop()
+
+
+def _alert(d):
+    try:
+        a = d.switch_to.alert
+        a.text  # raises when there is none
+        return a
+    except Exception:
+        return None
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    here = os.path.dirname(os.path.abspath(__file__))
+    ap.add_argument("--daemon", default=os.environ.get("CNCSTREAMD"), help="the cncstreamd binary")
+    ap.add_argument("--source", default=os.path.normpath(os.path.join(here, "..", "..")))
+    ap.add_argument("--output", default=os.environ.get("CNCSTREAM_TEST_OUTPUT", os.path.join(os.getcwd(), "test-output", "web")))
+    ap.add_argument("--mock", action="store_true", help="run against tests/web/mock_daemon.py (development only)")
+    args = ap.parse_args()
+    if not args.mock and not (args.daemon and os.access(args.daemon, os.X_OK)):
+        print(f"FAIL: no cncstreamd to test (--daemon or CNCSTREAMD): {args.daemon!r}")
+        return 1
+    os.makedirs(args.output, exist_ok=True)
+    try:
+        shots = main_flow(args, args.output)
+        token_flow(args, args.output)
+    except Exception:
+        traceback.print_exc()
+        say(f"FAILED; screenshots and logs in {args.output}")
+        return 1
+    say(f"passed; screenshots: {', '.join(os.path.basename(s) for s in shots)} in {args.output}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
