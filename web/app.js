@@ -125,6 +125,7 @@ async function takeControl(machine, force) {
   try {
     const r = await api('POST', `/machines/${enc(machine)}/control`, { force });
     S.control.set(machine, r.holder);
+    if (machine === S.current) renderMachine();
     return true;
   } catch (e) {
     if (e instanceof ApiError && e.status === 409) {
@@ -262,6 +263,8 @@ function renderMachine() {
   $('#ov-rapid').textContent = (ov[1] ?? 100) + ' %';
   $('#ov-spindle').textContent = (ov[2] ?? 100) + ' %';
   const link = s.link || rec.summary.link;
+  const holder = S.control.get(S.current);
+  $('#control').textContent = holder === S.clientId ? '· this screen has control' : holder ? `· controlled by another screen (${holder})` : '';
   $('#machine-link').textContent = [rec.summary.profile, link && link !== 'ready' ? 'link ' + link : ''].filter(Boolean).join(' · ');
 
   // What may be pressed follows the machine's state (the daemon refuses the
@@ -322,10 +325,28 @@ function renderJobs() {
   const mine = [...S.jobs.values()].filter((j) => j.machine === S.current);
   const queue = mine.filter((j) => UNFINISHED.has(j.state)).sort((a, b) => (a.position ?? 0) - (b.position ?? 0));
   $('#queue-empty').hidden = queue.length > 0;
-  $('#queue').replaceChildren(...queue.map(queueItem));
+  // Rebuild an entry only when what it shows changed: progress messages come
+  // many times a second, and a button replaced under a finger loses its tap.
+  const items = queue.map((j) => {
+    const sig = JSON.stringify([j.state, j.position, j.message, j.program, j.generation && [j.generation.stage, Math.round((j.generation.fraction || 0) * 100)], j.params]);
+    const old = queueItems.get(j.id);
+    if (old && old.sig === sig) return old.li;
+    const li = queueItem(j);
+    queueItems.set(j.id, { sig, li });
+    return li;
+  });
+  for (const id of queueItems.keys()) if (!queue.some((j) => j.id === id)) queueItems.delete(id);
+  sameChildren($('#queue'), items);
   renderRunning(mine);
   renderHistory();
   renderFormStatus();
+}
+
+const queueItems = new Map();  // job id -> {sig, li}
+function sameChildren(parent, nodes) {
+  const kids = parent.children;
+  if (kids.length === nodes.length && nodes.every((n, i) => kids[i] === n)) return;
+  parent.replaceChildren(...nodes);
 }
 
 function queueItem(j) {
@@ -401,9 +422,13 @@ function setProgress(frac, lines, eta) {
   $('#eta').textContent = eta;
 }
 
+let historySig = null;
 function renderHistory() {
   const done = [...S.jobs.values()].filter((j) => FINISHED.has(j.state))
     .sort((a, b) => String(b.ended_at || b.created_at).localeCompare(String(a.ended_at || a.created_at))).slice(0, 50);
+  const sig = JSON.stringify(done.map((j) => [j.id, j.state, j.message, j.ended_at, j.progress && j.progress.last_answered_line]));
+  if (sig === historySig) return;
+  historySig = sig;
   $('#history tbody').replaceChildren(...(done.length ? done.map((j) => {
     const p = j.progress || {};
     const total = j.program ? j.program.lines : null;
@@ -791,6 +816,7 @@ function onMessage(m) {
     }
     case 'control':
       S.control.set(m.machine, m.holder);
+      if (m.machine === S.current) renderMachine();
       if (m.holder && m.holder !== S.clientId) {
         log(m.machine, `control taken by ${m.holder}`, 'info');
         if (jog.machine === m.machine) releaseJog('control lost');

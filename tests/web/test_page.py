@@ -42,7 +42,7 @@ from selenium.common.exceptions import TimeoutException  # noqa: E402
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.chrome.service import Service  # noqa: E402
-from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
+from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
 
 T0 = time.monotonic()
 
@@ -69,7 +69,7 @@ class Daemon:
         web = os.path.join(args.source, "web")
         if args.mock:
             cmd = [sys.executable, os.path.join(args.source, "tests", "web", "mock_daemon.py"),
-                   "--port", str(self.port), "--web", web]
+                   "--port", str(self.port), "--web", web, "--machines", "sim,bench"]
             if require_token:
                 self.token = "mocktoken"
                 cmd += ["--token", self.token]
@@ -78,7 +78,10 @@ class Daemon:
             with open(cfg, "w") as f:
                 f.write(f'listen = "127.0.0.1:{self.port}"\n'
                         f'data_dir = {json.dumps(os.path.join(self.data, "state"))}\n'
+                        # sim: as fast as it goes, for the job; bench: real time, so
+                        # a held jog moves for as long as it is held (the dead man matters).
                         '[[machine]]\nname = "sim"\nport = "sim"\nsim_speed = "max"\n'
+                        '[[machine]]\nname = "bench"\nport = "sim"\nsim_speed = "1"\n'
                         f'[security]\nrequire_token = {"true" if require_token else "false"}\n'
                         f'[web]\nroot = {json.dumps(web)}\n')
             cmd = [args.daemon, "--config", cfg]
@@ -231,8 +234,8 @@ def main_flow(args, out):
         # ---- generated: in the queue as ready, with its preview drawn
         ready = "#queue li[data-state=ready]"
         p.wait("the job to be generated (ready in the queue)", lambda: d.find_elements(By.CSS_SELECTOR, ready), 90)
-        job_id = p.q(ready).get_attribute("data-job")
-        meta = p.q(ready + " .meta").text
+        job_id = d.execute_script(f"return document.querySelector('{ready}').dataset.job")
+        meta = d.execute_script(f"return document.querySelector('{ready} .meta').textContent")
         assert "ball:6" in meta and "stepover 2 mm" in meta and "along Y" in meta, meta
         p.wait("the preview of the job", lambda: p.q("#preview").is_displayed() and p.q("#preview").get_attribute("data-job") == job_id, 30)
         # The preview must have drawn something: count coloured (height map) pixels.
@@ -247,7 +250,7 @@ def main_flow(args, out):
         say(f"job #{job_id} ready: {meta}")
 
         # ---- start on the sim and see it through to 100 %
-        p.q(ready + " button[data-act=start]").click()
+        p.q(f"#queue li[data-job='{job_id}'] button[data-act=start]").click()
         p.wait("the job to run", lambda: p.q("#progressbar").get_attribute("data-state") in ("running", "done"), 20)
         d.execute_script("window.scrollTo(0, 0)")
         if p.q("#progressbar").get_attribute("data-state") == "running":
@@ -262,6 +265,10 @@ def main_flow(args, out):
         p.shot("05-done")
         say(f"job #{job_id} done: {p.text('#progress-lines')}")
 
+        # ---- jogging on the real-time simulator: switch machines in the page
+        Select(p.q("#machine-select")).select_by_value("bench")
+        p.wait("the page to show the bench machine, idle", lambda: p.d.execute_script("return window.cncstream.state.current") == "bench" and p.connected(), 20)
+
         # ---- a step jog: the DRO moves by exactly the step
         d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value='10']").find_element(By.XPATH, "..").click()
         x0 = p.dro("x")
@@ -272,7 +279,7 @@ def main_flow(args, out):
 
         # ---- press and hold: moves for longer than one lease, stops on release
         d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value=hold]").find_element(By.XPATH, "..").click()
-        feed = 1200  # mm/min: 20 mm/s, 6 mm in one 0.3 s lease
+        feed = 1200  # mm/min: the daemon clamps to the machine's rates ($110-$112, 500 on the simulator)
         p.q("#jog-feed").clear()
         p.q("#jog-feed").send_keys(str(feed))
         y0 = p.dro("y")
@@ -280,7 +287,7 @@ def main_flow(args, out):
         ActionChains(d).click_and_hold(btn).perform()
         t_press = time.monotonic()
         p.wait("the state to show Jog while held", lambda: p.state() == "jog", 10)
-        # 15 mm is more than two leases' travel: only a renewed jog gets there.
+        # 15 mm takes seconds at these feeds, many 0.3 s leases: only a renewed jog gets there.
         p.wait("Y to move 15 mm while held", lambda: p.dro("y") - y0 > 15, 20)
         assert p.state() == "jog", f"state {p.state()} while still held"
         p.shot("06-jog-held")
