@@ -359,7 +359,7 @@ function queueItem(j) {
   const acts = [];
   if (j.state === 'ready') {
     acts.push(el('button', { class: 'btn btn-go', 'data-act': 'start', onclick: () => run('Start', () => controlled(m, () => api('POST', `/jobs/${j.id}/start`, {}))) }, 'Start'));
-    if (j.kind === 'stl') acts.push(el('button', { class: 'btn', onclick: () => run('Preview', () => showPreview(j.id)) }, 'Preview'));
+    if (j.kind === 'stl') acts.push(el('button', { class: 'btn', 'data-act': 'preview', onclick: () => run('Preview', () => showPreview(j.id)) }, 'Preview'));
   }
   if (j.state === 'queued') acts.push(el('button', { class: 'btn', onclick: () => run('Generate', () => api('POST', `/jobs/${j.id}/generate`, {})) }, 'Generate'));
   if (j.state === 'running') acts.push(el('button', { class: 'btn btn-warn', onclick: () => run('Hold', () => api('POST', `/jobs/${j.id}/hold`, {})) }, 'Hold'));
@@ -367,7 +367,7 @@ function queueItem(j) {
   if (j.state === 'running' || j.state === 'held') acts.push(el('button', { class: 'btn btn-danger', onclick: () => run('Stop', () => api('POST', `/jobs/${j.id}/stop`, {})) }, 'Stop'));
   if (['queued', 'generating', 'ready'].includes(j.state)) {
     if ((j.position ?? 0) > 0) acts.push(el('button', { class: 'btn', 'aria-label': 'Move up', onclick: () => run('Move', () => api('POST', `/jobs/${j.id}/move`, { position: j.position - 1 })) }, '↑'));
-    acts.push(el('button', { class: 'btn', onclick: () => run('Cancel', () => controlled(m, () => api('POST', `/jobs/${j.id}/cancel`, {}))) }, 'Remove'));
+    acts.push(el('button', { class: 'btn', 'data-act': 'cancel', onclick: () => run('Cancel', () => controlled(m, () => api('POST', `/jobs/${j.id}/cancel`, {}))) }, 'Remove'));
   }
   return el('li', { dataset: { job: j.id, state: j.state } },
     el('div', { class: 'title' }, jobTitle(j), el('span', { class: 'badge ' + j.state }, j.state)),

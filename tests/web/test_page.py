@@ -138,6 +138,13 @@ class Page:
     def q(self, css):
         return self.d.find_element(By.CSS_SELECTOR, css)
 
+    def click(self, target):
+        """Clicks like a user: scrolled to the middle of the screen first, so the
+        sticky header never covers it."""
+        e = self.q(target) if isinstance(target, str) else target
+        self.d.execute_script("arguments[0].scrollIntoView({block: 'center'})", e)
+        e.click()
+
     def text(self, css):
         return self.q(css).text.strip()
 
@@ -199,9 +206,8 @@ def wait_stopped(p, axis):
     return p.dro(axis)
 
 
-def main_flow(args, out):
+def main_flow(args, out, d):
     daemon = Daemon(args, out, "daemon")
-    d = browser()
     p = Page(d, out)
     try:
         # ---- load
@@ -221,15 +227,15 @@ def main_flow(args, out):
             e = p.q(css)
             e.clear()
             e.send_keys(str(v))
-        d.find_element(By.CSS_SELECTOR, "#tp-cutter option[value=ball]").click()
+        Select(p.q("#tp-cutter")).select_by_value("ball")
         fill("#tp-diameter", 6)
         fill("#tp-stepover", 2)
-        d.find_element(By.CSS_SELECTOR, "#tp-direction option[value=y]").click()
+        Select(p.q("#tp-direction")).select_by_value("y")
         fill("#tp-feed", 2500)
         fill("#tp-plunge", 500)
         fill("#tp-rpm", 12000)
         p.shot("02-form")
-        p.q("#tp-generate").click()
+        p.click("#tp-generate")
 
         # ---- generated: in the queue as ready, with its preview drawn
         ready = "#queue li[data-state=ready]"
@@ -250,7 +256,7 @@ def main_flow(args, out):
         say(f"job #{job_id} ready: {meta}")
 
         # ---- start on the sim and see it through to 100 %
-        p.q(f"#queue li[data-job='{job_id}'] button[data-act=start]").click()
+        p.click(f"#queue li[data-job='{job_id}'] button[data-act=start]")
         p.wait("the job to run", lambda: p.q("#progressbar").get_attribute("data-state") in ("running", "done"), 20)
         d.execute_script("window.scrollTo(0, 0)")
         if p.q("#progressbar").get_attribute("data-state") == "running":
@@ -265,25 +271,43 @@ def main_flow(args, out):
         p.shot("05-done")
         say(f"job #{job_id} done: {p.text('#progress-lines')}")
 
+        # ---- a G-code file dropped on the drop zone is queued as it is, then removed
+        d.execute_script("""
+            const dt = new DataTransfer();
+            dt.items.add(new File([arguments[0]], 'square.nc', {type: 'text/plain'}));
+            const z = document.getElementById('drop');
+            for (const t of ['dragenter', 'dragover', 'drop'])
+              z.dispatchEvent(new DragEvent(t, {dataTransfer: dt, bubbles: true, cancelable: true}));""",
+            "G21 G90\nG0 X0 Y0\nG1 X5 F500\nG1 Y5\nG1 X0\nG1 Y0\nM2\n")
+        p.wait("the dropped G-code to be offered for the queue", lambda: "G-code, 7 lines" in p.text("#upload-status") and "Add to the queue" in p.text("#tp-generate"), 20)
+        p.click("#tp-generate")
+        dropped = "#queue li[data-state=ready]"
+        p.wait("the G-code job ready in the queue", lambda: d.execute_script(f"const e = document.querySelector('{dropped} .title'); return e && e.textContent.startsWith('square.nc')"), 20)
+        gid = d.execute_script(f"return document.querySelector('{dropped}').dataset.job")
+        p.click(f"#queue li[data-job='{gid}'] button[data-act=cancel]")
+        p.wait("the removed job in the history as cancelled", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{gid}'][data-state=cancelled]"), 10)
+        assert not d.find_elements(By.CSS_SELECTOR, f"#queue li[data-job='{gid}']"), "the cancelled job is still queued"
+
         # ---- jogging on the real-time simulator: switch machines in the page
         Select(p.q("#machine-select")).select_by_value("bench")
         p.wait("the page to show the bench machine, idle", lambda: p.d.execute_script("return window.cncstream.state.current") == "bench" and p.connected(), 20)
 
         # ---- a step jog: the DRO moves by exactly the step
-        d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value='10']").find_element(By.XPATH, "..").click()
+        p.click(d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value='10']").find_element(By.XPATH, ".."))
         x0 = p.dro("x")
-        p.q("#jogpad [data-axis=X][data-dir='1']").click()
+        p.click("#jogpad [data-axis=X][data-dir='1']")
         p.wait("X to move by the 10 mm step", lambda: p.dro("x") is not None and abs(p.dro("x") - (x0 + 10)) < 0.002, 20)
         wait_stopped(p, "x")
         say(f"step jog: X {x0} -> {p.dro('x')}")
 
         # ---- press and hold: moves for longer than one lease, stops on release
-        d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value=hold]").find_element(By.XPATH, "..").click()
+        p.click(d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value=hold]").find_element(By.XPATH, ".."))
         feed = 1200  # mm/min: the daemon clamps to the machine's rates ($110-$112, 500 on the simulator)
         p.q("#jog-feed").clear()
         p.q("#jog-feed").send_keys(str(feed))
         y0 = p.dro("y")
         btn = p.q("#jogpad [data-axis=Y][data-dir='1']")
+        d.execute_script("arguments[0].scrollIntoView({block: 'center'})", btn)
         ActionChains(d).click_and_hold(btn).perform()
         t_press = time.monotonic()
         p.wait("the state to show Jog while held", lambda: p.state() == "jog", 10)
@@ -346,16 +370,16 @@ def main_flow(args, out):
             pass
         raise
     finally:
-        d.quit()
+        d.get("about:blank")  # leave before the daemon goes, or the page's reconnects are logged as errors
         daemon.stop()
 
 
-def token_flow(args, out):
+def token_flow(args, out, d):
     """Off loopback the daemon needs a token: the page takes it from the URL
     fragment, else asks for it, and keeps it for the tab only."""
     daemon = Daemon(args, out, "daemon-token", require_token=True)
-    d = browser()
     p = Page(d, out)
+    p.console_errors()  # reading the log empties it: what follows belongs to this part
     try:
         # From the fragment: connects, and the token leaves the address bar.
         d.get(daemon.url + "#token=" + daemon.token)
@@ -379,7 +403,6 @@ def token_flow(args, out):
             pass
         raise
     finally:
-        d.quit()
         daemon.stop()
 
 
@@ -404,13 +427,16 @@ def main():
         print(f"FAIL: no cncstreamd to test (--daemon or CNCSTREAMD): {args.daemon!r}")
         return 1
     os.makedirs(args.output, exist_ok=True)
+    d = browser()
     try:
-        shots = main_flow(args, args.output)
-        token_flow(args, args.output)
+        shots = main_flow(args, args.output, d)
+        token_flow(args, args.output, d)
     except Exception:
         traceback.print_exc()
         say(f"FAILED; screenshots and logs in {args.output}")
         return 1
+    finally:
+        d.quit()
     say(f"passed; screenshots: {', '.join(os.path.basename(s) for s in shots)} in {args.output}")
     return 0
 
