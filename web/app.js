@@ -253,6 +253,8 @@ function renderMachine() {
   stEl.textContent = st.label;
   stEl.className = 'state state-' + st.cls;
   stEl.dataset.state = st.cls;
+  $('#top-state').textContent = st.label.split(':')[0];
+  $('#top-state').className = 'state top-state state-' + st.cls;
   const s = rec.status || {};
   const w = s.wpos || [], m = s.mpos || [];
   ['x', 'y', 'z'].forEach((a, i) => { $('#dro-' + a).textContent = fmt(w[i]); $('#dro-m' + a).textContent = fmt(m[i]); });
@@ -264,7 +266,7 @@ function renderMachine() {
   $('#ov-spindle').textContent = (ov[2] ?? 100) + ' %';
   const link = s.link || rec.summary.link;
   const holder = S.control.get(S.current);
-  $('#control').textContent = holder === S.clientId ? '· this screen has control' : holder ? `· controlled by another screen (${holder})` : '';
+  $('#control').textContent = holder === S.clientId ? 'this screen has control' : holder ? `controlled by another screen (${holder})` : '';
   $('#machine-link').textContent = [rec.summary.profile, link && link !== 'ready' ? 'link ' + link : ''].filter(Boolean).join(' · ');
 
   // What may be pressed follows the machine's state (the daemon refuses the
