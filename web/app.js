@@ -402,6 +402,8 @@ function renderRunning(mine) {
     } else if (last.started_at && last.ended_at) {
       eta = `took ${duration((Date.parse(last.ended_at) - Date.parse(last.started_at)) / 1000)}`;
     }
+    // The simulator's cut checked against the part (sim machines only).
+    if (last.verify && last.verify.text) eta += (eta ? ' · ' : '') + last.verify.text;
     setProgress(frac, lines, eta);
     bar.dataset.state = last.state;
     bar.dataset.job = last.id;
@@ -825,6 +827,11 @@ function onMessage(m) {
       }
       break;
     case 'ack': case 'error': {
+      if (m.id === 'renew') {
+        // The jog ended on the machine's side (an alarm, a limit, the lease): stop renewing.
+        if (m.type === 'error' && jog.timer) { endHold(); log(jog.machine || S.current, `jog ended: ${m.message}`, 'info'); }
+        break;
+      }
       const w = wsWaiters.get(m.id);
       if (w) { wsWaiters.delete(m.id); w(m); } else if (m.type === 'error') log(S.current, `${m.code}: ${m.message}`, 'err');
       break;
@@ -909,7 +916,7 @@ async function startHold(b) {
     return;
   }
   jog.timer = setInterval(() => {
-    if (!wsSend({ type: 'jog_renew', machine: m })) releaseJog('connection lost');
+    if (!wsSend({ type: 'jog_renew', machine: m, id: 'renew' })) releaseJog('connection lost');
   }, JOG_RENEW_MS);
 }
 

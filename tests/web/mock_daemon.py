@@ -477,6 +477,12 @@ class Handler(BaseHTTPRequestHandler):
                     broadcast({"type": "event", "machine": m.name, "kind": "alarm", "code": 2, "line": 0, "text": "ALARM:2",
                                "info": {"name": "Soft limit", "text": "A move would have gone past a soft limit; the machine position is kept.",
                                         "action": "Unlock ($X) and jog back inside the travel.", "reset_required": False, "position_lost": False}}, m.name)
+                elif line.strip().upper().startswith("G99"):
+                    broadcast({"type": "console", "machine": m.name, "dir": "in", "text": "error:20"}, m.name)
+                    broadcast({"type": "event", "machine": m.name, "kind": "error", "code": 20, "line": 0, "text": "error:20",
+                               "info": {"name": "Unsupported command", "text": "Unsupported or invalid G-code command found in the block.",
+                                        "action": "Remove or replace the command: this controller does not implement it.",
+                                        "reset_required": False, "position_lost": False}}, m.name)
                 else:
                     broadcast({"type": "console", "machine": m.name, "dir": "in", "text": "ok"}, m.name)
                 return self.reply(202, {"accepted": True})

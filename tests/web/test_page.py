@@ -288,6 +288,22 @@ def main_flow(args, out, d):
         p.wait("the removed job in the history as cancelled", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{gid}'][data-state=cancelled]"), 10)
         assert not d.find_elements(By.CSS_SELECTOR, f"#queue li[data-job='{gid}']"), "the cancelled job is still queued"
 
+        # ---- a line the controller rejects: explained in words, with what to do
+        p.q("#console-input").send_keys("G99")
+        p.click("#console-form button")
+        banner = ".banner.error"
+        p.wait("an error banner for the rejected console line", lambda: d.execute_script(
+            f"return [...document.querySelectorAll('{banner}')].some(b => /error 20/.test(b.textContent))"), 20)
+        texts = d.execute_script(f"""const b = [...document.querySelectorAll('{banner}')].find(b => /error 20/.test(b.textContent));
+            return [b.querySelector('.b-title').textContent, b.querySelector('.b-text').textContent, b.querySelector('.b-todo').textContent];""")
+        say(f"error banner: {texts}")
+        assert all(t.strip() for t in texts) and "Unsupported" in texts[0], texts
+        assert "> G99" in p.text("#console"), p.text("#console")
+        d.execute_script("window.scrollTo(0, 0)")
+        p.shot("06-error-banner")
+        p.click(f"{banner} button[aria-label=Dismiss]")
+        p.wait("the banner dismissed", lambda: not d.find_elements(By.CSS_SELECTOR, banner), 5)
+
         # ---- jogging on the real-time simulator: switch machines in the page
         Select(p.q("#machine-select")).select_by_value("bench")
         p.wait("the page to show the bench machine, idle", lambda: p.d.execute_script("return window.cncstream.state.current") == "bench" and p.connected(), 20)
@@ -314,7 +330,7 @@ def main_flow(args, out, d):
         # 15 mm takes seconds at these feeds, many 0.3 s leases: only a renewed jog gets there.
         p.wait("Y to move 15 mm while held", lambda: p.dro("y") - y0 > 15, 20)
         assert p.state() == "jog", f"state {p.state()} while still held"
-        p.shot("06-jog-held")
+        p.shot("07-jog-held")
         ActionChains(d).release().perform()
         t_release = time.monotonic()
         y1 = wait_stopped(p, "y")
@@ -329,8 +345,8 @@ def main_flow(args, out, d):
         ActionChains(d).release().perform()
         assert not d.find_elements(By.CSS_SELECTOR, "#jogpad .held"), "a jog button still shows held"
         say(f"blur released the jog: Y {y1} -> {y2}")
-        p.shot("07-after-jog")
-        p.full_shot("08-desktop-full")
+        p.shot("08-after-jog")
+        p.full_shot("09-desktop-full")
 
         # ---- a phone: 390x844 CSS pixels, touch
         d.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {"width": 390, "height": 844, "deviceScaleFactor": 2, "mobile": True})
@@ -352,9 +368,9 @@ def main_flow(args, out, d):
         for w, h, right in geo["buttons"]:
             assert w >= 44 and h >= 44 and right <= 390, f"a jog button is too small or off screen: {w}x{h} at {right}"
         assert "mono" in geo["droFont"].lower(), geo["droFont"]
-        p.shot("09-phone-top")
+        p.shot("10-phone-top")
         d.execute_script("document.getElementById('panel-jog').scrollIntoView()")
-        p.shot("10-phone-jog")
+        p.shot("11-phone-jog")
         d.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
         errs = p.console_errors()
         assert not errs, f"errors in the browser console: {errs}"
@@ -393,7 +409,7 @@ def token_flow(args, out, d):
         alert.send_keys(daemon.token)
         alert.accept()
         p.wait("the page to connect with the typed token", p.connected, 30)
-        p.shot("11-token-prompt-connected")
+        p.shot("12-token-prompt-connected")
         errs = [e for e in p.console_errors() if "401" not in e["message"]]  # the first, refused request is expected
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:
