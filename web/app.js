@@ -384,9 +384,10 @@ function renderRunning(mine) {
   const last = active || mine.filter((j) => j.started_at).sort((a, b) => String(b.started_at).localeCompare(String(a.started_at)))[0];
   const bar = $('#progressbar');
   if (!last) {
-    $('#job-name').textContent = 'No job running';
+    $('#job-name').textContent = `No job has run on ${S.current || 'this machine'} yet`;
     $('#job-name').className = 'job-name muted';
     setProgress(0, '', '');
+    $('#progress-pct').textContent = '—';
     bar.dataset.state = 'none';
   } else {
     const p = last.progress || {};
@@ -437,8 +438,8 @@ function renderHistory() {
     const p = j.progress || {};
     const total = j.program ? j.program.lines : null;
     return el('tr', { dataset: { job: j.id, state: j.state } },
-      el('td', {}, j.ended_at ? new Date(j.ended_at).toLocaleString() : '—'),
-      el('td', {}, j.machine),
+      el('td', { class: 'c-when' }, j.ended_at ? new Date(j.ended_at).toLocaleString([], { month: 'short', day: 'numeric', hour: '2-digit', minute: '2-digit' }) : '—'),
+      el('td', { class: 'c-machine' }, j.machine),
       el('td', {}, jobTitle(j)),
       el('td', { class: 'oc-' + (j.state === 'done' ? 'completed' : j.state === 'failed' ? 'error' : j.state) }, j.state + (j.message ? ' — ' + j.message : '')),
       el('td', { class: 'mono' }, total ? `${(p.last_answered_line || p.lines_answered || 0).toLocaleString()} / ${total.toLocaleString()}` : '—'));
@@ -579,6 +580,7 @@ async function showPreview(id) {
   S.previewJob = id;
   const text = await api('GET', `/jobs/${id}/gcode`, undefined, { raw: true });
   const moves = parseMoves(text);
+  $('#preview').hidden = false;  // shown first: the drawing is sized to its width
   drawPreview(moves);
   const j = S.jobs.get(id);
   $('#preview-meta').textContent = `${j ? jobTitle(j) : '#' + id} · ${moves.count.toLocaleString()} moves · X ${fmt(moves.x0, 1)}…${fmt(moves.x1, 1)} Y ${fmt(moves.y0, 1)}…${fmt(moves.y1, 1)} Z ${fmt(moves.zMin, 2)}…${fmt(moves.zCutMax, 2)} mm`;
@@ -626,9 +628,10 @@ function heightColour(t) {
 
 function drawPreview(m) {
   const cv = $('#preview-canvas');
-  const W = cv.width = Math.max(320, Math.min(900, cv.clientWidth || 640) * (window.devicePixelRatio || 1));
+  const dpr = Math.min(2, window.devicePixelRatio || 1);
+  const W = cv.width = Math.round(Math.max(320, Math.min(900, cv.parentElement.clientWidth || 640) * dpr));
   const sx = m.x1 - m.x0 || 1, sy = m.y1 - m.y0 || 1;
-  const pad = 24;
+  const pad = 24 * dpr;
   const scale = (W - 2 * pad) / sx;
   const H = cv.height = Math.min(Math.round(sy * scale + 2 * pad), 2 * W);
   const s = Math.min(scale, (H - 2 * pad) / sy);
@@ -639,7 +642,7 @@ function drawPreview(m) {
   const X = (x) => pad + (x - m.x0) * s, Y = (y) => H - pad - (y - m.y0) * s;
   const zr = m.zCutMax - m.zMin || 1;
   // Height map: every cutting point splatted into a grid cell, the highest wins.
-  const cell = 2;
+  const cell = 2 * dpr;
   const gw = Math.max(1, Math.round(sx * s / cell)), gh = Math.max(1, Math.round(sy * s / cell));
   const grid = new Float32Array(gw * gh).fill(NaN);
   const p = m.pts;
@@ -705,18 +708,18 @@ function drawPreview(m) {
   ctx.stroke();
   ctx.setLineDash([]);
   // Scale: the colours' heights and the work zero.
-  ctx.font = `${Math.round(12 * (window.devicePixelRatio || 1))}px sans-serif`;
+  ctx.font = `${Math.round(12 * dpr)}px sans-serif`;
   ctx.fillStyle = '#e8ecf0';
-  ctx.fillText(`tool tip Z ${fmt(m.zMin, 2)} mm`, pad, H - 6);
-  const lg = ctx.createLinearGradient(W / 2 - 60, 0, W / 2 + 60, 0);
+  ctx.fillText(`tool tip Z ${fmt(m.zMin, 2)} mm`, pad, H - 6 * dpr);
+  const lg = ctx.createLinearGradient(W / 2 - 60 * dpr, 0, W / 2 + 60 * dpr, 0);
   for (let k = 0; k <= 4; k++) lg.addColorStop(k / 4, `rgb(${heightColour(k / 4).join(',')})`);
   ctx.fillStyle = lg;
-  ctx.fillRect(W / 2 - 60, H - 16, 120, 10);
+  ctx.fillRect(W / 2 - 60 * dpr, H - 16 * dpr, 120 * dpr, 10 * dpr);
   ctx.fillStyle = '#e8ecf0';
-  ctx.fillText(`${fmt(m.zCutMax, 2)} mm`, W / 2 + 66, H - 6);
+  ctx.fillText(`${fmt(m.zCutMax, 2)} mm`, W / 2 + 66 * dpr, H - 6 * dpr);
   if (m.x0 <= 0 && m.x1 >= 0 && m.y0 <= 0 && m.y1 >= 0) {
     ctx.strokeStyle = '#fff';
-    ctx.beginPath(); ctx.arc(X(0), Y(0), 5, 0, 2 * Math.PI); ctx.stroke();
+    ctx.beginPath(); ctx.arc(X(0), Y(0), 5 * dpr, 0, 2 * Math.PI); ctx.stroke();
   }
 }
 

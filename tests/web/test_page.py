@@ -164,6 +164,7 @@ class Page:
     def full_shot(self, name):
         """The whole page, not only the viewport (Chrome DevTools)."""
         import base64
+        self.d.execute_script("window.scrollTo(0, 0)")  # else the sticky header is drawn where the view was
         m = self.d.execute_cdp_cmd("Page.getLayoutMetrics", {})
         w, h = m["cssContentSize"]["width"], m["cssContentSize"]["height"]
         r = self.d.execute_cdp_cmd("Page.captureScreenshot", {"format": "png", "captureBeyondViewport": True,
@@ -371,6 +372,7 @@ def main_flow(args, out, d):
         p.shot("10-phone-top")
         d.execute_script("document.getElementById('panel-jog').scrollIntoView()")
         p.shot("11-phone-jog")
+        p.full_shot("12-phone-full")
         d.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
         errs = p.console_errors()
         assert not errs, f"errors in the browser console: {errs}"
@@ -409,7 +411,7 @@ def token_flow(args, out, d):
         alert.send_keys(daemon.token)
         alert.accept()
         p.wait("the page to connect with the typed token", p.connected, 30)
-        p.shot("12-token-prompt-connected")
+        p.shot("13-token-prompt-connected")
         errs = [e for e in p.console_errors() if "401" not in e["message"]]  # the first, refused request is expected
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:
