@@ -346,6 +346,17 @@ def main_flow(args, out, d):
         ActionChains(d).release().perform()
         assert not d.find_elements(By.CSS_SELECTOR, "#jogpad .held"), "a jog button still shows held"
         say(f"blur released the jog: Y {y1} -> {y2}")
+
+        # ---- the daemon's dead man: the page's messages stop reaching it while the
+        # button is still held (a stalled network); the lease runs out and the jog stops.
+        ActionChains(d).click_and_hold(btn).perform()
+        p.wait("the state to show Jog while held", lambda: p.state() == "jog", 10)
+        d.execute_script("const ws = window.cncstream.state.ws; ws.send = () => {};")
+        y3 = wait_stopped(p, "y")
+        assert d.find_elements(By.CSS_SELECTOR, "#jogpad .jog.held"), "the button should still be held"
+        ActionChains(d).release().perform()
+        d.execute_script("delete window.cncstream.state.ws.send;")  # the network is back
+        say(f"silence stopped the jog (lease): Y {y2} -> {y3}")
         p.shot("08-after-jog")
         p.full_shot("09-desktop-full")
 
