@@ -14,7 +14,6 @@ import json
 import math
 import os
 import secrets
-import socket
 import struct
 import threading
 import time
