@@ -232,6 +232,7 @@ function selectMachine(name) {
   S.current = name;
   localStorage.setItem('cncstream.machine', name);
   renderMachinePicker();
+  formButton();
   run('Loading the machine', async () => { await loadMachineDetail(name); await loadJobs(); });
 }
 
@@ -520,8 +521,13 @@ function showForm(f) {
   $('#tp-part').textContent = f.name;
   const stl = f.kind === 'stl';
   form.querySelector('.grid').hidden = !stl;
-  $('#tp-generate').textContent = stl ? 'Generate tool path' : `Add to the queue of ${S.current}`;
+  formButton();
   $('#tp-status').textContent = '';
+}
+// The job is made for the machine shown: the button says which.
+function formButton() {
+  if (!S.upload) return;
+  $('#tp-generate').textContent = S.upload.kind === 'stl' ? `Generate tool path for ${S.current}` : `Add to the queue of ${S.current}`;
 }
 
 function numberOf(id, { optional = false } = {}) {
