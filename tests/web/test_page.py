@@ -272,23 +272,6 @@ def main_flow(args, out, d):
         p.shot("05-done")
         say(f"job #{job_id} done: {p.text('#progress-lines')}")
 
-        # ---- a G-code file dropped on the drop zone is queued as it is, then removed
-        d.execute_script("""
-            const dt = new DataTransfer();
-            dt.items.add(new File([arguments[0]], 'square.nc', {type: 'text/plain'}));
-            const z = document.getElementById('drop');
-            for (const t of ['dragenter', 'dragover', 'drop'])
-              z.dispatchEvent(new DragEvent(t, {dataTransfer: dt, bubbles: true, cancelable: true}));""",
-            "G21 G90\nG0 X0 Y0\nG1 X5 F500\nG1 Y5\nG1 X0\nG1 Y0\nM2\n")
-        p.wait("the dropped G-code to be offered for the queue", lambda: "G-code, 7 lines" in p.text("#upload-status") and "Add to the queue" in p.text("#tp-generate"), 20)
-        p.click("#tp-generate")
-        dropped = "#queue li[data-state=ready]"
-        p.wait("the G-code job ready in the queue", lambda: d.execute_script(f"const e = document.querySelector('{dropped} .title'); return e && e.textContent.startsWith('square.nc')"), 20)
-        gid = d.execute_script(f"return document.querySelector('{dropped}').dataset.job")
-        p.click(f"#queue li[data-job='{gid}'] button[data-act=cancel]")
-        p.wait("the removed job in the history as cancelled", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{gid}'][data-state=cancelled]"), 10)
-        assert not d.find_elements(By.CSS_SELECTOR, f"#queue li[data-job='{gid}']"), "the cancelled job is still queued"
-
         # ---- a line the controller rejects: explained in words, with what to do
         p.q("#console-input").send_keys("G99")
         p.click("#console-form button")
@@ -305,9 +288,54 @@ def main_flow(args, out, d):
         p.click(f"{banner} button[aria-label=Dismiss]")
         p.wait("the banner dismissed", lambda: not d.find_elements(By.CSS_SELECTOR, banner), 5)
 
-        # ---- jogging on the real-time simulator: switch machines in the page
+        # ---- the real-time simulator from here: switch machines in the page
         Select(p.q("#machine-select")).select_by_value("bench")
         p.wait("the page to show the bench machine, idle", lambda: p.d.execute_script("return window.cncstream.state.current") == "bench" and p.connected(), 20)
+
+        # ---- a G-code file dropped on the drop zone, queued as it is: start,
+        # hold, resume, stop with the running panel's buttons; queued again and removed
+        square = "G21 G90 G94\nG0 X0 Y0\n" + "G1 X40 F500\nG1 Y40\nG1 X0\nG1 Y0\n" * 3 + "M2\n"  # ~1 min at 500 mm/min
+        d.execute_script("""
+            const dt = new DataTransfer();
+            dt.items.add(new File([arguments[0]], 'square.nc', {type: 'text/plain'}));
+            const z = document.getElementById('drop');
+            for (const t of ['dragenter', 'dragover', 'drop'])
+              z.dispatchEvent(new DragEvent(t, {dataTransfer: dt, bubbles: true, cancelable: true}));""", square)
+        p.wait("the dropped G-code to be offered for the queue of bench",
+               lambda: "square.nc: G-code" in p.text("#upload-status") and p.text("#tp-generate") == "Add to the queue of bench", 20)
+
+        def queue_gcode():
+            p.click("#tp-generate")
+            sel = "#queue li[data-state=ready]"
+            p.wait("the G-code job ready in the queue", lambda: d.execute_script(
+                f"const e = document.querySelector('{sel} .title'); return e && e.textContent.startsWith('square.nc')"), 20)
+            return d.execute_script(f"return document.querySelector('{sel}').dataset.job")
+
+        def panel_state():
+            return p.q("#progressbar").get_attribute("data-state")
+        gid = queue_gcode()
+        p.click(f"#queue li[data-job='{gid}'] button[data-act=start]")
+        p.wait("the G-code job running", lambda: panel_state() == "running" and p.state() == "run", 20)
+        p.click("#btn-hold")
+        p.wait("the job held", lambda: panel_state() == "held" and p.state() == "hold", 20)
+        y_held = p.dro("y"), p.dro("x")
+        seq = p.status_seq()
+        p.wait("three status reports while held", lambda: (p.status_seq() or 0) >= (seq or 0) + 3, 10)
+        assert (p.dro("y"), p.dro("x")) == y_held, "the machine moved while held"
+        assert p.q("#btn-resume").is_enabled() and not p.q("#btn-hold").is_enabled()
+        d.execute_script("window.scrollTo(0, 0)")
+        p.shot("07-job-held")
+        p.click("#btn-resume")
+        p.wait("the job running again", lambda: panel_state() == "running" and p.state() == "run", 20)
+        p.click("#btn-stop")
+        p.wait("the job stopped", lambda: panel_state() == "stopped", 30)
+        p.wait("the stopped job in the history", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{gid}'][data-state=stopped]"), 10)
+        p.wait("the machine idle after the stop", lambda: p.state() == "idle", 30)
+        say(f"G-code job #{gid}: held, resumed, stopped at {p.text('#progress-lines')}")
+        gid2 = queue_gcode()
+        p.click(f"#queue li[data-job='{gid2}'] button[data-act=cancel]")
+        p.wait("the removed job in the history as cancelled", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{gid2}'][data-state=cancelled]"), 10)
+        assert not d.find_elements(By.CSS_SELECTOR, f"#queue li[data-job='{gid2}']"), "the cancelled job is still queued"
 
         # ---- a step jog: the DRO moves by exactly the step
         p.click(d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value='10']").find_element(By.XPATH, ".."))
@@ -331,7 +359,7 @@ def main_flow(args, out, d):
         # 15 mm takes seconds at these feeds, many 0.3 s leases: only a renewed jog gets there.
         p.wait("Y to move 15 mm while held", lambda: p.dro("y") - y0 > 15, 20)
         assert p.state() == "jog", f"state {p.state()} while still held"
-        p.shot("07-jog-held")
+        p.shot("08-jog-held")
         ActionChains(d).release().perform()
         t_release = time.monotonic()
         y1 = wait_stopped(p, "y")
@@ -357,8 +385,8 @@ def main_flow(args, out, d):
         ActionChains(d).release().perform()
         d.execute_script("delete window.cncstream.state.ws.send;")  # the network is back
         say(f"silence stopped the jog (lease): Y {y2} -> {y3}")
-        p.shot("08-after-jog")
-        p.full_shot("09-desktop-full")
+        p.shot("09-after-jog")
+        p.full_shot("10-desktop-full")
 
         # ---- a phone: 390x844 CSS pixels, touch
         d.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {"width": 390, "height": 844, "deviceScaleFactor": 2, "mobile": True})
@@ -380,10 +408,10 @@ def main_flow(args, out, d):
         for w, h, right in geo["buttons"]:
             assert w >= 44 and h >= 44 and right <= 390, f"a jog button is too small or off screen: {w}x{h} at {right}"
         assert "mono" in geo["droFont"].lower(), geo["droFont"]
-        p.shot("10-phone-top")
+        p.shot("11-phone-top")
         d.execute_script("document.getElementById('panel-jog').scrollIntoView()")
-        p.shot("11-phone-jog")
-        p.full_shot("12-phone-full")
+        p.shot("12-phone-jog")
+        p.full_shot("13-phone-full")
         d.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
         errs = p.console_errors()
         assert not errs, f"errors in the browser console: {errs}"
@@ -422,7 +450,7 @@ def token_flow(args, out, d):
         alert.send_keys(daemon.token)
         alert.accept()
         p.wait("the page to connect with the typed token", p.connected, 30)
-        p.shot("13-token-prompt-connected")
+        p.shot("14-token-prompt-connected")
         errs = [e for e in p.console_errors() if "401" not in e["message"]]  # the first, refused request is expected
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:
