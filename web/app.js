@@ -241,8 +241,14 @@ function stateOf(rec) {
   if (link && link !== 'ready') return { label: link === 'connecting' ? 'Connecting' : link === 'disconnected' ? 'Disconnected' : 'Closed', cls: 'offline' };
   const s = (rec.status && rec.status.state) || rec.summary.state;
   if (!s) return { label: '—', cls: 'unknown' };
-  return { label: (rec.status && rec.status.state_text) || s, cls: s.toLowerCase().split(':')[0] };
+  const text = (rec.status && rec.status.state_text) || s;
+  return { label: STATE_WORDS[text] || text.split(':')[0], cls: s.toLowerCase().split(':')[0], text };
 }
+// GRBL's sub-states in words (Hold:1 means still slowing down: not safe to walk up to yet).
+const STATE_WORDS = {
+  'Hold:0': 'Held', 'Hold:1': 'Holding…', 'Door:0': 'Door closed', 'Door:1': 'Door open',
+  'Door:2': 'Door open, parking', 'Door:3': 'Door closed, restoring',
+};
 
 const fmt = (v, d = 3) => (typeof v === 'number' && isFinite(v) ? v.toFixed(d) : '—');
 
@@ -254,7 +260,8 @@ function renderMachine() {
   stEl.textContent = st.label;
   stEl.className = 'state state-' + st.cls;
   stEl.dataset.state = st.cls;
-  $('#top-state').textContent = st.label.split(':')[0];
+  stEl.dataset.text = st.text || '';
+  $('#top-state').textContent = st.label;
   $('#top-state').className = 'state top-state state-' + st.cls;
   const s = rec.status || {};
   const w = s.wpos || [], m = s.mpos || [];
@@ -330,13 +337,14 @@ function renderJobs() {
   $('#queue-empty').hidden = queue.length > 0;
   // Rebuild an entry only when what it shows changed: progress messages come
   // many times a second, and a button replaced under a finger loses its tap.
+  // Entries are updated in place and their buttons rebuilt only when the set of
+  // actions changes: progress and reloads come many times a second, and a
+  // button replaced under a finger loses its tap.
   const items = queue.map((j) => {
-    const sig = JSON.stringify([j.state, j.position, j.message, j.program, j.generation && [j.generation.stage, Math.round((j.generation.fraction || 0) * 100)], j.params]);
     const old = queueItems.get(j.id);
-    if (old && old.sig === sig) return old.li;
-    const li = queueItem(j);
-    queueItems.set(j.id, { sig, li });
-    return li;
+    const item = queueItem(j, old);
+    queueItems.set(j.id, item);
+    return item.li;
   });
   for (const id of queueItems.keys()) if (!queue.some((j) => j.id === id)) queueItems.delete(id);
   sameChildren($('#queue'), items);
@@ -345,37 +353,54 @@ function renderJobs() {
   renderFormStatus();
 }
 
-const queueItems = new Map();  // job id -> {sig, li}
+const queueItems = new Map();  // job id -> {li, actKey}
 function sameChildren(parent, nodes) {
   const kids = parent.children;
   if (kids.length === nodes.length && nodes.every((n, i) => kids[i] === n)) return;
   parent.replaceChildren(...nodes);
 }
 
-function queueItem(j) {
+function queueItem(j, old) {
   const g = j.generation || {};
   let meta = toolText(j.params);
   if (j.state === 'generating') meta += ` · ${g.stage || 'starting'} ${g.fraction != null ? Math.round(g.fraction * 100) + ' %' : ''}`;
   if (j.program) meta += ` · ${j.program.lines.toLocaleString()} lines · about ${duration(j.program.estimated_s)}`;
   if (j.message) meta += ` · ${j.message}`;
-  const m = j.machine;
+  const li = old ? old.li : el('li', { dataset: { job: j.id } },
+    el('div', { class: 'title' }, el('span', { class: 't-name' }), el('span', { class: 'badge' })),
+    el('div', { class: 'meta' }), el('div', { class: 'actions' }));
+  li.dataset.state = j.state;
+  li.querySelector('.t-name').textContent = jobTitle(j);
+  const badge = li.querySelector('.badge');
+  badge.textContent = j.state;
+  badge.className = 'badge ' + j.state;
+  li.querySelector('.meta').textContent = meta;
+  const actKey = JSON.stringify([j.state, (j.position ?? 0) > 0, j.kind]);
+  if (!old || old.actKey !== actKey) li.querySelector('.actions').replaceChildren(...queueActions(j));
+  li.querySelector('.actions').hidden = !li.querySelector('.actions').children.length;
+  return { li, actKey };
+}
+
+// The handlers look the job up when pressed: the entry outlives the job object it was made from.
+function queueActions(j0) {
+  const id = j0.id, m = j0.machine;
+  const job = () => S.jobs.get(id) || j0;
+  const b = (act, label, cls, fn, { text, ...attrs } = {}) => el('button', { class: 'btn ' + cls, 'data-act': act, onclick: () => run(label, fn), ...attrs }, text || label);
   const acts = [];
-  if (j.state === 'ready') {
-    acts.push(el('button', { class: 'btn btn-go', 'data-act': 'start', onclick: () => run('Start', () => controlled(m, () => api('POST', `/jobs/${j.id}/start`, {}))) }, 'Start'));
-    if (j.kind === 'stl') acts.push(el('button', { class: 'btn', 'data-act': 'preview', onclick: () => run('Preview', () => showPreview(j.id)) }, 'Preview'));
+  const st = j0.state;
+  if (st === 'ready') {
+    acts.push(b('start', 'Start', 'btn-go', () => controlled(m, () => api('POST', `/jobs/${id}/start`, {}))));
+    if (j0.kind === 'stl') acts.push(b('preview', 'Preview', '', () => showPreview(id)));
   }
-  if (j.state === 'queued') acts.push(el('button', { class: 'btn', onclick: () => run('Generate', () => api('POST', `/jobs/${j.id}/generate`, {})) }, 'Generate'));
-  if (j.state === 'running') acts.push(el('button', { class: 'btn btn-warn', onclick: () => run('Hold', () => api('POST', `/jobs/${j.id}/hold`, {})) }, 'Hold'));
-  if (j.state === 'held') acts.push(el('button', { class: 'btn btn-go', onclick: () => run('Resume', () => controlled(m, () => api('POST', `/jobs/${j.id}/resume`, {}))) }, 'Resume'));
-  if (j.state === 'running' || j.state === 'held') acts.push(el('button', { class: 'btn btn-danger', onclick: () => run('Stop', () => api('POST', `/jobs/${j.id}/stop`, {})) }, 'Stop'));
-  if (['queued', 'generating', 'ready'].includes(j.state)) {
-    if ((j.position ?? 0) > 0) acts.push(el('button', { class: 'btn', 'aria-label': 'Move up', onclick: () => run('Move', () => api('POST', `/jobs/${j.id}/move`, { position: j.position - 1 })) }, '↑'));
-    acts.push(el('button', { class: 'btn', 'data-act': 'cancel', onclick: () => run('Cancel', () => controlled(m, () => api('POST', `/jobs/${j.id}/cancel`, {}))) }, 'Remove'));
+  if (st === 'queued') acts.push(b('generate', 'Generate', '', () => api('POST', `/jobs/${id}/generate`, {})));
+  if (st === 'running') acts.push(b('hold', 'Hold', 'btn-warn', () => api('POST', `/jobs/${id}/hold`, {})));
+  if (st === 'held') acts.push(b('resume', 'Resume', 'btn-go', () => controlled(m, () => api('POST', `/jobs/${id}/resume`, {}))));
+  if (st === 'running' || st === 'held') acts.push(b('stop', 'Stop', 'btn-danger', () => api('POST', `/jobs/${id}/stop`, {})));
+  if (['queued', 'generating', 'ready'].includes(st)) {
+    if ((j0.position ?? 0) > 0) acts.push(b('up', 'Move', '', () => api('POST', `/jobs/${id}/move`, { position: Math.max(0, (job().position ?? 1) - 1) }), { 'aria-label': 'Move up', text: '↑' }));
+    acts.push(b('cancel', 'Remove', '', () => controlled(m, () => api('POST', `/jobs/${id}/cancel`, {}))));
   }
-  return el('li', { dataset: { job: j.id, state: j.state } },
-    el('div', { class: 'title' }, jobTitle(j), el('span', { class: 'badge ' + j.state }, j.state)),
-    el('div', { class: 'meta' }, meta),
-    acts.length ? el('div', { class: 'actions' }, acts) : null);
+  return acts;
 }
 
 // The running panel shows the active job, else the last one that ran here (so

@@ -78,6 +78,8 @@ class Daemon:
             with open(cfg, "w") as f:
                 f.write(f'listen = "127.0.0.1:{self.port}"\n'
                         f'data_dir = {json.dumps(os.path.join(self.data, "state"))}\n'
+                        # Its own journal: never the user's, and no jobs from an earlier run.
+                        f'journal = {json.dumps(os.path.join(self.data, "journal.sqlite"))}\n'
                         # sim: as fast as it goes, for the job; bench: real time, so
                         # a held jog moves for as long as it is held (the dead man matters).
                         '[[machine]]\nname = "sim"\nport = "sim"\nsim_speed = "max"\n'
@@ -317,7 +319,9 @@ def main_flow(args, out, d):
         p.click(f"#queue li[data-job='{gid}'] button[data-act=start]")
         p.wait("the G-code job running", lambda: panel_state() == "running" and p.state() == "run", 20)
         p.click("#btn-hold")
-        p.wait("the job held", lambda: panel_state() == "held" and p.state() == "hold", 20)
+        # Hold:1 is the feed hold slowing down, Hold:0 the machine standing still.
+        p.wait("the job held and the machine still", lambda: panel_state() == "held" and p.q("#state").get_attribute("data-text") == "Hold:0", 20)
+        assert p.text("#state") == "Held", p.text("#state")
         y_held = p.dro("y"), p.dro("x")
         seq = p.status_seq()
         p.wait("three status reports while held", lambda: (p.status_seq() or 0) >= (seq or 0) + 3, 10)
