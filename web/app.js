@@ -322,6 +322,12 @@ function reloadJobsSoon() {
   jobsReload = setTimeout(() => run('Loading the jobs', loadJobs), 120);
 }
 
+// The state, and the daemon's message unless it only says the state again.
+function outcomeText(j) {
+  const msg = j.message || '';
+  if (!msg) return j.state;
+  return msg.toLowerCase().startsWith(j.state) ? msg : `${j.state}: ${msg}`;
+}
 function jobTitle(j) { return `${j.file_name || 'job'} #${j.id}`; }
 function toolText(p) { return p && p.tool ? `${p.tool}, stepover ${p.stepover} mm, rows along ${(p.direction || 'x').toUpperCase()}` : 'G-code as uploaded'; }
 function duration(s) {
@@ -419,7 +425,7 @@ function renderRunning(mine) {
     const p = last.progress || {};
     const total = (last.program && last.program.lines) || p.total_lines || 0;
     const frac = last.state === 'done' ? 1 : (p.fraction ?? (total ? p.lines_answered / total : 0));
-    $('#job-name').textContent = `${jobTitle(last)} — ${last.state}${last.message ? ': ' + last.message : ''}`;
+    $('#job-name').textContent = `${jobTitle(last)} — ${outcomeText(last)}`;
     $('#job-name').className = 'job-name';
     const lines = total ? `${(p.lines_answered || 0).toLocaleString()} / ${total.toLocaleString()} lines` : '';
     let eta = '';
@@ -467,7 +473,7 @@ function renderHistory() {
       el('td', { class: 'c-when' }, j.ended_at ? new Date(j.ended_at).toLocaleString([], { month: 'short', day: 'numeric', hour: '2-digit', minute: '2-digit' }) : '—'),
       el('td', { class: 'c-machine' }, j.machine),
       el('td', {}, jobTitle(j)),
-      el('td', { class: 'oc-' + (j.state === 'done' ? 'completed' : j.state === 'failed' ? 'error' : j.state) }, j.state + (j.message ? ' — ' + j.message : '')),
+      el('td', { class: 'oc-' + (j.state === 'done' ? 'completed' : j.state === 'failed' ? 'error' : j.state) }, outcomeText(j)),
       el('td', { class: 'mono' }, total ? `${(p.last_answered_line || p.lines_answered || 0).toLocaleString()} / ${total.toLocaleString()}` : '—'));
   }) : [el('tr', {}, el('td', { colspan: 5, class: 'muted' }, 'No finished jobs yet.'))]));
 }
@@ -698,10 +704,11 @@ function drawPreview(m) {
       const c = gy * gw + gx;
       if (!isNaN(prev[c])) continue;
       let best = NaN;
-      if (gx > 0 && !(best >= prev[c - 1])) best = prev[c - 1];
-      if (gx < gw - 1 && !(best >= prev[c + 1])) best = prev[c + 1];
-      if (gy > 0 && !(best >= prev[c - gw])) best = prev[c - gw];
-      if (gy < gh - 1 && !(best >= prev[c + gw])) best = prev[c + gw];
+      const take = (v) => { if (!isNaN(v) && !(best >= v)) best = v; };  // the highest known neighbour
+      if (gx > 0) take(prev[c - 1]);
+      if (gx < gw - 1) take(prev[c + 1]);
+      if (gy > 0) take(prev[c - gw]);
+      if (gy < gh - 1) take(prev[c + gw]);
       if (!isNaN(best)) { grid[c] = best; grew = true; }
     }
   }
@@ -739,15 +746,18 @@ function drawPreview(m) {
   ctx.stroke();
   ctx.setLineDash([]);
   // Scale: the colours' heights and the work zero.
+  // Legend: the colours' heights, laid out left to right by measured width.
   ctx.font = `${Math.round(12 * dpr)}px sans-serif`;
   ctx.fillStyle = '#e8ecf0';
-  ctx.fillText(`tool tip Z ${fmt(m.zMin, 2)} mm`, pad, H - 6 * dpr);
-  const lg = ctx.createLinearGradient(W / 2 - 60 * dpr, 0, W / 2 + 60 * dpr, 0);
+  const lo = `tool tip Z ${fmt(m.zMin, 2)}`, hi = `${fmt(m.zCutMax, 2)} mm`, base = H - 6 * dpr;
+  ctx.fillText(lo, pad, base);
+  const gx0 = pad + ctx.measureText(lo).width + 8 * dpr, gw0 = Math.min(120 * dpr, W - gx0 - ctx.measureText(hi).width - pad - 8 * dpr);
+  const lg = ctx.createLinearGradient(gx0, 0, gx0 + gw0, 0);
   for (let k = 0; k <= 4; k++) lg.addColorStop(k / 4, `rgb(${heightColour(k / 4).join(',')})`);
   ctx.fillStyle = lg;
-  ctx.fillRect(W / 2 - 60 * dpr, H - 16 * dpr, 120 * dpr, 10 * dpr);
+  ctx.fillRect(gx0, H - 16 * dpr, gw0, 10 * dpr);
   ctx.fillStyle = '#e8ecf0';
-  ctx.fillText(`${fmt(m.zCutMax, 2)} mm`, W / 2 + 66 * dpr, H - 6 * dpr);
+  ctx.fillText(hi, gx0 + gw0 + 8 * dpr, base);
   if (m.x0 <= 0 && m.x1 >= 0 && m.y0 <= 0 && m.y1 >= 0) {
     ctx.strokeStyle = '#fff';
     ctx.beginPath(); ctx.arc(X(0), Y(0), 5 * dpr, 0, 2 * Math.PI); ctx.stroke();
@@ -880,7 +890,8 @@ function renderRunButtons() { renderRunning([...S.jobs.values()].filter((j) => j
 function onEvent(m) {
   const i = m.info || {};
   const where = m.line ? ` (file line ${m.line})` : '';
-  log(m.machine, `${m.kind}${m.code ? ' ' + m.code : ''}${where}: ${m.text}${i.name ? ' — ' + i.name : ''}`, m.kind === 'error' || m.kind === 'alarm' ? 'err' : 'info');
+  const named = i.name && !m.text.includes(i.name) ? ' — ' + i.name : '';
+  log(m.machine, `${m.kind}${m.code ? ' ' + m.code : ''}${where}: ${m.text}${named}`, m.kind === 'error' || m.kind === 'alarm' ? 'err' : 'info');
   if (m.kind === 'alarm') {
     const rec = machine(m.machine);
     rec.alarmInfo = { code: m.code, ...i };
