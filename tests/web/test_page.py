@@ -30,7 +30,9 @@ import traceback
 import urllib.request
 
 SKIP = 77
-CHROMIUM = next((p for p in ("/usr/bin/chromium", "/usr/bin/chromium-browser") if os.path.exists(p)), None)
+# CNCSTREAM_CHROMIUM names another browser binary (or a missing one, to check the skip).
+CHROMIUM = next((p for p in ([os.environ["CNCSTREAM_CHROMIUM"]] if os.environ.get("CNCSTREAM_CHROMIUM") else
+                             ["/usr/bin/chromium", "/usr/bin/chromium-browser"]) if os.path.exists(p)), None)
 CHROMEDRIVER = shutil.which("chromedriver") or ("/usr/bin/chromedriver" if os.path.exists("/usr/bin/chromedriver") else None)
 if not CHROMIUM or not CHROMEDRIVER:
     print("SKIP: Chromium or chromedriver is not installed (scripts/setup.sh installs chromium chromium-driver)")
