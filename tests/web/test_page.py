@@ -227,7 +227,8 @@ def main_flow(args, out, d):
         p.wait("the tool-path form for plaque.stl", lambda: p.q("#toolpath-form").is_displayed() and p.text("#tp-part") == "plaque.stl", 60)
         assert "STL" in p.text("#upload-status") and "34,908 facets" in p.text("#upload-status").replace("\u202f", ","), p.text("#upload-status")
 
-        # ---- the tool-path form: a coarse stepover keeps the job short
+        # ---- the tool-path form: a coarse stepover and step keep the job short (the
+        # deadlines below are generous for a sanitizer build; a pass ends each wait at once)
         def fill(css, v):
             e = p.q(css)
             e.clear()
@@ -239,12 +240,13 @@ def main_flow(args, out, d):
         fill("#tp-feed", 2500)
         fill("#tp-plunge", 500)
         fill("#tp-rpm", 12000)
+        fill("#tp-step", 0.25)
         p.shot("02-form")
         p.click("#tp-generate")
 
         # ---- generated: in the queue as ready, with its preview drawn
         ready = "#queue li[data-state=ready]"
-        p.wait("the job to be generated (ready in the queue)", lambda: d.find_elements(By.CSS_SELECTOR, ready), 90)
+        p.wait("the job to be generated (ready in the queue)", lambda: d.find_elements(By.CSS_SELECTOR, ready), 240)
         job_id = d.execute_script(f"return document.querySelector('{ready}').dataset.job")
         meta = d.execute_script(f"return document.querySelector('{ready} .meta').textContent")
         assert "ball:6" in meta and "stepover 2 mm" in meta and "along Y" in meta, meta
@@ -266,7 +268,7 @@ def main_flow(args, out, d):
         d.execute_script("window.scrollTo(0, 0)")
         if p.q("#progressbar").get_attribute("data-state") == "running":
             p.shot("04-running")
-        p.wait("the job to finish", lambda: p.q("#progressbar").get_attribute("data-state") == "done", 90)
+        p.wait("the job to finish", lambda: p.q("#progressbar").get_attribute("data-state") == "done", 240)
         assert p.text("#progress-pct") == "100 %", p.text("#progress-pct")
         lines = p.text("#progress-lines").replace(",", "").replace("\u202f", "").split(" ")
         assert lines[0] == lines[2] and int(lines[0]) > 1000, f"answered lines {p.text('#progress-lines')}"
