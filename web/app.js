@@ -472,9 +472,9 @@ function renderHistory() {
     return el('tr', { dataset: { job: j.id, state: j.state } },
       el('td', { class: 'c-when' }, j.ended_at ? new Date(j.ended_at).toLocaleString([], { month: 'short', day: 'numeric', hour: '2-digit', minute: '2-digit' }) : '—'),
       el('td', { class: 'c-machine' }, j.machine),
-      el('td', {}, jobTitle(j)),
-      el('td', { class: 'oc-' + (j.state === 'done' ? 'completed' : j.state === 'failed' ? 'error' : j.state) }, outcomeText(j)),
-      el('td', { class: 'mono' }, total ? `${(p.last_answered_line || p.lines_answered || 0).toLocaleString()} / ${total.toLocaleString()}` : '—'));
+      el('td', { class: 'c-job' }, jobTitle(j)),
+      el('td', { class: 'c-outcome oc-' + (j.state === 'done' ? 'completed' : j.state === 'failed' ? 'error' : j.state) }, outcomeText(j)),
+      el('td', { class: 'mono c-lines' }, total ? `${(p.last_answered_line || p.lines_answered || 0).toLocaleString()} / ${total.toLocaleString()}` : '—'));
   }) : [el('tr', {}, el('td', { colspan: 5, class: 'muted' }, 'No finished jobs yet.'))]));
 }
 

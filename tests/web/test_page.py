@@ -91,10 +91,18 @@ class Daemon:
             cmd = [args.daemon, "--config", cfg]
         say(f"starting {' '.join(cmd)}")
         self.proc = subprocess.Popen(cmd, stdout=self.log, stderr=subprocess.STDOUT)
+        try:
+            self._wait_ready(args, require_token)
+        except BaseException:
+            self.stop()  # the caller gets no object to stop: leave no daemon behind
+            raise
+
+    def _wait_ready(self, args, require_token):
         deadline = time.monotonic() + 30
         while True:
             if self.proc.poll() is not None:
-                raise AssertionError(f"the daemon exited with {self.proc.returncode}; its log:\n{open(self.log_path).read()}")
+                with open(self.log_path) as f:
+                    raise AssertionError(f"the daemon exited with {self.proc.returncode}; its log:\n{f.read()}")
             try:
                 with urllib.request.urlopen(self.url + "api/v1/health", timeout=2) as r:
                     if json.load(r).get("ok"):
