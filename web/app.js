@@ -287,6 +287,7 @@ function renderMachine() {
   for (const id of ['zero-xy', 'zero-z', 'go-zero', 'safe-z']) $('#' + id).disabled = !canJog;
   $('#unlock').disabled = !ready || jobActive;
   $('#home').disabled = !ready || jobActive;
+  $('#reset').disabled = !ready;
   renderAlarm(rec, alarm);
 }
 
@@ -840,13 +841,14 @@ function onMessage(m) {
     case 'status': {
       const rec = machine(m.machine);
       const wasAlarm = rec.status && rec.status.alarm;
+      const changed = !rec.status || rec.status.state_text !== m.state_text || rec.status.link !== m.link;
       rec.status = m;
       rec.summary.job_active = m.job_active;
       rec.summary.link = m.link ?? rec.summary.link;
       if (m.alarm && !wasAlarm && !rec.alarmInfo) run('Loading the alarm', () => loadMachineDetail(m.machine));
       if (!m.alarm) rec.alarmInfo = null;
       if (m.machine === S.current) { renderMachine(); renderRunButtons(); }
-      renderMachineListSoon();
+      if (changed) renderMachineList(); else renderMachineListSoon();  // a new state shows at once
       break;
     }
     case 'job': onJobMessage(m); break;
@@ -1035,6 +1037,7 @@ function setupButtons() {
   $('#safe-z').addEventListener('click', action('safe_z'));
   $('#unlock').addEventListener('click', action('unlock'));
   $('#home').addEventListener('click', action('home'));
+  $('#reset').addEventListener('click', action('reset'));
   const activeJob = () => $('#panel-job').dataset.job;
   // Hold and stop need no control: safety beats ownership.
   $('#btn-hold').addEventListener('click', () => run('Hold', () => activeJob() ? api('POST', `/jobs/${activeJob()}/hold`, {}) : api('POST', `/machines/${enc(m())}/hold`, {})));

@@ -436,7 +436,7 @@ class Handler(BaseHTTPRequestHandler):
                 n = math.sqrt(sum(v * v for v in d))
                 base = m.steps[-1] if m.steps else m.mpos
                 m.steps.append([base[k] + d[k] / n * float(b["distance"]) for k in range(3)])
-                m.step_feed = float(b.get("feed", 1000))
+                m.step_feed = min(500.0, float(b.get("feed", 1000)))   # the simulator's $110-$112
                 return self.reply(202, {"accepted": True})
             if rest == ["jog", "cancel"] and method == "POST":
                 self.body()
@@ -453,6 +453,13 @@ class Handler(BaseHTTPRequestHandler):
                         m.wco[k] = m.mpos[k]
                 elif a == "unlock":
                     m.alarm = False
+                elif a == "reset":
+                    if m.steps or m.jog_dir is not None:   # GRBL: a reset in motion is alarm 3
+                        m.steps, m.jog_dir, m.alarm = [], None, True
+                        broadcast({"type": "event", "machine": m.name, "kind": "alarm", "code": 3, "line": 0, "text": "ALARM:3",
+                                   "info": {"name": "Abort during cycle", "text": "Reset while in motion. Machine position is likely lost due to the sudden halt.",
+                                            "action": "Re-home with $H (or unlock with $X and re-zero) before cutting again.",
+                                            "reset_required": False, "position_lost": True}}, m.name)
                 elif a == "go_to_work_zero":
                     m.steps.append(list(m.wco))
                 return self.reply(202, {"accepted": True})
@@ -631,7 +638,7 @@ class Handler(BaseHTTPRequestHandler):
                 d = msg["dir"]
                 n = math.sqrt(sum(v * v for v in d))
                 m.jog_dir = [v / n for v in d]
-                m.jog_feed = float(msg.get("feed", 1000))
+                m.jog_feed = min(500.0, float(msg.get("feed", 1000)))
                 m.jog_until = time.monotonic() + 0.3
                 m.jog_owner = c.client_id
             elif t == "jog_renew":

@@ -361,6 +361,32 @@ def main_flow(args, out, d):
         wait_stopped(p, "x")
         say(f"step jog: X {x0} -> {p.dro('x')}")
 
+        # ---- an alarm: Reset during a step jog (GRBL's alarm 3, position lost); the
+        # banner explains it and says what to do; Unlock clears it
+        p.click("#jogpad [data-axis=X][data-dir='-1']")
+        p.wait("the step jog moving", lambda: p.state() == "jog", 10)
+        p.click("#reset")
+        alarm = ".banner.alarm"
+        p.wait("the alarm banner", lambda: d.find_elements(By.CSS_SELECTOR, alarm) and p.state() == "alarm", 20)
+        texts = d.execute_script(f"""const b = document.querySelector('{alarm}');
+            return [b.querySelector('.b-title').textContent, b.querySelector('.b-text').textContent,
+                    b.querySelector('.b-todo').textContent, [...b.querySelectorAll('button')].map(x => x.textContent)];""")
+        say(f"alarm banner: {texts}")
+        assert "ALARM" in texts[0] and texts[1].strip() and texts[2].strip(), texts
+        assert "Unlock" in texts[3] and "Home" in texts[3], f"a lost position should offer Home and Unlock: {texts[3]}"
+        assert p.q("#jogpad [data-axis=X][data-dir='1']").get_attribute("disabled") is not None, "jogging must be off in alarm"
+        d.execute_script("window.scrollTo(0, 0)")
+        p.shot("08-alarm")
+        unlock = d.execute_script(f"return [...document.querySelectorAll('{alarm} button')].find(b => b.textContent === 'Unlock')")
+        p.click(unlock)
+        p.wait("the alarm cleared", lambda: not d.find_elements(By.CSS_SELECTOR, alarm) and p.state() == "idle", 20)
+
+        # ---- overrides: feed +10 % shows in the status, 100 resets it
+        p.click("[data-ov=feed][data-delta='10']")
+        p.wait("the feed override at 110 %", lambda: p.text("#ov-feed") == "110 %", 10)
+        p.click("[data-ov=feed][data-delta='0']")
+        p.wait("the feed override back at 100 %", lambda: p.text("#ov-feed") == "100 %", 10)
+
         # ---- press and hold: moves for longer than one lease, stops on release
         p.click(d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value=hold]").find_element(By.XPATH, ".."))
         feed = 1200  # mm/min: the daemon clamps to the machine's rates ($110-$112, 500 on the simulator)
@@ -375,7 +401,7 @@ def main_flow(args, out, d):
         # 15 mm takes seconds at these feeds, many 0.3 s leases: only a renewed jog gets there.
         p.wait("Y to move 15 mm while held", lambda: p.dro("y") - y0 > 15, 20)
         assert p.state() == "jog", f"state {p.state()} while still held"
-        p.shot("08-jog-held")
+        p.shot("09-jog-held")
         ActionChains(d).release().perform()
         t_release = time.monotonic()
         y1 = wait_stopped(p, "y")
@@ -401,8 +427,8 @@ def main_flow(args, out, d):
         ActionChains(d).release().perform()
         d.execute_script("delete window.cncstream.state.ws.send;")  # the network is back
         say(f"silence stopped the jog (lease): Y {y2} -> {y3}")
-        p.shot("09-after-jog")
-        p.full_shot("10-desktop-full")
+        p.shot("10-after-jog")
+        p.full_shot("11-desktop-full")
 
         # ---- a phone: 390x844 CSS pixels, touch
         d.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {"width": 390, "height": 844, "deviceScaleFactor": 2, "mobile": True})
@@ -424,10 +450,10 @@ def main_flow(args, out, d):
         for w, h, right in geo["buttons"]:
             assert w >= 44 and h >= 44 and right <= 390, f"a jog button is too small or off screen: {w}x{h} at {right}"
         assert "mono" in geo["droFont"].lower(), geo["droFont"]
-        p.shot("11-phone-top")
+        p.shot("12-phone-top")
         d.execute_script("document.getElementById('panel-jog').scrollIntoView()")
-        p.shot("12-phone-jog")
-        p.full_shot("13-phone-full")
+        p.shot("13-phone-jog")
+        p.full_shot("14-phone-full")
         d.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
         errs = p.console_errors()
         assert not errs, f"errors in the browser console: {errs}"
@@ -466,7 +492,7 @@ def token_flow(args, out, d):
         alert.send_keys(daemon.token)
         alert.accept()
         p.wait("the page to connect with the typed token", p.connected, 30)
-        p.shot("14-token-prompt-connected")
+        p.shot("15-token-prompt-connected")
         errs = [e for e in p.console_errors() if "401" not in e["message"]]  # the first, refused request is expected
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:
