@@ -453,6 +453,22 @@ def main_flow(args, out, d):
         p.shot("12-phone-top")
         d.execute_script("document.getElementById('panel-jog').scrollIntoView()")
         p.shot("13-phone-jog")
+
+        # ---- a finger on the phone: touch and hold Y-, the machine moves; lift, it stops
+        p.click(d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value=hold]").find_element(By.XPATH, ".."))
+        btn = p.q("#jogpad [data-axis=Y][data-dir='-1']")
+        d.execute_script("arguments[0].scrollIntoView({block: 'center'})", btn)
+        r = d.execute_script("const b = arguments[0].getBoundingClientRect(); return [b.left + b.width / 2, b.top + b.height / 2];", btn)
+        finger = [{"x": r[0], "y": r[1], "id": 1}]
+        y0 = p.dro("y")
+        d.execute_cdp_cmd("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": finger})
+        try:
+            p.wait("the state to show Jog under the finger", lambda: p.state() == "jog", 10)
+            p.wait("Y to move 3 mm under the finger", lambda: y0 - p.dro("y") > 3, 20)
+        finally:
+            d.execute_cdp_cmd("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+        y1 = wait_stopped(p, "y")
+        say(f"touch jog on the phone: Y {y0} -> {y1}")
         p.full_shot("14-phone-full")
         d.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
         errs = p.console_errors()
