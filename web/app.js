@@ -748,7 +748,7 @@ function drawPreview(m) {
   ctx.setLineDash([]);
   // Scale: the colours' heights and the work zero.
   // Legend: the colours' heights, laid out left to right by measured width.
-  ctx.font = `${Math.round(12 * dpr)}px sans-serif`;
+  ctx.font = `${Math.round(14 * dpr)}px sans-serif`;
   ctx.fillStyle = '#e8ecf0';
   const lo = `tool tip Z ${fmt(m.zMin, 2)}`, hi = `${fmt(m.zCutMax, 2)} mm`, base = H - 6 * dpr;
   ctx.fillText(lo, pad, base);
