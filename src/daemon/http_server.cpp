@@ -8,7 +8,6 @@
 #include <boost/beast/websocket.hpp>
 #include <spdlog/spdlog.h>
 
-#include <algorithm>
 #include <chrono>
 
 namespace cncstream::daemon {
@@ -159,10 +158,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void read_header() {
     header_.emplace();
     header_->header_limit(16 * 1024);
-    // The header parser checks Content-Length against its body limit as soon
-    // as the header is complete: it must allow the largest body of any kind
-    // (an upload); the JSON limit is checked below, once the route is known.
-    header_->body_limit(std::max<std::uint64_t>(server_->config.limits.max_json_bytes, server_->config.limits.max_upload_bytes));
+    header_->body_limit(server_->config.limits.max_json_bytes);
     stream_.expires_after(seconds(server_->config.limits.header_timeout_s));
     http::async_read_header(stream_, buffer_, *header_,
                             [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_header(ec); });
@@ -177,11 +173,6 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     if (ec == http::error::header_limit) {
       keep_alive_ = false;
       write(Response::error(431, "bad_request", "request headers too large"), 11);
-      return;
-    }
-    if (ec == http::error::body_limit) {  // Content-Length over every limit: refused before the body is read
-      keep_alive_ = false;
-      write(Response::error(413, "too_large", "the body exceeds the limit"), header_->get().version());
       return;
     }
     if (ec) return close();
@@ -233,11 +224,6 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
         self->temp_.clear();
         self->dispatch();
       });
-      return;
-    }
-    if (const auto n = header_->content_length(); n && *n > server_->config.limits.max_json_bytes) {
-      keep_alive_ = false;
-      write(Response::error(413, "too_large", "the JSON body exceeds the limit"), version_);
       return;
     }
     body_.emplace(std::move(*header_));
