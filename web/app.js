@@ -1013,16 +1013,25 @@ function setupJog() {
     });
     b.addEventListener('contextmenu', (e) => e.preventDefault());  // a long press must not open a menu
   }
+  // The big red button stops whatever moves: a jog gently (jog cancel), a job
+  // with its controlled stop, anything else (go to zero, a console move) with
+  // the machine's controlled stop. None of these needs control.
   $('#jog-stop').addEventListener('click', () => {
+    const m = S.current;
+    const wasHeld = !!jog.button;
     releaseJog('stop pressed');
-    run('Stop jog', () => api('POST', `/machines/${enc(S.current)}/jog/cancel`, {}));
+    const st = (S.machines.get(m) && S.machines.get(m).status) || {};
+    const active = [...S.jobs.values()].find((j) => j.machine === m && (j.state === 'running' || j.state === 'held'));
+    if (active) run('Stop', () => api('POST', `/jobs/${active.id}/stop`, {}));
+    else if (wasHeld || st.jogging || st.state === 'Jog') run('Stop jog', () => api('POST', `/machines/${enc(m)}/jog/cancel`, {}));
+    else run('Stop', () => api('POST', `/machines/${enc(m)}/stop`, {}));
   });
   window.addEventListener('blur', () => releaseJog('window lost focus'));
   document.addEventListener('visibilitychange', () => { if (document.hidden) releaseJog('page hidden'); });
   window.addEventListener('pagehide', () => releaseJog('page closed'));
   document.querySelectorAll('input[name=jogstep]').forEach((r) => r.addEventListener('change', () => {
     $('#jog-hint').textContent = jogStep() === null
-      ? 'Hold: the machine moves while you hold the button and stops when you let go.'
+      ? 'Hold to move: the machine moves while you hold the button and stops when you let go.'
       : `Step: each press moves ${jogStep()} mm.`;
   }));
 }
