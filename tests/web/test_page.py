@@ -306,8 +306,8 @@ def main_flow(args, out, d):
         Select(p.q("#machine-select")).select_by_value("bench")
         p.wait("the page to show the bench machine, idle", lambda: p.d.execute_script("return window.cncstream.state.current") == "bench" and p.connected(), 20)
 
-        # ---- a G-code file dropped on the drop zone, queued as it is: start,
-        # hold, resume, stop with the running panel's buttons; queued again and removed
+        # ---- a G-code file dropped on the drop zone, queued as it is: start, hold and
+        # resume with the running panel's buttons, stop with the jog pad's STOP; queued again and removed
         square = "G21 G90 G94\nG0 X0 Y0\n" + "G1 X40 F500\nG1 Y40\nG1 X0\nG1 Y0\n" * 3 + "M2\n"  # ~1 min at 500 mm/min
         d.execute_script("""
             const dt = new DataTransfer();
@@ -343,7 +343,9 @@ def main_flow(args, out, d):
         p.shot("07-job-held")
         p.click("#btn-resume")
         p.wait("the job running again", lambda: panel_state() == "running" and p.state() == "run", 20)
-        p.click("#btn-stop")
+        assert p.q("#btn-stop").is_enabled()
+        # The jog pad's big STOP, the one a hand finds first, must stop a job too.
+        p.click("#jog-stop")
         p.wait("the job stopped", lambda: panel_state() == "stopped", 30)
         p.wait("the stopped job in the history", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{gid}'][data-state=stopped]"), 10)
         p.wait("the machine idle after the stop", lambda: p.state() == "idle", 30)
