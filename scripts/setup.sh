@@ -10,6 +10,7 @@ packages=(
   libspdlog-dev libfmt-dev libtbb-dev libpng-dev nettle-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   tmux  # the terminal jog tests drive `cncstream jog` in a tmux session
+  chromium chromium-driver python3-selenium libjs-three
 )
 missing=()
 for p in "${packages[@]}"; do
