@@ -4,15 +4,25 @@
 // 0 feed 100 %, > / < spindle ±10 %, 1 2 3 rapid 100/50/25 %, ? toggles the
 // key help in the live display.
 #include <atomic>
+#include <functional>
 #include <thread>
 
 #include "cncstream/session/stream_runner.hpp"
 
 namespace cncstream::app {
 
+// What the keys do: a local StreamRunner's requests, or the daemon's API
+// calls when the job was handed to the daemon. Called on the key thread.
+struct JobKeyActions {
+  std::function<void()> toggle_pause;
+  std::function<void()> stop;
+  std::function<void(protocol::Realtime)> realtime;
+};
+
 class KeyboardControl {
  public:
   explicit KeyboardControl(session::StreamRunner& runner);
+  explicit KeyboardControl(JobKeyActions actions);
   ~KeyboardControl();  // restores the terminal
   KeyboardControl(const KeyboardControl&) = delete;
   KeyboardControl& operator=(const KeyboardControl&) = delete;
@@ -22,7 +32,7 @@ class KeyboardControl {
 
  private:
   void loop();
-  session::StreamRunner& runner_;
+  JobKeyActions actions_;
   std::atomic<bool> running_{true};
   bool active_ = false;
   std::atomic<bool> show_help_{false};
