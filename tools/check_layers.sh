@@ -21,6 +21,7 @@ declare -A may_include=(
   [protocol]="geometry image cam gcode"
   [transport]="geometry image cam gcode protocol"
   [session]="geometry image cam gcode protocol transport"
+  [daemon]="geometry image cam gcode jobs protocol transport session"
 )
 # The machine session serves `PORT=sim` with the in-process simulator: it
 # may include cncsim (the simulator never includes it back).

@@ -59,6 +59,7 @@ void SimulatorPort::start() {
     }
     // Whatever ended the loop, the host must see the port go away.
     front_.reset();
+    ended_ = true;
   });
 }
 

@@ -131,6 +131,14 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
         throw JournalError(path.string() + ": cannot upgrade the progress table: " + sqlite3_errmsg(db_));
     }
     exec("CREATE INDEX IF NOT EXISTS progress_job ON progress(job_id, id)");
+    // cncstreamd's queue: a new table, so older journals stay readable by
+    // older programs and gain it the first time the daemon opens them.
+    exec("CREATE TABLE IF NOT EXISTS daemon_jobs ("
+         " id INTEGER PRIMARY KEY AUTOINCREMENT, machine TEXT NOT NULL, file_id TEXT NOT NULL, file_name TEXT NOT NULL,"
+         " kind TEXT NOT NULL, params TEXT NOT NULL, state TEXT NOT NULL, position INTEGER NOT NULL DEFAULT 0,"
+         " message TEXT NOT NULL DEFAULT '', created_at TEXT NOT NULL, started_at TEXT, ended_at TEXT,"
+         " journal_id INTEGER, resumed_from INTEGER NOT NULL DEFAULT 0, from_line INTEGER NOT NULL DEFAULT 0,"
+         " last_line INTEGER NOT NULL DEFAULT 0)");
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;
@@ -264,6 +272,75 @@ std::int64_t Journal::progress_count(std::int64_t job_id) const {
   s.bind(1, job_id);
   s.step();
   return s.i64(0);
+}
+
+namespace {
+
+constexpr const char* kDaemonJobColumns =
+    "id, machine, file_id, file_name, kind, params, state, position, message, created_at, started_at, ended_at,"
+    " journal_id, resumed_from, from_line, last_line";
+
+void bind_daemon_job(Stmt& s, const DaemonJobRow& r) {
+  s.bind(1, r.machine).bind(2, r.file_id).bind(3, r.file_name).bind(4, r.kind).bind(5, r.params_json).bind(6, r.state);
+  s.bind(7, r.position).bind(8, r.message).bind(9, r.created_at);
+  if (r.started_at) s.bind(10, *r.started_at);
+  else s.bind_null(10);
+  if (r.ended_at) s.bind(11, *r.ended_at);
+  else s.bind_null(11);
+  if (r.journal_id) s.bind(12, r.journal_id);
+  else s.bind_null(12);
+  s.bind(13, r.resumed_from).bind(14, r.from_line).bind(15, r.last_line);
+}
+
+}  // namespace
+
+std::int64_t Journal::insert_daemon_job(const DaemonJobRow& r) {
+  Stmt s(db_, path_,
+         "INSERT INTO daemon_jobs (machine, file_id, file_name, kind, params, state, position, message, created_at,"
+         " started_at, ended_at, journal_id, resumed_from, from_line, last_line)"
+         " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)");
+  bind_daemon_job(s, r);
+  s.step();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+void Journal::update_daemon_job(const DaemonJobRow& r) {
+  Stmt s(db_, path_,
+         "UPDATE daemon_jobs SET machine=?1, file_id=?2, file_name=?3, kind=?4, params=?5, state=?6, position=?7,"
+         " message=?8, created_at=?9, started_at=?10, ended_at=?11, journal_id=?12, resumed_from=?13, from_line=?14,"
+         " last_line=?15 WHERE id=?16");
+  bind_daemon_job(s, r);
+  s.bind(16, r.id);
+  s.step();
+}
+
+std::vector<DaemonJobRow> Journal::daemon_jobs(int limit) const {
+  const std::string sql = std::string("SELECT ") + kDaemonJobColumns +
+                          " FROM daemon_jobs ORDER BY (ended_at IS NOT NULL), position, id DESC LIMIT ?1";
+  Stmt s(db_, path_, sql.c_str());
+  s.bind(1, static_cast<std::int64_t>(limit));
+  std::vector<DaemonJobRow> out;
+  while (s.step()) {
+    DaemonJobRow r;
+    r.id = s.i64(0);
+    r.machine = s.text(1);
+    r.file_id = s.text(2);
+    r.file_name = s.text(3);
+    r.kind = s.text(4);
+    r.params_json = s.text(5);
+    r.state = s.text(6);
+    r.position = s.i64(7);
+    r.message = s.text(8);
+    r.created_at = s.text(9);
+    r.started_at = s.opt_text(10);
+    r.ended_at = s.opt_text(11);
+    r.journal_id = s.is_null(12) ? 0 : s.i64(12);
+    r.resumed_from = s.i64(13);
+    r.from_line = s.i64(14);
+    r.last_line = s.i64(15);
+    out.push_back(std::move(r));
+  }
+  return out;
 }
 
 }  // namespace cncstream::transport

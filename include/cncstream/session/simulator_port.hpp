@@ -60,6 +60,8 @@ class SimulatorPort final : public MachinePort {
   std::size_t lines_answered() const { return machine_->lines_answered(); }
   // The controller's settings ($$), for planning before connecting.
   const cncsim::Settings& settings() const { return machine_->settings(); }
+  // The serving thread has ended (the port vanished, overflowed, or finish()).
+  bool ended() const { return ended_; }
 
   // Stops the simulator (after the job) and describes what it saw: lines,
   // RX overflow, material removed and, with a design, the verify result.
@@ -80,6 +82,7 @@ class SimulatorPort final : public MachinePort {
   std::unique_ptr<cncsim::MaterialRemoval> removal_;
   std::unique_ptr<cncsim::PtyFrontEnd> front_;
   std::atomic<bool> stop_{false};
+  std::atomic<bool> ended_{false};
   std::thread thread_;
   std::string path_;
   std::string fatal_;  // what ended the simulator early (strict overflow)

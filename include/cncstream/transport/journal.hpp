@@ -55,6 +55,26 @@ struct ProgressRecord {
   std::string machine_state;
 };
 
+// A job of the daemon's queue (cncstreamd): created before it runs, so it
+// has a row of its own; `journal_id` links it to the `jobs` row its run wrote.
+struct DaemonJobRow {
+  std::int64_t id = 0;
+  std::string machine;
+  std::string file_id;  // the upload's SHA-256
+  std::string file_name;
+  std::string kind;         // "stl" | "gcode"
+  std::string params_json;  // the operation's parameters as given
+  std::string state;        // queued, generating, ready, running, held, done, failed, stopped, interrupted, cancelled
+  std::int64_t position = 0;
+  std::string message;
+  std::string created_at;
+  std::optional<std::string> started_at, ended_at;
+  std::int64_t journal_id = 0;
+  std::int64_t resumed_from = 0;
+  std::int64_t from_line = 0;
+  std::int64_t last_line = 0;
+};
+
 class Journal {
  public:
   // Opens or creates the database (and its folder).
@@ -79,6 +99,12 @@ class Journal {
   std::int64_t progress_count(std::int64_t job_id) const;
 
   static std::string now_iso8601();
+
+  // The daemon's queue and history (table daemon_jobs; journals of older
+  // versions gain it when opened, and the CLI's tables are untouched).
+  std::int64_t insert_daemon_job(const DaemonJobRow& row);  // returns the new id
+  void update_daemon_job(const DaemonJobRow& row);
+  std::vector<DaemonJobRow> daemon_jobs(int limit = 1000) const;  // unfinished first by position, then newest
 
  private:
   void exec(const char* sql);

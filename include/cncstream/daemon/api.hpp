@@ -1,0 +1,76 @@
+#pragma once
+// The API v1 (docs/api-v1.md): the routes and their handlers, the checks
+// every request passes before its body is read, and the WebSocket messages.
+// Handlers run on the event loop's thread; anything slow is posted to the
+// worker pool and answers later.
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/thread_pool.hpp>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "cncstream/daemon/auth.hpp"
+#include "cncstream/daemon/config.hpp"
+#include "cncstream/daemon/file_store.hpp"
+#include "cncstream/daemon/http_types.hpp"
+#include "cncstream/daemon/job_manager.hpp"
+#include "cncstream/daemon/machines.hpp"
+#include "cncstream/daemon/router.hpp"
+#include "cncstream/daemon/ws_hub.hpp"
+
+namespace cncstream::daemon {
+
+// The embedded OpenAPI document (src/daemon/openapi.json).
+const std::string& openapi_json();
+
+class Api {
+ public:
+  Api(boost::asio::io_context& io, boost::asio::thread_pool& pool, const DaemonConfig& config, Auth& auth,
+      FileStore& files, Machines& machines, JobManager& jobs, WsHub& hub, std::filesystem::path web_root);
+
+  // Before the body is read: route exists, token, Origin/Host, client id,
+  // and for an upload its declared size. nullopt: go on.
+  std::optional<Response> precheck(Request& r, bool websocket_upgrade);
+  bool is_upload(const Request& r) const { return r.method == "POST" && r.path == "/api/v1/files"; }
+  void handle(Request r, Respond respond);
+
+  // WebSocket clients.
+  std::shared_ptr<WsClient> ws_open(const Request& upgrade, std::weak_ptr<WsPeer> peer);
+  void ws_message(WsClient& c, const std::string& text);
+  void ws_close(WsClient& c);
+
+  const Router& router() const { return router_; }
+  const DaemonConfig& config() const { return config_; }
+
+ private:
+  void add_routes();
+  void machine_routes();
+  void file_routes();
+  void job_routes();
+  void static_routes();
+  Machine& machine(const Request& r, std::size_t param = 0);
+  std::int64_t job_id(const Request& r) const;
+
+  boost::asio::io_context& io_;
+  boost::asio::thread_pool& pool_;
+  const DaemonConfig& config_;
+  Auth& auth_;
+  FileStore& files_;
+  Machines& machines_;
+  JobManager& jobs_;
+  WsHub& hub_;
+  std::filesystem::path web_root_;
+  Router router_;
+};
+
+// Parses a JSON request body; ApiError 400 naming the byte of a syntax error.
+nlohmann::json parse_body(const Request& r);
+
+// Static files: the content type for a file name's extension.
+std::string content_type_for(const std::filesystem::path& p);
+// A request's path below the web root, or nullopt for anything that could
+// leave it ("..", "\\", NUL, an absolute path, a hidden file).
+std::optional<std::filesystem::path> safe_static_path(const std::filesystem::path& root, const std::string& rel);
+
+}  // namespace cncstream::daemon

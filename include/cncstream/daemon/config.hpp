@@ -1,0 +1,76 @@
+#pragma once
+// cncstreamd's configuration: a TOML file (docs/api-v1.md, "Configuration")
+// and command-line overrides. Every field has a default, so no file at all
+// gives one simulated machine listening on 127.0.0.1:8420.
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cncstream::daemon {
+
+struct MachineConfig {
+  std::string name = "sim";
+  std::string port = "sim";  // a device path, /dev/serial/by-id/..., "auto" or "sim"
+  unsigned baud = 115200;
+  std::string profile;       // "": identify
+  double reconnect_s = 1.0;  // reopen a vanished port this often
+  // port = "sim" only.
+  std::string sim_speed = "max";
+  bool sim_verify = true;            // STL jobs: cut a fresh stock and verify it against the part
+  std::size_t sim_vanish_after = 0;  // fault for tests: the first simulator vanishes after N answers
+  std::string sim_settings;          // persistent simulator settings file ("" : defaults)
+  double sim_resolution = 0.1;       // stock grid step of the verify, mm
+  double sim_tolerance = 0.05;       // verify tolerance, mm
+};
+
+struct Limits {
+  std::uint64_t max_upload_bytes = 200'000'000;
+  std::size_t max_json_bytes = 1 << 20;
+  std::size_t max_connections = 128;
+  std::size_t max_ws_clients = 64;
+  double header_timeout_s = 10;
+  double body_timeout_s = 120;
+  std::size_t ws_queue_messages = 1024;
+  double max_grid_nodes = 50e6;
+  double control_idle_s = 300;
+  unsigned worker_threads = 0;  // 0: hardware concurrency
+};
+
+struct SecurityConfig {
+  bool require_token = false;  // forced on for a non-loopback listen address
+  std::vector<std::string> allowed_origins;
+  std::vector<std::string> allowed_hosts;
+};
+
+struct DaemonConfig {
+  std::string listen_address = "127.0.0.1";
+  unsigned short listen_port = 8420;  // 0: any free port (tests)
+  std::filesystem::path data_dir;     // "" : default_data_dir()
+  std::filesystem::path journal;      // "" : the CLI's journal (transport::Journal::default_path())
+  std::filesystem::path web_root;     // "" : found at start (share/cncstream/web, then the source tree's web/)
+  std::vector<MachineConfig> machines{MachineConfig{}};
+  Limits limits;
+  SecurityConfig security;
+
+  bool listen_is_loopback() const;
+  bool token_required() const { return security.require_token || !listen_is_loopback(); }
+};
+
+// $XDG_STATE_HOME/cncstream/daemon, else ~/.local/state/cncstream/daemon.
+std::filesystem::path default_data_dir();
+
+// Throws std::invalid_argument naming the file, line and key of a bad value.
+DaemonConfig load_config(const std::filesystem::path& file);
+DaemonConfig parse_config(std::string_view toml_text, const std::string& source_name);
+
+// "ADDR:PORT", "[::1]:PORT"; throws std::invalid_argument naming the text.
+void apply_listen(DaemonConfig& c, const std::string& addr_port);
+// "NAME=PORT[,profile=P,baud=B,sim_speed=S,reconnect_s=R]"; throws naming the text.
+MachineConfig parse_machine_option(const std::string& text);
+
+// Checks names are unique and well-formed ([A-Za-z0-9_-]{1,32}) and values in range.
+void validate(const DaemonConfig& c);
+
+}  // namespace cncstream::daemon

@@ -1,0 +1,138 @@
+#pragma once
+// The daemon's jobs: the queue per machine, their states, tool-path
+// generation on the worker pool with a cache keyed by (file hash,
+// parameters), starting and controlling a job on its machine, the resume
+// planner, and the rows in the shared SQLite journal that let the queue and
+// the history survive a restart. Runs on the event loop's thread; only
+// generation and resume planning run on the pool.
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/thread_pool.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <list>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stop_token>
+#include <string>
+#include <vector>
+
+#include "cncstream/daemon/file_store.hpp"
+#include "cncstream/daemon/http_types.hpp"
+#include "cncstream/daemon/machines.hpp"
+#include "cncstream/jobs/resume_job.hpp"
+#include "cncstream/transport/journal.hpp"
+
+namespace cncstream::daemon {
+
+// A generated program, shared by every job with the same file and parameters.
+struct Program {
+  std::vector<std::string> lines;
+  std::vector<long> source_lines;  // empty: 1..n
+  std::int64_t total_lines = 0;
+  std::string sha256;              // of the program text
+  std::filesystem::path path;      // written under <data>/programs/ (the journal's `file`)
+  std::vector<double> end_by_line;  // when each file line's motion ends (s), for the ETA
+  double estimated_s = 0;
+  std::optional<Mesh> work_mesh;   // STL jobs: the part in work coordinates (the simulator's verify)
+  std::optional<Cutter> cutter;
+  double seconds = 0;              // generation time
+};
+
+struct DaemonJob {
+  transport::DaemonJobRow row;
+  nlohmann::json params;  // canonical (STL) or null (G-code)
+  std::string cache_key;
+  std::shared_ptr<const Program> program;
+  std::shared_ptr<std::stop_source> stop;  // generation in progress
+  std::string stage;
+  double fraction = 0;
+  bool cached = false;
+  protocol::JobProgress progress;
+  std::optional<SimVerifyReport> verify;
+  std::optional<jobs::ResumePlan> resume;  // a confirmed resume: its lines
+};
+
+class JobManager {
+ public:
+  JobManager(boost::asio::io_context& io, boost::asio::thread_pool& pool, const DaemonConfig& config, FileStore& files,
+             Machines& machines, WsHub& hub, const std::filesystem::path& journal_path,
+             const std::filesystem::path& programs_dir);
+  ~JobManager();
+
+  // After a restart: running/held -> interrupted (with the last answered
+  // line), unfinished ones regenerated; nothing is started.
+  void recover();
+
+  nlohmann::json create(const nlohmann::json& body);  // throws ApiError
+  nlohmann::json list(const std::optional<std::string>& machine, const std::optional<std::string>& state) const;
+  DaemonJob& get(std::int64_t id);  // throws ApiError 404
+  nlohmann::json to_json(const DaemonJob& j) const;
+  std::shared_ptr<const Program> program(const DaemonJob& j) const { return j.program; }
+
+  nlohmann::json start(std::int64_t id, const std::string& client);
+  nlohmann::json generate(std::int64_t id);
+  void hold(std::int64_t id);
+  void resume(std::int64_t id, const std::string& client);
+  void stop(std::int64_t id);
+  nlohmann::json cancel(std::int64_t id, const std::string& client);
+  nlohmann::json move(std::int64_t id, std::int64_t position);
+  // Answers later (plans on the pool).
+  void resume_plan(std::int64_t id, long from_line, const std::string& client, Respond respond);
+  nlohmann::json resume_confirm(std::int64_t id, const std::string& plan_id, const std::string& client);
+
+  void stop_generations() {
+    for (auto& [k, s] : generation_stop_) s->request_stop();
+  }
+  bool file_in_use(const std::string& file_id) const;
+  nlohmann::json current_job(const std::string& machine) const;
+
+  // Cache statistics (tests, benchmarks).
+  std::size_t cache_size() const { return cache_.size(); }
+
+ private:
+  void kick_generation(DaemonJob& j);
+  void on_generated(const std::string& key, std::shared_ptr<const Program> p, const std::string& error, bool cancelled);
+  void persist(DaemonJob& j);
+  void publish_job(const DaemonJob& j);
+  void publish_queue(const std::string& machine);
+  void set_state(DaemonJob& j, const std::string& state, const std::string& message = {});
+  DaemonJob* running_on(const std::string& machine);
+  std::vector<DaemonJob*> unfinished(const std::string& machine);
+  Machine& machine_of(const DaemonJob& j);
+  void cache_put(const std::string& key, std::shared_ptr<const Program> p);
+  void on_started(const std::string& machine, std::int64_t journal_id);
+  void on_progress(const std::string& machine, const protocol::JobProgress& p);
+  void on_state(const std::string& machine, const std::string& state);
+  void on_ended(const std::string& machine, protocol::JobOutcome o, long last_line, const std::string& text);
+  void on_verified(const std::string& machine, SimVerifyReport rep);
+  void on_start_failed(const std::string& machine, const std::string& why);
+  std::optional<double> eta(const DaemonJob& j) const;
+
+  boost::asio::io_context& io_;
+  boost::asio::thread_pool& pool_;
+  const DaemonConfig& config_;
+  FileStore& files_;
+  Machines& machines_;
+  WsHub& hub_;
+  std::filesystem::path programs_dir_;
+  transport::Journal journal_;
+  std::map<std::int64_t, std::unique_ptr<DaemonJob>> jobs_;
+  std::map<std::string, std::int64_t> running_;   // machine -> job
+  std::map<std::string, std::int64_t> last_run_;  // machine -> the last job started there (its verify report)
+  // The cache: key -> program, least recently used first.
+  std::list<std::pair<std::string, std::shared_ptr<const Program>>> cache_;
+  std::map<std::string, std::vector<std::int64_t>> generating_;  // key -> jobs waiting for it
+  std::map<std::string, std::shared_ptr<std::stop_source>> generation_stop_;
+  struct PendingPlan {
+    std::int64_t job;
+    std::string client;
+    jobs::ResumePlan plan;
+    double expires;
+  };
+  std::map<std::string, PendingPlan> plans_;
+  std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
+};
+
+}  // namespace cncstream::daemon

@@ -1,0 +1,59 @@
+// cncstreamd: the machine-side daemon (docs/daemon.md, docs/api-v1.md).
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <iostream>
+#include <thread>
+
+#include "cncstream/daemon/config.hpp"
+#include "cncstream/daemon/daemon.hpp"
+
+namespace {
+cncstream::daemon::Daemon* g_daemon = nullptr;
+}
+
+int main(int argc, char** argv) {
+  using namespace cncstream::daemon;
+  CLI::App app{"cncstreamd: serves CNC machines over HTTP and WebSocket (API: docs/api-v1.md)"};
+  std::string config_file, listen, data;
+  std::vector<std::string> machines;
+  app.add_option("--config", config_file, "TOML configuration file");
+  app.add_option("--listen", listen, "ADDR:PORT (default 127.0.0.1:8420; anything but loopback requires the token)");
+  app.add_option("--data", data, "Data folder (uploads, programs, token)");
+  app.add_option("--machine", machines, "NAME=PORT[,profile=P,baud=B,sim_speed=S] (replaces the file's machines)");
+  CLI11_PARSE(app, argc, argv);
+  setup_journald_logging();
+  try {
+    DaemonConfig c = config_file.empty() ? DaemonConfig{} : load_config(config_file);
+    if (!listen.empty()) apply_listen(c, listen);
+    if (!data.empty()) c.data_dir = data;
+    if (!machines.empty()) {
+      c.machines.clear();
+      for (const auto& m : machines) c.machines.push_back(parse_machine_option(m));
+    }
+    validate(c);
+    // SIGINT/SIGTERM end the loop; the sessions close their ports on the way out.
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set, nullptr);
+    Daemon d(std::move(c));
+    g_daemon = &d;
+    std::thread signals([&] {
+      int sig = 0;
+      sigwait(&set, &sig);
+      spdlog::info("signal {}: stopping", sig);
+      d.stop();
+    });
+    d.run();
+    pthread_kill(signals.native_handle(), SIGTERM);
+    signals.join();
+    g_daemon = nullptr;
+  } catch (const std::exception& e) {
+    spdlog::critical("cncstreamd: {}", e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,137 @@
+#include "cncstream/daemon/daemon.hpp"
+
+#include <boost/asio/executor_work_guard.hpp>
+#include <boost/asio/post.hpp>
+#include <spdlog/pattern_formatter.h>
+#include <spdlog/sinks/stdout_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <thread>
+#include <unistd.h>
+
+#include "cncstream/daemon/api.hpp"
+#include "cncstream/daemon/auth.hpp"
+#include "cncstream/daemon/file_store.hpp"
+#include "cncstream/daemon/http_server.hpp"
+#include "cncstream/daemon/job_manager.hpp"
+#include "cncstream/daemon/machines.hpp"
+#include "cncstream/daemon/ws_hub.hpp"
+#include "cncstream/transport/journal.hpp"
+
+#ifndef CNCSTREAM_SOURCE_WEB_DIR
+#define CNCSTREAM_SOURCE_WEB_DIR ""
+#endif
+
+namespace cncstream::daemon {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+unsigned worker_count(const DaemonConfig& c) {
+  if (c.limits.worker_threads) return c.limits.worker_threads;
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
+// sd-daemon(3) priorities: <3> error, <4> warning, <6> info, <7> debug.
+class PriorityFlag : public spdlog::custom_flag_formatter {
+ public:
+  void format(const spdlog::details::log_msg& msg, const std::tm&, spdlog::memory_buf_t& dest) override {
+    const char* p = "<6>";
+    switch (msg.level) {
+      case spdlog::level::critical: p = "<2>"; break;
+      case spdlog::level::err: p = "<3>"; break;
+      case spdlog::level::warn: p = "<4>"; break;
+      case spdlog::level::debug:
+      case spdlog::level::trace: p = "<7>"; break;
+      default: break;
+    }
+    dest.append(p, p + 3);
+  }
+  std::unique_ptr<custom_flag_formatter> clone() const override { return spdlog::details::make_unique<PriorityFlag>(); }
+};
+
+}  // namespace
+
+void setup_journald_logging() {
+  auto logger = std::make_shared<spdlog::logger>("cncstreamd", std::make_shared<spdlog::sinks::stderr_sink_mt>());
+  auto f = std::make_unique<spdlog::pattern_formatter>();
+  f->add_flag<PriorityFlag>('*').set_pattern("%*%v");
+  logger->set_formatter(std::move(f));
+  logger->flush_on(spdlog::level::info);
+  spdlog::set_default_logger(logger);
+}
+
+fs::path find_web_root(const DaemonConfig& c) {
+  if (!c.web_root.empty()) return c.web_root;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path installed = exe.parent_path().parent_path() / "share" / "cncstream" / "web";
+    if (fs::is_directory(installed, ec)) return installed;
+  }
+  const fs::path source = CNCSTREAM_SOURCE_WEB_DIR;
+  if (!source.empty() && fs::is_directory(source, ec)) return source;
+  return {};
+}
+
+Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_count(config_)) {
+  validate(config_);
+  if (config_.data_dir.empty()) config_.data_dir = default_data_dir();
+  fs::create_directories(config_.data_dir);
+  const fs::path journal = config_.journal.empty() ? transport::Journal::default_path() : config_.journal;
+  std::string token;
+  if (config_.token_required()) {
+    token = load_or_create_token(config_.data_dir, token_created_);
+    if (token_created_)
+      spdlog::warn("a token was generated (shown once; also in {}): {}", (config_.data_dir / "token").string(), token);
+    else
+      spdlog::info("clients need the token in {}", (config_.data_dir / "token").string());
+  }
+  hub_ = std::make_unique<WsHub>(config_.limits.max_ws_clients, config_.limits.ws_queue_messages);
+  files_ = std::make_unique<FileStore>(config_.data_dir / "files");
+  auth_ = std::make_unique<Auth>(config_, token);
+  machines_ = std::make_unique<Machines>(io_, pool_, config_, *hub_, journal);
+  jobs_ = std::make_unique<JobManager>(io_, pool_, config_, *files_, *machines_, *hub_, journal,
+                                       config_.data_dir / "programs");
+  jobs_->recover();
+  const fs::path web = find_web_root(config_);
+  if (web.empty()) spdlog::warn("no web page folder found (set web.root): GET / answers 404");
+  api_ = std::make_unique<Api>(io_, pool_, config_, *auth_, *files_, *machines_, *jobs_, *hub_, web);
+  server_ = std::make_unique<HttpServer>(io_, config_, *api_, *files_);
+  server_->start();
+  spdlog::info("listening on {}:{} ({}), data in {}, journal {}, {} machine(s)", config_.listen_address, port(),
+               config_.token_required() ? "token required" : "loopback, no token", config_.data_dir.string(),
+               journal.string(), config_.machines.size());
+  machines_->open_all();
+}
+
+Daemon::~Daemon() {
+  stop();
+  // Generation tasks see their stop request at the next checkpoint; the
+  // pool is joined before the objects its tasks use go away.
+  jobs_->stop_generations();
+  pool_.join();
+  jobs_.reset();
+  server_.reset();
+  api_.reset();
+  machines_.reset();
+}
+
+void Daemon::run() {
+  auto guard = boost::asio::make_work_guard(io_);
+  io_.run();
+}
+
+void Daemon::stop() {
+  boost::asio::post(io_, [this] {
+    if (server_) server_->stop();
+    io_.stop();
+  });
+}
+
+unsigned short Daemon::port() const { return server_ ? server_->port() : 0; }
+
+const std::string& Daemon::token() const { return auth_->token(); }
+
+}  // namespace cncstream::daemon

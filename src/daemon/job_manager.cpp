@@ -1,0 +1,730 @@
+#include "cncstream/daemon/job_manager.hpp"
+
+#include <boost/asio/post.hpp>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <sstream>
+
+#include "cncstream/daemon/auth.hpp"
+#include "cncstream/daemon/job_params.hpp"
+#include "cncstream/gcode/program.hpp"
+#include "cncstream/jobs/toolpath_job.hpp"
+#include "cncstream/protocol/grbl_settings.hpp"
+#include "cncstream/transport/sha256.hpp"
+
+namespace cncstream::daemon {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::size_t kCacheEntries = 16;
+
+bool is_final(const std::string& s) {
+  return s == "done" || s == "failed" || s == "stopped" || s == "interrupted" || s == "cancelled";
+}
+
+double steady_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// Builds a Program from G-code text: lines, hash, the file under
+// <programs>/<sha>.nc (written whole, then renamed), and the ETA table.
+std::shared_ptr<Program> make_program(std::string text, const fs::path& programs_dir, const gcode::MotionLimits& limits) {
+  auto p = std::make_shared<Program>();
+  for (auto l : gcode::split_lines(text)) {
+    if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
+    p->lines.emplace_back(l);
+  }
+  if (!p->lines.empty() && p->lines.back().empty()) p->lines.pop_back();
+  p->total_lines = static_cast<std::int64_t>(p->lines.size());
+  p->sha256 = transport::sha256_hex(text);
+  p->path = programs_dir / (p->sha256 + ".nc");
+  if (!fs::exists(p->path)) {
+    const fs::path tmp = programs_dir / (random_token_hex(8) + ".part");
+    {
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      out << text;
+      if (!out) throw std::runtime_error(tmp.string() + ": cannot write the program");
+    }
+    fs::rename(tmp, p->path);
+  }
+  const auto trace = gcode::trace_program(text);
+  const auto ends = gcode::estimate_line_end_times(trace, limits, p->lines.size());
+  p->end_by_line.assign(p->lines.size() + 1, 0.0);
+  for (std::size_t i = 0; i < ends.size() && i + 1 < p->end_by_line.size(); ++i) p->end_by_line[i + 1] = ends[i];
+  p->estimated_s = ends.empty() ? 0 : ends.back() + trace.dwell_seconds;
+  return p;
+}
+
+std::string read_all(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw std::runtime_error(p.string() + ": cannot read");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+JobManager::JobManager(boost::asio::io_context& io, boost::asio::thread_pool& pool, const DaemonConfig& config,
+                       FileStore& files, Machines& machines, WsHub& hub, const fs::path& journal_path,
+                       const fs::path& programs_dir)
+    : io_(io),
+      pool_(pool),
+      config_(config),
+      files_(files),
+      machines_(machines),
+      hub_(hub),
+      programs_dir_(programs_dir),
+      journal_(journal_path) {
+  fs::create_directories(programs_dir_);
+  MachineJobListener l;
+  l.started = [this](const std::string& m, std::int64_t id) { on_started(m, id); };
+  l.progress = [this](const std::string& m, const protocol::JobProgress& p) { on_progress(m, p); };
+  l.state = [this](const std::string& m, const std::string& s) { on_state(m, s); };
+  l.ended = [this](const std::string& m, protocol::JobOutcome o, long line, const std::string& t) {
+    on_ended(m, o, line, t);
+  };
+  l.verified = [this](const std::string& m, SimVerifyReport r) { on_verified(m, std::move(r)); };
+  l.start_failed = [this](const std::string& m, bool, const std::string& why) { on_start_failed(m, why); };
+  machines_.set_listener(std::move(l));
+  machines_.current_job = [this](const std::string& m) { return current_job(m); };
+}
+
+JobManager::~JobManager() {
+  *alive_ = false;
+  for (auto& [k, s] : generation_stop_) s->request_stop();
+}
+
+void JobManager::recover() {
+  for (auto& row : journal_.daemon_jobs(100000)) {
+    auto j = std::make_unique<DaemonJob>();
+    j->row = row;
+    try {
+      j->params = row.params_json.empty() ? json(nullptr) : json::parse(row.params_json);
+    } catch (const std::exception&) {
+      j->params = nullptr;
+    }
+    j->cache_key = row.file_id + ":" + (j->params.is_null() ? std::string("gcode") : j->params.dump());
+    if (row.state == "running" || row.state == "held") {
+      // The daemon died under a running job: the machine may have moved on
+      // its buffered lines or stopped; never resume by itself.
+      if (row.journal_id)
+        if (const auto p = journal_.last_progress(row.journal_id)) j->row.last_line = p->last_line;
+      j->row.state = "interrupted";
+      j->row.ended_at = transport::Journal::now_iso8601();
+      j->row.message = "cncstreamd stopped while this job ran (last answered line " + std::to_string(j->row.last_line) +
+                       "); not resumed: check the machine, then plan a resume from the line";
+      if (row.journal_id) {
+        const auto rec = journal_.job(row.journal_id);
+        if (rec && !rec->outcome) journal_.end_job(row.journal_id, "interrupted", j->row.message);
+      }
+      journal_.update_daemon_job(j->row);
+    } else if (!is_final(row.state)) {
+      j->row.state = "queued";  // generated again below; never started by itself
+      journal_.update_daemon_job(j->row);
+    }
+    jobs_[row.id] = std::move(j);
+  }
+  for (auto& [id, j] : jobs_)
+    if (j->row.state == "queued") kick_generation(*j);
+  spdlog::info("jobs: {} in the journal", jobs_.size());
+}
+
+// ---- persistence and publishing ---------------------------------------------
+
+void JobManager::persist(DaemonJob& j) {
+  try {
+    journal_.update_daemon_job(j.row);
+  } catch (const std::exception& e) {
+    spdlog::error("journal: {}", e.what());
+  }
+}
+
+json JobManager::to_json(const DaemonJob& j) const {
+  const auto& r = j.row;
+  json gen = nullptr;
+  if (r.kind == "stl" || j.stage.size())
+    gen = {{"stage", j.stage}, {"fraction", j.fraction}, {"cached", j.cached},
+           {"seconds", j.program ? json(j.program->seconds) : json(nullptr)}};
+  json prog = nullptr;
+  if (j.program) prog = {{"lines", j.program->lines.size()}, {"estimated_s", j.program->estimated_s}};
+  const double total = j.program ? double(j.program->total_lines) : 0;
+  json progress = {{"lines_sent", j.progress.lines_sent},
+                   {"lines_answered", j.progress.lines_answered},
+                   {"last_answered_line", std::max<std::int64_t>(r.last_line, j.progress.last_answered_line)},
+                   {"fraction", total > 0 ? double(j.progress.lines_answered) / total : 0.0},
+                   {"eta_s", eta(j) ? json(*eta(j)) : json(nullptr)}};
+  json verify = nullptr;
+  if (j.verify)
+    verify = {{"gouged", j.verify->gouged},
+              {"largest_gouge_mm", j.verify->largest_gouge_mm ? json(*j.verify->largest_gouge_mm) : json(nullptr)},
+              {"text", j.verify->text}};
+  return {{"id", r.id},
+          {"machine", r.machine},
+          {"file", r.file_id},
+          {"file_name", r.file_name},
+          {"kind", r.kind},
+          {"params", j.params},
+          {"state", r.state},
+          {"position", r.position},
+          {"message", r.message},
+          {"created_at", r.created_at},
+          {"started_at", r.started_at ? json(*r.started_at) : json(nullptr)},
+          {"ended_at", r.ended_at ? json(*r.ended_at) : json(nullptr)},
+          {"generation", gen},
+          {"program", prog},
+          {"progress", progress},
+          {"verify", verify},
+          {"journal_id", r.journal_id ? json(r.journal_id) : json(nullptr)},
+          {"resumed_from", r.resumed_from},
+          {"from_line", r.from_line}};
+}
+
+std::optional<double> JobManager::eta(const DaemonJob& j) const {
+  if (!j.program || j.program->end_by_line.empty()) return std::nullopt;
+  const auto& e = j.program->end_by_line;
+  if (j.row.state == "done") return 0.0;
+  if (j.row.state != "running" && j.row.state != "held") return j.program->estimated_s;
+  const auto line = static_cast<std::size_t>(std::clamp<long>(j.progress.last_answered_line, 0, long(e.size()) - 1));
+  return std::max(0.0, e.back() - e[line]);
+}
+
+void JobManager::publish_job(const DaemonJob& j) {
+  json f = to_json(j);
+  json m = {{"type", "job"},     {"job", j.row.id},         {"machine", j.row.machine}, {"state", j.row.state},
+            {"progress", f["progress"]}, {"eta_s", f["progress"]["eta_s"]}, {"message", j.row.message},
+            {"generation", f["generation"]}, {"verify", f["verify"]}};
+  hub_.publish(j.row.machine, WsHub::frame(m.dump()));
+}
+
+std::vector<DaemonJob*> JobManager::unfinished(const std::string& machine) {
+  std::vector<DaemonJob*> v;
+  for (auto& [id, j] : jobs_)
+    if (j->row.machine == machine && !is_final(j->row.state)) v.push_back(j.get());
+  std::sort(v.begin(), v.end(), [](auto* a, auto* b) {
+    return a->row.position != b->row.position ? a->row.position < b->row.position : a->row.id < b->row.id;
+  });
+  return v;
+}
+
+void JobManager::publish_queue(const std::string& machine) {
+  json list = json::array();
+  for (auto* j : unfinished(machine))
+    list.push_back({{"id", j->row.id}, {"state", j->row.state}, {"position", j->row.position},
+                    {"file_name", j->row.file_name}});
+  hub_.publish(machine, WsHub::frame(json{{"type", "queue"}, {"machine", machine}, {"jobs", list}}.dump()));
+}
+
+void JobManager::set_state(DaemonJob& j, const std::string& state, const std::string& message) {
+  const bool changed = j.row.state != state;
+  j.row.state = state;
+  if (!message.empty()) j.row.message = message;
+  if (is_final(state) && !j.row.ended_at) j.row.ended_at = transport::Journal::now_iso8601();
+  persist(j);
+  publish_job(j);
+  if (changed) publish_queue(j.row.machine);
+}
+
+// ---- create, list ---------------------------------------------------------
+
+json JobManager::create(const json& body) {
+  if (!body.is_object()) throw ApiError{400, "bad_request", "expected a JSON object"};
+  if (!body.contains("machine") || !body["machine"].is_string())
+    throw ApiError{400, "bad_request", "machine: required, a machine name"};
+  if (!body.contains("file") || !body["file"].is_string())
+    throw ApiError{400, "bad_request", "file: required, the id of an uploaded file"};
+  const std::string machine = body["machine"].get<std::string>();
+  if (!machines_.find(machine)) throw ApiError{404, "not_found", "no machine '" + machine.substr(0, 64) + "'"};
+  const std::string file_id = body["file"].get<std::string>();
+  const auto info = files_.get(file_id);
+  if (!info) throw ApiError{404, "not_found", "no file '" + file_id.substr(0, 64) + "'"};
+  auto j = std::make_unique<DaemonJob>();
+  if (info->kind == "stl") {
+    if (!body.contains("params")) throw ApiError{400, "bad_request", "params: required for an STL file (at least tool)"};
+    const auto checked = check_toolpath_params(body["params"], *info, config_.limits);
+    j->params = checked.canonical;
+    j->cache_key = file_id + ":" + checked.canonical.dump();
+  } else {
+    j->params = nullptr;
+    j->cache_key = file_id + ":gcode";
+  }
+  auto& r = j->row;
+  r.machine = machine;
+  r.file_id = file_id;
+  r.file_name = info->name;
+  r.kind = info->kind;
+  r.params_json = j->params.is_null() ? "" : j->params.dump();
+  r.state = "queued";
+  std::int64_t pos = 0;
+  for (auto* u : unfinished(machine)) pos = std::max(pos, u->row.position + 1);
+  r.position = pos;
+  r.created_at = transport::Journal::now_iso8601();
+  r.id = journal_.insert_daemon_job(r);
+  auto& ref = *j;
+  jobs_[r.id] = std::move(j);
+  spdlog::info("job {}: created on {} from {} ({})", r.id, machine, info->name, info->kind);
+  publish_queue(machine);
+  kick_generation(ref);
+  return to_json(ref);
+}
+
+json JobManager::list(const std::optional<std::string>& machine, const std::optional<std::string>& state) const {
+  std::vector<const DaemonJob*> open, done;
+  for (const auto& [id, j] : jobs_) {
+    if (machine && j->row.machine != *machine) continue;
+    if (state && j->row.state != *state) continue;
+    (is_final(j->row.state) ? done : open).push_back(j.get());
+  }
+  std::sort(open.begin(), open.end(), [](auto* a, auto* b) {
+    return a->row.position != b->row.position ? a->row.position < b->row.position : a->row.id < b->row.id;
+  });
+  std::sort(done.begin(), done.end(), [](auto* a, auto* b) { return a->row.id > b->row.id; });
+  json out = json::array();
+  for (auto* j : open)
+    if (out.size() < 200) out.push_back(to_json(*j));
+  for (auto* j : done)
+    if (out.size() < 200) out.push_back(to_json(*j));
+  return {{"jobs", out}};
+}
+
+DaemonJob& JobManager::get(std::int64_t id) {
+  const auto it = jobs_.find(id);
+  if (it == jobs_.end()) throw ApiError{404, "not_found", "no job " + std::to_string(id)};
+  return *it->second;
+}
+
+Machine& JobManager::machine_of(const DaemonJob& j) {
+  Machine* m = machines_.find(j.row.machine);
+  if (!m) throw ApiError{409, "bad_state", "job " + std::to_string(j.row.id) + "'s machine '" + j.row.machine +
+                                               "' is not configured any more"};
+  return *m;
+}
+
+DaemonJob* JobManager::running_on(const std::string& machine) {
+  const auto it = running_.find(machine);
+  if (it == running_.end()) return nullptr;
+  const auto j = jobs_.find(it->second);
+  return j == jobs_.end() ? nullptr : j->second.get();
+}
+
+bool JobManager::file_in_use(const std::string& file_id) const {
+  for (const auto& [id, j] : jobs_)
+    if (j->row.file_id == file_id && !is_final(j->row.state)) return true;
+  return false;
+}
+
+json JobManager::current_job(const std::string& machine) const {
+  const auto it = running_.find(machine);
+  if (it == running_.end()) return nullptr;
+  return it->second;
+}
+
+// ---- generation -------------------------------------------------------------
+
+void JobManager::cache_put(const std::string& key, std::shared_ptr<const Program> p) {
+  cache_.remove_if([&](const auto& e) { return e.first == key; });
+  cache_.emplace_back(key, std::move(p));
+  while (cache_.size() > kCacheEntries) cache_.pop_front();
+}
+
+void JobManager::kick_generation(DaemonJob& j) {
+  if (j.row.resumed_from && !j.resume) {
+    // A confirmed resume whose lines were lost with a restart: plan it again from its recorded line.
+    set_state(j, "failed", "the resume plan was lost with a daemon restart: plan the resume again from job " +
+                               std::to_string(j.row.resumed_from));
+    return;
+  }
+  for (auto it = cache_.begin(); it != cache_.end(); ++it) {
+    if (it->first != j.cache_key) continue;
+    j.program = it->second;
+    cache_.splice(cache_.end(), cache_, it);  // most recently used
+    j.cached = true;
+    j.stage = "done";
+    j.fraction = 1;
+    set_state(j, "ready");
+    return;
+  }
+  j.cached = false;
+  j.stage = "queued";
+  j.fraction = 0;
+  set_state(j, "generating");
+  auto& waiting = generating_[j.cache_key];
+  waiting.push_back(j.row.id);
+  if (waiting.size() > 1) return;  // the same program is being generated for another job
+
+  auto stop = std::make_shared<std::stop_source>();
+  generation_stop_[j.cache_key] = stop;
+  const auto path = files_.content_path(j.row.file_id);
+  if (!path) {
+    generating_.erase(j.cache_key);
+    generation_stop_.erase(j.cache_key);
+    set_state(j, "failed", "the file " + j.row.file_id + " was deleted");
+    return;
+  }
+  gcode::MotionLimits limits = protocol::grbl_default_motion_limits();
+  if (Machine* m = machines_.find(j.row.machine))
+    if (auto l = protocol::motion_limits_from(m->session->settings())) limits = *l;
+  jobs::ToolpathParams params;
+  const bool stl = j.row.kind == "stl";
+  if (stl) {
+    auto info = files_.get(j.row.file_id);
+    if (!info) info = FileInfo{};
+    params = check_toolpath_params(j.params, *info, config_.limits).params;
+    params.part.stl = path->string();
+  }
+  const std::string key = j.cache_key;
+  const std::string label = j.row.file_name;
+  struct Shared {
+    std::atomic<int> last_percent{-1};
+  };
+  auto shared = std::make_shared<Shared>();
+  boost::asio::post(pool_, [this, key, label, stl, params, limits, file = *path, stop, shared, alive = alive_] {
+    std::shared_ptr<Program> prog;
+    std::string error;
+    bool cancelled = false;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      if (stl) {
+        jobs::JobControl control;
+        control.stop = stop->get_token();
+        control.progress = [this, key, shared, alive](std::string_view stage, double f) {
+          const int pct = static_cast<int>(f * 100);
+          if (pct == shared->last_percent.exchange(pct)) return;
+          boost::asio::post(io_, [this, key, st = std::string(stage), f, alive] {
+            if (!*alive) return;
+            const auto it = generating_.find(key);
+            if (it == generating_.end()) return;
+            for (auto id : it->second)
+              if (auto j = jobs_.find(id); j != jobs_.end()) {
+                j->second->stage = st;
+                j->second->fraction = f;
+                publish_job(*j->second);
+              }
+          });
+        };
+        jobs::ToolpathParams p = params;
+        auto r = jobs::generate_toolpath(p, control);
+        prog = make_program(std::move(r.gcode), programs_dir_, limits);
+        prog->work_mesh = std::move(r.work_mesh);
+        prog->cutter = r.cutter;
+      } else {
+        prog = make_program(read_all(file), programs_dir_, limits);
+      }
+      prog->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    } catch (const jobs::Cancelled&) {
+      cancelled = true;
+    } catch (const std::exception& e) {
+      error = label + ": " + e.what();
+    }
+    boost::asio::post(io_, [this, key, prog, error, cancelled, alive] {
+      if (*alive) on_generated(key, prog, error, cancelled);
+    });
+  });
+}
+
+void JobManager::on_generated(const std::string& key, std::shared_ptr<const Program> p, const std::string& error,
+                              bool cancelled) {
+  auto waiting = std::move(generating_[key]);
+  generating_.erase(key);
+  generation_stop_.erase(key);
+  if (p) cache_put(key, p);
+  for (auto id : waiting) {
+    auto it = jobs_.find(id);
+    if (it == jobs_.end()) continue;
+    auto& j = *it->second;
+    if (j.row.state != "generating") continue;  // cancelled meanwhile
+    if (p) {
+      j.program = p;
+      j.stage = "done";
+      j.fraction = 1;
+      spdlog::info("job {}: ready: {} lines in {:.3f} s", id, p->lines.size(), p->seconds);
+      set_state(j, "ready");
+    } else if (cancelled) {
+      set_state(j, "cancelled", "generation cancelled");
+    } else {
+      spdlog::warn("job {}: generation failed: {}", id, error);
+      set_state(j, "failed", error);
+    }
+  }
+}
+
+json JobManager::generate(std::int64_t id) {
+  auto& j = get(id);
+  if (j.row.state != "queued")
+    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state + ", not queued"};
+  kick_generation(j);
+  return to_json(j);
+}
+
+// ---- running ----------------------------------------------------------------
+
+json JobManager::start(std::int64_t id, const std::string& client) {
+  auto& j = get(id);
+  Machine& m = machine_of(j);
+  machines_.require_control(m, client);
+  if (j.row.state != "ready")
+    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state + "; only a ready job starts"};
+  if (auto* r = running_on(j.row.machine))
+    throw ApiError{409, "refused", "job " + std::to_string(r->row.id) + " is running on " + j.row.machine};
+  session::JobInput in;
+  in.file = j.program->path;
+  in.file_sha256 = j.program->sha256;
+  in.total_lines = j.program->total_lines;
+  if (j.resume) {
+    in.lines = j.resume->lines;
+    in.source_lines = j.resume->source_lines;
+    in.resumed_from = j.row.resumed_from;
+    in.from_line = j.resume->from_line;
+  } else {
+    in.lines = j.program->lines;
+  }
+  std::optional<Mesh> design;
+  std::optional<Cutter> cutter;
+  if (!j.resume && j.program->work_mesh && j.program->cutter) {
+    design = j.program->work_mesh;
+    cutter = j.program->cutter;
+  }
+  // Marked running before the call: a session that starts at once reports
+  // JobStarted from inside start_job.
+  running_[j.row.machine] = id;
+  last_run_[j.row.machine] = id;
+  j.progress = {};
+  j.verify.reset();
+  const auto r = machines_.start_job(m, std::move(in), std::move(design), std::move(cutter));
+  if (!r) {
+    running_.erase(j.row.machine);
+    throw ApiError{409, "refused", r.reason};
+  }
+  j.row.started_at = transport::Journal::now_iso8601();
+  j.row.message.clear();
+  spdlog::info("job {}: started on {} by {}", id, j.row.machine, client);
+  set_state(j, "running");
+  return to_json(j);
+}
+
+void JobManager::hold(std::int64_t id) {
+  auto& j = get(id);
+  if (j.row.state != "running") throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state};
+  if (auto r = machine_of(j).session->hold(); !r) throw ApiError{409, "refused", r.reason};
+}
+
+void JobManager::resume(std::int64_t id, const std::string& client) {
+  auto& j = get(id);
+  Machine& m = machine_of(j);
+  machines_.require_control(m, client);
+  if (j.row.state != "held") throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state};
+  if (auto r = m.session->resume(); !r) throw ApiError{409, "refused", r.reason};
+}
+
+void JobManager::stop(std::int64_t id) {
+  auto& j = get(id);
+  if (j.row.state != "running" && j.row.state != "held")
+    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state + "; cancel a job that has not started"};
+  if (auto r = machine_of(j).session->stop(); !r) throw ApiError{409, "refused", r.reason};
+}
+
+json JobManager::cancel(std::int64_t id, const std::string& client) {
+  auto& j = get(id);
+  machines_.require_control(machine_of(j), client);
+  const auto& s = j.row.state;
+  if (s != "queued" && s != "generating" && s != "ready")
+    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + s + (s == "running" || s == "held" ? "; stop it instead" : "")};
+  if (s == "generating") {
+    auto& waiting = generating_[j.cache_key];
+    std::erase(waiting, id);
+    if (waiting.empty())
+      if (auto st = generation_stop_.find(j.cache_key); st != generation_stop_.end()) st->second->request_stop();
+  }
+  set_state(j, "cancelled", "cancelled by " + (client.empty() ? std::string("a client") : client));
+  return to_json(j);
+}
+
+json JobManager::move(std::int64_t id, std::int64_t position) {
+  auto& j = get(id);
+  if (is_final(j.row.state)) throw ApiError{409, "bad_state", "job " + std::to_string(id) + " has ended"};
+  auto list = unfinished(j.row.machine);
+  std::erase(list, &j);
+  position = std::clamp<std::int64_t>(position, 0, static_cast<std::int64_t>(list.size()));
+  list.insert(list.begin() + position, &j);
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    list[i]->row.position = static_cast<std::int64_t>(i);
+    persist(*list[i]);
+  }
+  publish_queue(j.row.machine);
+  return to_json(j);
+}
+
+// ---- machine events ---------------------------------------------------------
+
+void JobManager::on_started(const std::string& machine, std::int64_t journal_id) {
+  if (auto* j = running_on(machine)) {
+    j->row.journal_id = journal_id;
+    persist(*j);
+  }
+}
+
+void JobManager::on_progress(const std::string& machine, const protocol::JobProgress& p) {
+  if (auto* j = running_on(machine)) {
+    j->progress = p;
+    j->row.last_line = p.last_answered_line;
+    publish_job(*j);
+  }
+}
+
+void JobManager::on_state(const std::string& machine, const std::string& state) {
+  if (auto* j = running_on(machine); j && j->row.state != state) set_state(*j, state);
+}
+
+void JobManager::on_ended(const std::string& machine, protocol::JobOutcome o, long last_line, const std::string& text) {
+  auto* j = running_on(machine);
+  if (!j) return;
+  running_.erase(machine);
+  if (Machine* m = machines_.find(machine); m && m->session->engine()) j->progress = m->session->engine()->progress();
+  j->row.last_line = last_line;
+  using protocol::JobOutcome;
+  std::string state = "failed";
+  std::string msg = text;
+  switch (o) {
+    case JobOutcome::Completed: state = "done"; break;
+    case JobOutcome::Stopped: state = "stopped"; break;
+    case JobOutcome::Disconnected:
+      state = "interrupted";
+      msg = "the machine's port went away at line " + std::to_string(last_line) +
+            " (" + text + "); not resumed: check the machine, then plan a resume";
+      break;
+    default: break;
+  }
+  set_state(*j, state, msg);
+}
+
+void JobManager::on_verified(const std::string& machine, SimVerifyReport rep) {
+  const auto it = last_run_.find(machine);
+  if (it == last_run_.end()) return;
+  auto jt = jobs_.find(it->second);
+  if (jt == jobs_.end()) return;
+  auto& j = *jt->second;
+  spdlog::info("job {}: simulator verify: {}", j.row.id,
+               rep.gouged ? "GOUGED" : "no gouge");
+  j.verify = std::move(rep);
+  j.row.message += (j.row.message.empty() ? "" : "; ") +
+                   std::string(j.verify->gouged ? "simulated cut: gouged" : "simulated cut: no gouge");
+  persist(j);
+  publish_job(j);
+}
+
+void JobManager::on_start_failed(const std::string& machine, const std::string& why) {
+  if (auto* j = running_on(machine)) {
+    running_.erase(machine);
+    set_state(*j, "failed", "could not start: " + why);
+  }
+}
+
+// ---- resume from a line -----------------------------------------------------
+
+void JobManager::resume_plan(std::int64_t id, long from_line, const std::string& client, Respond respond) {
+  auto& j = get(id);
+  machines_.require_control(machine_of(j), client);
+  const auto& s = j.row.state;
+  if (s != "stopped" && s != "failed" && s != "interrupted")
+    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + s + "; resume plans are for stopped, failed or interrupted jobs"};
+  if (!j.program) {
+    // After a restart: find the program by its key in the cache, else it must be generated first.
+    for (auto& e : cache_)
+      if (e.first == j.cache_key) j.program = e.second;
+  }
+  if (!j.program && j.row.journal_id) {
+    // The program the journal recorded is on disk under <data>/programs.
+    const auto rec = journal_.job(j.row.journal_id);
+    if (rec && fs::exists(rec->file)) {
+      try {
+        auto p = make_program(read_all(rec->file), programs_dir_, protocol::grbl_default_motion_limits());
+        j.program = p;
+      } catch (const std::exception&) {
+      }
+    }
+  }
+  if (!j.program) throw ApiError{409, "bad_state", "job " + std::to_string(id) + "'s program is not available"};
+  jobs::ResumeInput in;
+  in.file = j.program->path;
+  in.file_sha256 = j.program->sha256;
+  in.lines = j.program->lines;
+  in.from_line = from_line;
+  in.last_line = j.row.last_line;
+  if (j.row.journal_id)
+    if (const auto p = journal_.last_progress(j.row.journal_id)) {
+      in.last_line = p->last_line;
+      if (p->status_work_pos) in.status_work_pos = Vec3{(*p->status_work_pos)[0], (*p->status_work_pos)[1], (*p->status_work_pos)[2]};
+      in.status_line = p->status_line;
+    }
+  if (from_line > j.program->total_lines)
+    throw ApiError{400, "bad_request", "from_line " + std::to_string(from_line) + " is past the program's " +
+                                           std::to_string(j.program->total_lines) + " lines"};
+  boost::asio::post(pool_, [this, in = std::move(in), id, client, respond, alive = alive_] {
+    std::optional<jobs::ResumePlan> plan;
+    std::string error;
+    try {
+      plan = jobs::plan_resume(in);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    boost::asio::post(io_, [this, plan = std::move(plan), error, id, client, respond, alive]() mutable {
+      if (!*alive) return;
+      if (!plan) {
+        respond(Response::error(400, "bad_request", error));
+        return;
+      }
+      const std::string plan_id = random_token_hex(12);
+      json r = {{"plan_id", plan_id}, {"job", id},          {"from_line", plan->from_line}, {"reason", plan->reason},
+                {"preamble", plan->preamble}, {"lines", plan->lines.size()}, {"expires_in_s", 600}};
+      std::erase_if(plans_, [now = steady_s()](const auto& e) { return e.second.expires < now; });
+      plans_[plan_id] = PendingPlan{id, client, std::move(*plan), steady_s() + 600};
+      respond(Response::json(200, r));
+    });
+  });
+}
+
+json JobManager::resume_confirm(std::int64_t id, const std::string& plan_id, const std::string& client) {
+  auto& old = get(id);
+  machines_.require_control(machine_of(old), client);
+  const auto it = plans_.find(plan_id);
+  if (it == plans_.end() || it->second.job != id || it->second.expires < steady_s())
+    throw ApiError{404, "not_found", "no resume plan '" + plan_id.substr(0, 64) + "' for job " + std::to_string(id) +
+                                         " (plans expire after 600 s)"};
+  auto j = std::make_unique<DaemonJob>();
+  j->row = old.row;
+  j->row.id = 0;
+  j->row.state = "ready";
+  j->row.message = "resumes job " + std::to_string(id) + " after line " + std::to_string(it->second.plan.from_line);
+  j->row.created_at = transport::Journal::now_iso8601();
+  j->row.started_at.reset();
+  j->row.ended_at.reset();
+  j->row.journal_id = 0;
+  j->row.last_line = 0;
+  j->row.resumed_from = id;
+  j->row.from_line = it->second.plan.from_line;
+  std::int64_t pos = 0;
+  for (auto* u : unfinished(old.row.machine)) pos = std::max(pos, u->row.position + 1);
+  j->row.position = pos;
+  j->params = old.params;
+  j->cache_key = old.cache_key;
+  j->program = old.program;
+  j->resume = std::move(it->second.plan);
+  j->stage = "done";
+  j->fraction = 1;
+  plans_.erase(it);
+  j->row.id = journal_.insert_daemon_job(j->row);
+  auto& ref = *j;
+  jobs_[ref.row.id] = std::move(j);
+  publish_queue(ref.row.machine);
+  publish_job(ref);
+  return to_json(ref);
+}
+
+}  // namespace cncstream::daemon

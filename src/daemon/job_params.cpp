@@ -1,0 +1,127 @@
+#include "cncstream/daemon/job_params.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "cncstream/cam/cutter.hpp"
+#include "cncstream/daemon/http_types.hpp"
+
+namespace cncstream::daemon {
+
+using nlohmann::json;
+
+namespace {
+
+[[noreturn]] void bad(const std::string& field, const std::string& why) {
+  throw ApiError{400, "bad_request", "params." + field + ": " + why};
+}
+
+std::string num_text(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
+double number(const json& j, const char* key, double dflt, double lo, double hi, bool lo_open = false) {
+  if (!j.contains(key) || j.at(key).is_null()) return dflt;
+  const auto& v = j.at(key);
+  if (!v.is_number()) bad(key, cat({"expected a number, got ", v.type_name()}));
+  const double x = v.get<double>();
+  if (!std::isfinite(x) || (lo_open ? !(x > lo) : !(x >= lo)) || !(x <= hi))
+    bad(key, cat({"must be ", lo_open ? "> " : ">= ", num_text(lo), " and <= ", num_text(hi), " (got ", num_text(x), ")"}));
+  return x;
+}
+
+std::optional<double> opt_number(const json& j, const char* key, double lo, double hi) {
+  if (!j.contains(key) || j.at(key).is_null()) return std::nullopt;
+  return number(j, key, 0, lo, hi);
+}
+
+std::string choice(const json& j, const char* key, const std::string& dflt, std::initializer_list<const char*> allowed) {
+  if (!j.contains(key) || j.at(key).is_null()) return dflt;
+  const auto& v = j.at(key);
+  if (!v.is_string()) bad(key, "expected a string");
+  const std::string s = v.get<std::string>();
+  std::string list;
+  for (const char* a : allowed) {
+    if (s == a) return s;
+    list += list.empty() ? "" : ", ";
+    list += a;
+  }
+  bad(key, cat({"'", s.substr(0, 40), "' is not one of ", list}));
+}
+
+}  // namespace
+
+CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const Limits& limits) {
+  if (!j.is_object()) throw ApiError{400, "bad_request", "params: expected an object"};
+  CheckedParams out;
+  auto& p = out.params;
+  if (!j.contains("tool") || !j.at("tool").is_string()) bad("tool", "required: a cutter such as ball:3.175");
+  const std::string tool = j.at("tool").get<std::string>();
+  if (tool.size() > 64) bad("tool", "too long");
+  try {
+    p.cutter = parse_cutter_spec(tool);
+  } catch (const std::exception& e) {
+    bad("tool", e.what());
+  }
+  if (!(p.cutter.diameter() > 0 && p.cutter.diameter() <= 50)) bad("tool", "the diameter must be > 0 and <= 50 mm");
+  p.stepover = number(j, "stepover", 0.4, 0.01, 50);
+  p.step = number(j, "step", 0, 0, 10);
+  if (p.step != 0 && p.step < 0.005) bad("step", "must be 0 (automatic) or >= 0.005 mm");
+  const std::string dir = choice(j, "direction", "x", {"x", "y"});
+  p.direction = dir == "y" ? RasterDirection::Y : RasterDirection::X;
+  p.feed = number(j, "feed", 1000, 0, 100000, true);
+  p.plunge_feed = number(j, "plunge_feed", 300, 0, 100000, true);
+  p.rpm = number(j, "rpm", 18000, 0, 100000);
+  p.safe_z = opt_number(j, "safe_z", -1000, 1000);
+  p.tolerance = number(j, "tolerance", 0.002, 0, 1);
+  p.floor = opt_number(j, "floor", -10000, 10000);
+  const std::string origin = choice(j, "origin", "min", {"min", "center", "model"});
+  p.origin = origin == "center" ? XYOrigin::PartCenter : origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
+  const std::string zz = choice(j, "z_zero", "top", {"top", "bottom", "model"});
+  p.z_zero = zz == "bottom" ? ZZero::PartBottom : zz == "model" ? ZZero::Model : ZZero::PartTop;
+  const std::string units = choice(j, "units", "mm", {"mm", "in"});
+  p.part.units = units == "in" ? LengthUnit::Inch : LengthUnit::Millimetre;
+  p.part.scale = number(j, "scale", 1, 0, 1000, true);
+  json bounds = nullptr;
+  if (j.contains("bounds") && !j.at("bounds").is_null()) {
+    const auto& b = j.at("bounds");
+    if (!b.is_array() || b.size() != 4) bad("bounds", "expected [x0, y0, x1, y1]");
+    double v[4];
+    for (int i = 0; i < 4; ++i) {
+      if (!b[i].is_number() || !std::isfinite(b[i].get<double>()) || std::abs(b[i].get<double>()) > 1e5)
+        bad("bounds", "expected 4 numbers within +-100000 mm");
+      v[i] = b[i].get<double>();
+    }
+    if (!(v[0] < v[2] && v[1] < v[3])) bad("bounds", "need x0 < x1 and y0 < y1");
+    p.bounds = XYBounds{v[0], v[1], v[2], v[3]};
+    bounds = json::array({v[0], v[1], v[2], v[3]});
+  }
+  // The grid the CL engine samples: rows across, samples along.
+  const double to_mm = (units == "in" ? 25.4 : 1.0) * p.part.scale;
+  double w = 0, h = 0;
+  if (p.bounds) {
+    w = p.bounds->x1 - p.bounds->x0;
+    h = p.bounds->y1 - p.bounds->y0;
+  } else {
+    w = (file.bbox[3] - file.bbox[0]) * to_mm + 2 * p.cutter.radius;
+    h = (file.bbox[4] - file.bbox[1]) * to_mm + 2 * p.cutter.radius;
+  }
+  const double step = p.step > 0 ? p.step : std::min(p.stepover / 4, 0.1);
+  const double along = p.direction == RasterDirection::X ? w : h, across = p.direction == RasterDirection::X ? h : w;
+  out.grid_nodes = (along / step + 1) * (across / p.stepover + 1);
+  if (!(out.grid_nodes <= limits.max_grid_nodes))
+    bad("stepover", cat({"the tool path would sample ", num_text(out.grid_nodes), " points (limit ",
+                         num_text(limits.max_grid_nodes), "): use a larger stepover or step, or smaller bounds"}));
+  out.canonical = {{"tool", tool},       {"stepover", p.stepover},       {"step", p.step},
+                   {"direction", dir},   {"feed", p.feed},               {"plunge_feed", p.plunge_feed},
+                   {"rpm", p.rpm},       {"safe_z", p.safe_z ? json(*p.safe_z) : json(nullptr)},
+                   {"tolerance", p.tolerance}, {"bounds", bounds},
+                   {"floor", p.floor ? json(*p.floor) : json(nullptr)},
+                   {"origin", origin},   {"z_zero", zz},                 {"units", units},
+                   {"scale", p.part.scale}};
+  return out;
+}
+
+}  // namespace cncstream::daemon
