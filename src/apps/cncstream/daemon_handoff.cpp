@@ -241,7 +241,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
       }
     }
     const std::string now_stage = str_or(j.value("generation", json::object()), "stage");
-    if (!now_stage.empty() && now_stage != stage) {
+    if (st == "generating" && !now_stage.empty() && now_stage != stage) {
       stage = now_stage;
       std::cerr << "daemon: " << stage << "...\n";
     }
@@ -345,7 +345,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
     if (m.contains("progress") && m["progress"].is_object()) last_progress = m["progress"];
     message = str_or(m, "message", message);
     if (m.contains("journal_id") && m["journal_id"].is_number_integer()) journal_id = m["journal_id"].get<std::int64_t>();
-    view.job_state = job_state;
+    view.job_state = handoff_outcome_word(job_state);  // "completed", as a local run says
     view.line = static_cast<long>(num_or(last_progress, "last_answered_line", double(view.line)));
     const double eta = num_or(m, "eta_s", num_or(last_progress, "eta_s", -1));
     view.eta_s = eta >= 0 ? std::optional<double>(eta) : std::nullopt;
