@@ -19,6 +19,23 @@ namespace {
 
 using json = nlohmann::json;
 
+// Null-safe reads (json::value() throws on a key that is present but null,
+// as the API's fields are before a machine's first status report).
+std::string sget(const json& j, const char* key, const std::string& fallback = "?") {
+  if (!j.is_object()) return fallback;
+  const auto it = j.find(key);
+  return it != j.end() && it->is_string() ? it->get<std::string>() : fallback;
+}
+json oget(const json& j, const char* key) {
+  if (!j.is_object()) return nullptr;
+  const auto it = j.find(key);
+  return it != j.end() ? *it : json(nullptr);
+}
+long long iget(const json& j, const char* key) {
+  const json v = oget(j, key);
+  return v.is_number() ? v.get<long long>() : 0;
+}
+
 bool status_job_unfinished(const std::string& s) {
   return s == "queued" || s == "generating" || s == "ready" || s == "running" || s == "held";
 }
@@ -40,10 +57,10 @@ std::string status_pos_text(const json& a) {
 }
 
 std::string status_job_text(const json& jb) {
-  std::string s = "#" + std::to_string(jb.value("id", 0)) + " " + jb.value("file_name", std::string("?")) + " " +
-                  jb.value("state", std::string("?"));
-  const json p = jb.value("progress", json::object());
-  const json prog = jb.value("program", json::object());
+  std::string s = "#";
+  s.append(std::to_string(iget(jb, "id"))).append(" ").append(sget(jb, "file_name")).append(" ").append(sget(jb, "state"));
+  const json p = oget(jb, "progress");
+  const json prog = oget(jb, "program");
   if (p.is_object() && p.contains("fraction") && p["fraction"].is_number()) {
     char buf[32];
     std::snprintf(buf, sizeof buf, " %.1f %%", 100.0 * p["fraction"].get<double>());
@@ -108,8 +125,8 @@ void register_status(CLI::App& app, CommandRegistry& registry) {
       DaemonClient client(parse_daemon_address(cand), "cncstream-status", daemon_token_from_env());
       try {
         const json health = client.get("/api/v1/health", 2);
-        if (!health.value("ok", false)) throw std::runtime_error("it answered, but not ok");
-        version = health.value("version", std::string());
+        if (oget(health, "ok") != true) throw std::runtime_error("it answered, but not ok");
+        version = sget(health, "version", "");
         api = client;
         break;
       } catch (const std::exception& e) {
@@ -137,8 +154,10 @@ void register_status(CLI::App& app, CommandRegistry& registry) {
     // The daemon's view: every machine's state, its current job, its queue.
     json daemon{{"url", api->address().url()}, {"version", version}, {"machines", json::array()}};
     std::set<std::string> daemon_devices;
-    for (const auto& summary : api->get("/api/v1/machines").value("machines", json::array())) {
-      const std::string name = summary.value("name", std::string());
+    json summaries = oget(api->get("/api/v1/machines"), "machines");
+    if (!summaries.is_array()) summaries = json::array();
+    for (const auto& summary : summaries) {
+      const std::string name = sget(summary, "name", "");
       json m = summary;
       try {
         m = api->get("/api/v1/machines/" + url_encode(name));
@@ -147,14 +166,16 @@ void register_status(CLI::App& app, CommandRegistry& registry) {
       }
       json queue = json::array();
       try {
-        for (const auto& jb : api->get("/api/v1/jobs?machine=" + url_encode(name)).value("jobs", json::array()))
-          if (status_job_unfinished(jb.value("state", std::string()))) queue.push_back(jb);
+        json jobs = oget(api->get("/api/v1/jobs?machine=" + url_encode(name)), "jobs");
+        if (!jobs.is_array()) jobs = json::array();
+        for (const auto& jb : jobs)
+          if (status_job_unfinished(sget(jb, "state", ""))) queue.push_back(jb);
       } catch (const std::exception& e) {
         m["queue_error"] = e.what();
       }
       m["queue"] = queue;
       daemon["machines"].push_back(m);
-      if (const std::string port = summary.value("port", std::string()); port != "sim" && !port.empty())
+      if (const std::string port = sget(summary, "port", ""); port != "sim" && !port.empty())
         daemon_devices.insert(transport::resolve_device(port));
     }
     out["daemon"] = daemon;
@@ -165,22 +186,24 @@ void register_status(CLI::App& app, CommandRegistry& registry) {
     std::cout << "cncstreamd at " << api->address().url() << (version.empty() ? "" : " (version " + version + ")") << ": "
               << daemon["machines"].size() << " machine" << (daemon["machines"].size() == 1 ? "" : "s") << "\n";
     for (const auto& m : daemon["machines"]) {
-      const json st = m.value("status", json());
-      const std::string state = st.is_object() ? st.value("state_text", st.value("state", std::string("?")))
-                                               : m.value("state", std::string("-"));
-      std::cout << "  " << m.value("name", std::string("?")) << "  " << m.value("port", std::string("?")) << "  "
-                << m.value("link", std::string("?")) << "  " << state << "  WPos "
-                << (st.is_object() ? status_pos_text(st.value("wpos", json())) : std::string("-")) << "  ";
+      const json st = oget(m, "status");
+      const std::string state = st.is_object() ? sget(st, "state_text", sget(st, "state")) : sget(m, "state", "-");
+      std::cout << "  " << sget(m, "name") << "  " << sget(m, "port") << "  " << sget(m, "link") << "  " << state
+                << "  WPos " << (st.is_object() ? status_pos_text(oget(st, "wpos")) : std::string("-")) << "  ";
       const json* current = nullptr;
       for (const auto& jb : m["queue"])
-        if (jb.value("state", std::string()) == "running" || jb.value("state", std::string()) == "held") current = &jb;
+        if (sget(jb, "state") == "running" || sget(jb, "state") == "held") current = &jb;
       std::cout << (current ? "job " + status_job_text(*current) : std::string("no job running")) << "\n";
       std::string rest;
       for (const auto& jb : m["queue"]) {
         if (&jb == current) continue;
-        rest.append(rest.empty() ? "" : ", ")
-            .append("#" + std::to_string(jb.value("id", 0)) + " " + jb.value("file_name", std::string("?")) + " (" +
-                    jb.value("state", std::string("?")) + ")");
+        rest.append(rest.empty() ? "#" : ", #")
+            .append(std::to_string(iget(jb, "id")))
+            .append(" ")
+            .append(sget(jb, "file_name"))
+            .append(" (")
+            .append(sget(jb, "state"))
+            .append(")");
       }
       std::cout << "      queue: " << (rest.empty() ? std::string("empty") : rest) << "\n";
       if (m.contains("error")) std::cout << "      (" << m["error"].get<std::string>() << ")\n";

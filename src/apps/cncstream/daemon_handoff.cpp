@@ -57,6 +57,14 @@ std::string str_or(const json& j, const char* key, const std::string& fallback =
   return it != j.end() && it->is_string() ? it->get<std::string>() : fallback;
 }
 
+// The object at `key`, or an empty one (absent, null or another type):
+// json::value() throws on a key that is present but null.
+json obj_or(const json& j, const char* key) {
+  if (!j.is_object()) return json::object();
+  const auto it = j.find(key);
+  return it != j.end() && it->is_object() ? *it : json::object();
+}
+
 std::optional<protocol::Axes> axes_of(const json& j, const char* key) {
   if (!j.is_object() || !j.contains(key) || !j[key].is_array() || j[key].size() < 3) return std::nullopt;
   protocol::Axes a{};
@@ -103,7 +111,7 @@ std::optional<DaemonOwner> daemon_owning_port(const std::string& port) {
   const DaemonClient probe(d.address, {}, daemon_token_from_env());
   try {
     const json health = probe.get("/api/v1/health", 3);
-    if (!health.value("ok", false)) throw std::runtime_error("it answers, but not ok");
+    if (!(health.contains("ok") && health["ok"] == true)) throw std::runtime_error("it answers, but not ok");
   } catch (const std::exception& e) {
     throw std::runtime_error(transport::busy_message(port, *owner) + "; its API does not answer (" + e.what() +
                              "), so the job cannot be handed to it");
@@ -157,7 +165,8 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
   // another path, e.g. /dev/serial/by-id/...).
   const json machines = api.get("/api/v1/machines");
   std::string machine;
-  for (const auto& m : machines.value("machines", json::array()))
+  const json list = machines.contains("machines") && machines["machines"].is_array() ? machines["machines"] : json::array();
+  for (const auto& m : list)
     if (transport::resolve_device(str_or(m, "port")) == daemon.owner.device) machine = str_or(m, "name");
   if (machine.empty())
     throw std::runtime_error("the daemon at " + daemon.address.url() + " owns " + c.port + " but lists no machine on " +
@@ -200,7 +209,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
   json create{{"machine", machine}, {"file", str_or(file, "id")}};
   if (job.stl) create["params"] = job_params_from(job.tp);
   json j = api.post("/api/v1/jobs", create);
-  job_id = j.value("id", std::int64_t{0});
+  job_id = static_cast<std::int64_t>(num_or(j, "id", 0));
   if (!job_id) throw std::runtime_error("the daemon created no job (answer: " + j.dump() + ")");
   const std::string jpath = "/api/v1/jobs/" + std::to_string(job_id);
   std::cerr << "daemon job #" << job_id << " on machine '" << machine << "'\n";
@@ -240,8 +249,9 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
       } catch (const DaemonError&) {
       }
     }
-    const std::string now_stage = str_or(j.value("generation", json::object()), "stage");
-    if (st == "generating" && !now_stage.empty() && now_stage != stage) {
+    const std::string now_stage = str_or(obj_or(j, "generation"), "stage");
+    if (st == "generating" && !now_stage.empty() && now_stage != "queued" && now_stage != "done" &&
+        now_stage != stage) {
       stage = now_stage;
       std::cerr << "daemon: " << stage << "...\n";
     }
@@ -249,13 +259,14 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
     j = api.get(jpath);
   }
 
-  const json program = j.value("program", json::object());
+  const json program = obj_or(j, "program");
   const long total_lines = static_cast<long>(num_or(program, "lines", 0));
   const double estimated_s = num_or(program, "estimated_s", -1);
   const std::string est_text = estimated_s >= 0 ? format_duration(estimated_s) : std::string("unknown");
   if (job.stl) {
     const Cutter cutter = parse_cutter_spec(job.tp.tool);
-    const bool cached = j.value("generation", json::object()).value("cached", false);
+    const json gen = obj_or(j, "generation");
+    const bool cached = gen.contains("cached") && gen["cached"].is_boolean() && gen["cached"].get<bool>();
     std::cout << "plan for " << job.file << " (tool path by the daemon at " << daemon.address.url()
               << (cached ? ", from its cache" : "") << "):\n"
               << "  tool: " << cutter.description() << " [" << cutter.spec() << "]\n"
@@ -288,10 +299,26 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
   }
   double capacity = 128;
   try {
-    capacity = num_or(api.get(mpath).value("buffer", json::object()), "capacity", 128);
+    capacity = num_or(obj_or(api.get(mpath), "buffer"), "capacity", 128);
   } catch (const std::exception&) {
   }
 
+  // The daemon may still be identifying the controller (just opened, or
+  // reconnecting): a local run waits for it too before starting.
+  {
+    const auto ready_by = Clock::now() + std::chrono::seconds(30);
+    std::string link;
+    for (;;) {
+      link = str_or(api.get(mpath), "link");
+      if (link == "ready") break;
+      if (Clock::now() >= ready_by || g_handoff_sigints > 0) {
+        std::cerr << "cncstream: machine '" << machine << "' on the daemon is not ready (link " << link
+                  << "): job #" << job_id << " not started\n";
+        return 1;  // the guard cancels the job
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  }
   try {
     j = api.post(jpath + "/start");
   } catch (const DaemonError& e) {
@@ -335,7 +362,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
   if (!keys->active()) keys.reset();
   const bool interactive = keys != nullptr;
 
-  json last_progress = j.value("progress", json::object());
+  json last_progress = obj_or(j, "progress");
   std::string message = str_or(j, "message");
   std::optional<std::int64_t> journal_id;
   bool stop_sent = false;
@@ -357,7 +384,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
     if (s.contains("overrides") && s["overrides"].is_array() && s["overrides"].size() == 3)
       view.overrides = std::array<int, 3>{s["overrides"][0].get<int>(), s["overrides"][1].get<int>(),
                                           s["overrides"][2].get<int>()};
-    const double rx_free = num_or(s.value("buffer", json::object()), "rx_free", -1);
+    const double rx_free = num_or(obj_or(s, "buffer"), "rx_free", -1);
     if (rx_free >= 0 && capacity > 0) view.buffer_fill = std::clamp(1.0 - rx_free / capacity, 0.0, 1.0);
   };
 
@@ -373,7 +400,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
           const std::string type = str_or(*m, "type");
           if (type == "status" && str_or(*m, "machine") == machine) {
             apply_status(*m);
-          } else if (type == "job" && m->value("job", std::int64_t{0}) == job_id) {
+          } else if (type == "job" && static_cast<std::int64_t>(num_or(*m, "job", 0)) == job_id) {
             apply_job(*m);
           } else if (type == "event" && str_or(*m, "machine") == machine) {
             const std::string kind = str_or(*m, "kind");
