@@ -6,7 +6,7 @@
 //  2. The plaque's tool path over the API: POST /jobs -> ready, then the same
 //     parameters again (the cache).
 //  3. Status latency while a 600k-facet part is computed on the workers.
-// Usage: bench_daemon_ws [clients=50] [program lines=60000]
+// Usage: bench_daemon_ws [clients=50] [program lines=60000] [sim speed=10]
 #include <pthread.h>
 #include <time.h>
 
@@ -131,9 +131,10 @@ void write_big_mesh(const fs::path& p, int n) {
 int main(int argc, char** argv) {
   const int clients = argc > 1 ? std::atoi(argv[1]) : 50;
   const int lines = argc > 2 ? std::atoi(argv[2]) : 60000;
+  const std::string speed = argc > 3 ? argv[3] : "10";
   const auto dir = temp_dir("bench");
   auto cfg = test_config(dir);
-  cfg.machines = {sim_machine("sim")};
+  cfg.machines = {sim_machine("sim", speed)};
   cfg.machines[0].sim_verify = false;
   cfg.limits.max_ws_clients = 256;
   cfg.limits.max_connections = 512;

@@ -2,6 +2,7 @@
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -9,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <limits>
 
 namespace cncstream::daemon {
 
@@ -139,7 +141,7 @@ class WsSession : public WsPeer, public std::enable_shared_from_this<WsSession> 
 class HttpSession : public std::enable_shared_from_this<HttpSession> {
  public:
   HttpSession(std::shared_ptr<HttpServer::Impl> server, tcp::socket&& socket)
-      : server_(std::move(server)), stream_(std::move(socket)) {}
+      : server_(std::move(server)), stream_(std::move(socket)), deadline_(stream_.get_executor()) {}
   ~HttpSession() {
     if (counted_) --server_->connections;
   }
@@ -155,17 +157,38 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
  private:
+  // Reads time out by a timer of our own that cancels the read, so the
+  // socket is still open to say 408 (a tcp_stream time-out closes it).
+  void arm(double s) {
+    timed_out_ = false;
+    deadline_.expires_after(seconds(s));
+    deadline_.async_wait([weak = weak_from_this()](beast::error_code ec) {
+      if (ec) return;
+      if (auto self = weak.lock()) {
+        self->timed_out_ = true;
+        beast::error_code ignored;
+        self->stream_.socket().cancel(ignored);
+      }
+    });
+  }
+  void disarm() { deadline_.cancel(); }
+
   void read_header() {
     header_.emplace();
     header_->header_limit(16 * 1024);
-    header_->body_limit(server_->config.limits.max_json_bytes);
-    stream_.expires_after(seconds(server_->config.limits.header_timeout_s));
+    // The body's size is checked by the body's own parser (JSON) or the
+    // precheck (uploads), each answering 413. (Not boost::none: Beast 1.74
+    // compares a Content-Length with the empty optional and always fails.)
+    header_->body_limit(std::numeric_limits<std::uint64_t>::max());
+    stream_.expires_never();
+    arm(server_->config.limits.header_timeout_s);
     http::async_read_header(stream_, buffer_, *header_,
                             [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_header(ec); });
   }
 
   void on_header(beast::error_code ec) {
-    if (ec == beast::error::timeout) {
+    disarm();
+    if (timed_out_) {
       keep_alive_ = false;
       write(Response::error(408, "timeout", "the request's headers did not arrive in time"), 11);
       return;
@@ -175,7 +198,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       write(Response::error(431, "bad_request", "request headers too large"), 11);
       return;
     }
-    if (ec) return close();
+    if (ec) {
+      spdlog::debug("connection: header not read: {}", ec.message());
+      return close();
+    }
     auto& h = header_->get();
     version_ = h.version();
     keep_alive_ = h.keep_alive();
@@ -198,13 +224,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
         write(Response::error(404, "not_found", "no WebSocket at " + req_.path), version_);
         return;
       }
-      stream_.expires_never();
       auto ws = std::make_shared<WsSession>(server_, stream_.release_socket());
       ++server_->connections;  // the WebSocket session counts itself; this one is ending
       ws->run(header_->release(), std::move(req_));
       return;
     }
-    stream_.expires_after(seconds(server_->config.limits.body_timeout_s));
+    arm(server_->config.limits.body_timeout_s);
     if (server_->api.is_upload(req_)) {
       upload_.emplace(std::move(*header_));
       upload_->body_limit(server_->config.limits.max_upload_bytes);
@@ -236,15 +261,17 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   void body_failed(beast::error_code ec) {
+    spdlog::debug("{} {}: body not read: {}", req_.method, req_.path, ec.message());
+    disarm();
     drop_temp();
     keep_alive_ = false;
+    if (timed_out_) return write(Response::error(408, "timeout", "the body did not arrive in time"), version_);
     if (ec == http::error::body_limit) return write(Response::error(413, "too_large", "the body exceeds the limit"), version_);
-    if (ec == beast::error::timeout) return write(Response::error(408, "timeout", "the body did not arrive in time"), version_);
     close();
   }
 
   void dispatch() {
-    stream_.expires_never();  // a handler may take a while (upload hashing): no time-out while we work
+    disarm();  // a handler may take a while (upload hashing): no time-out while we work
     auto self = shared_from_this();
     auto strand_exec = stream_.get_executor();
     server_->api.handle(std::move(req_), [self, strand_exec](Response r) {
@@ -310,6 +337,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::optional<http::request_parser<http::empty_body>> header_;
   std::optional<http::request_parser<http::string_body>> body_;
   std::optional<http::request_parser<http::file_body>> upload_;
+  net::steady_timer deadline_;
+  bool timed_out_ = false;
   std::filesystem::path temp_;
   Request req_;
   unsigned version_ = 11;

@@ -33,9 +33,9 @@ double steady_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-// Builds a Program from G-code text: lines, hash, the file under
-// <programs>/<sha>.nc (written whole, then renamed), and the ETA table.
-std::shared_ptr<Program> make_program(std::string text, const fs::path& programs_dir, const gcode::MotionLimits& limits) {
+// Builds a Program from G-code text: lines, hash, and the file under
+// <programs>/<sha>.nc (written whole, then renamed).
+std::shared_ptr<Program> make_program(const std::string& text, const fs::path& programs_dir) {
   auto p = std::make_shared<Program>();
   for (auto l : gcode::split_lines(text)) {
     if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
@@ -54,12 +54,17 @@ std::shared_ptr<Program> make_program(std::string text, const fs::path& programs
     }
     fs::rename(tmp, p->path);
   }
-  const auto trace = gcode::trace_program(text);
-  const auto ends = gcode::estimate_line_end_times(trace, limits, p->lines.size());
-  p->end_by_line.assign(p->lines.size() + 1, 0.0);
-  for (std::size_t i = 0; i < ends.size() && i + 1 < p->end_by_line.size(); ++i) p->end_by_line[i + 1] = ends[i];
-  p->estimated_s = ends.empty() ? 0 : ends.back() + trace.dwell_seconds;
   return p;
+}
+
+std::shared_ptr<EtaTable> make_eta(const std::string& text, std::size_t lines, const gcode::MotionLimits& limits) {
+  auto e = std::make_shared<EtaTable>();
+  const auto trace = gcode::trace_program(text);
+  const auto ends = gcode::estimate_line_end_times(trace, limits, lines);
+  e->end_by_line.assign(lines + 1, 0.0);
+  for (std::size_t i = 0; i < ends.size() && i + 1 < e->end_by_line.size(); ++i) e->end_by_line[i + 1] = ends[i];
+  e->estimated_s = ends.empty() ? 0 : ends.back() + trace.dwell_seconds;
+  return e;
 }
 
 std::string read_all(const fs::path& p) {
@@ -154,7 +159,8 @@ json JobManager::to_json(const DaemonJob& j) const {
     gen = {{"stage", j.stage}, {"fraction", j.fraction}, {"cached", j.cached},
            {"seconds", j.program ? json(j.program->seconds) : json(nullptr)}};
   json prog = nullptr;
-  if (j.program) prog = {{"lines", j.program->lines.size()}, {"estimated_s", j.program->estimated_s}};
+  const EtaTable* et = eta_table(j);
+  if (j.program) prog = {{"lines", j.program->lines.size()}, {"estimated_s", et ? json(et->estimated_s) : json(nullptr)}};
   const double total = j.program ? double(j.program->total_lines) : 0;
   json progress = {{"lines_sent", j.progress.lines_sent},
                    {"lines_answered", j.progress.lines_answered},
@@ -187,11 +193,18 @@ json JobManager::to_json(const DaemonJob& j) const {
           {"from_line", r.from_line}};
 }
 
+const EtaTable* JobManager::eta_table(const DaemonJob& j) const {
+  if (!j.program) return nullptr;
+  const auto it = etas_.find(j.program->sha256);
+  return it == etas_.end() ? nullptr : it->second.get();
+}
+
 std::optional<double> JobManager::eta(const DaemonJob& j) const {
-  if (!j.program || j.program->end_by_line.empty()) return std::nullopt;
-  const auto& e = j.program->end_by_line;
   if (j.row.state == "done") return 0.0;
-  if (j.row.state != "running" && j.row.state != "held") return j.program->estimated_s;
+  const EtaTable* t = eta_table(j);
+  if (!t || t->end_by_line.empty()) return std::nullopt;
+  const auto& e = t->end_by_line;
+  if (j.row.state != "running" && j.row.state != "held") return t->estimated_s;
   const auto line = static_cast<std::size_t>(std::clamp<long>(j.progress.last_answered_line, 0, long(e.size()) - 1));
   return std::max(0.0, e.back() - e[line]);
 }
@@ -387,6 +400,7 @@ void JobManager::kick_generation(DaemonJob& j) {
   auto shared = std::make_shared<Shared>();
   boost::asio::post(pool_, [this, key, label, stl, params, limits, file = *path, stop, shared, alive = alive_] {
     std::shared_ptr<Program> prog;
+    std::string text;
     std::string error;
     bool cancelled = false;
     const auto t0 = std::chrono::steady_clock::now();
@@ -411,11 +425,13 @@ void JobManager::kick_generation(DaemonJob& j) {
         };
         jobs::ToolpathParams p = params;
         auto r = jobs::generate_toolpath(p, control);
-        prog = make_program(std::move(r.gcode), programs_dir_, limits);
+        text = std::move(r.gcode);
+        prog = make_program(text, programs_dir_);
         prog->work_mesh = std::move(r.work_mesh);
         prog->cutter = r.cutter;
       } else {
-        prog = make_program(read_all(file), programs_dir_, limits);
+        text = read_all(file);
+        prog = make_program(text, programs_dir_);
       }
       prog->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     } catch (const jobs::Cancelled&) {
@@ -426,6 +442,21 @@ void JobManager::kick_generation(DaemonJob& j) {
     boost::asio::post(io_, [this, key, prog, error, cancelled, alive] {
       if (*alive) on_generated(key, prog, error, cancelled);
     });
+    if (!prog || stop->stop_requested()) return;
+    // The ETA table after the job is ready: tracing the program takes a
+    // while for a big one, and nothing waits for it.
+    try {
+      auto eta = make_eta(text, prog->lines.size(), limits);
+      boost::asio::post(io_, [this, sha = prog->sha256, eta, alive] {
+        if (!*alive) return;
+        etas_[sha] = eta;
+        if (etas_.size() > 64) etas_.erase(etas_.begin());
+        for (auto& [id, j] : jobs_)
+          if (j->program && j->program->sha256 == sha && !is_final(j->row.state)) publish_job(*j);
+      });
+    } catch (const std::exception& e) {
+      spdlog::warn("{}: no time estimate: {}", label, e.what());
+    }
   });
 }
 
@@ -644,7 +675,7 @@ void JobManager::resume_plan(std::int64_t id, long from_line, const std::string&
     const auto rec = journal_.job(j.row.journal_id);
     if (rec && fs::exists(rec->file)) {
       try {
-        auto p = make_program(read_all(rec->file), programs_dir_, protocol::grbl_default_motion_limits());
+        auto p = make_program(read_all(rec->file), programs_dir_);
         j.program = p;
       } catch (const std::exception&) {
       }

@@ -33,11 +33,16 @@ struct Program {
   std::int64_t total_lines = 0;
   std::string sha256;              // of the program text
   std::filesystem::path path;      // written under <data>/programs/ (the journal's `file`)
-  std::vector<double> end_by_line;  // when each file line's motion ends (s), for the ETA
-  double estimated_s = 0;
   std::optional<Mesh> work_mesh;   // STL jobs: the part in work coordinates (the simulator's verify)
   std::optional<Cutter> cutter;
   double seconds = 0;              // generation time
+};
+
+// When each file line's motion ends (s), for the ETA: computed after the
+// program is ready (it traces the whole program), so it never delays a start.
+struct EtaTable {
+  std::vector<double> end_by_line;
+  double estimated_s = 0;
 };
 
 struct DaemonJob {
@@ -109,6 +114,7 @@ class JobManager {
   void on_verified(const std::string& machine, SimVerifyReport rep);
   void on_start_failed(const std::string& machine, const std::string& why);
   std::optional<double> eta(const DaemonJob& j) const;
+  const EtaTable* eta_table(const DaemonJob& j) const;
 
   boost::asio::io_context& io_;
   boost::asio::thread_pool& pool_;
@@ -123,6 +129,7 @@ class JobManager {
   std::map<std::string, std::int64_t> last_run_;  // machine -> the last job started there (its verify report)
   // The cache: key -> program, least recently used first.
   std::list<std::pair<std::string, std::shared_ptr<const Program>>> cache_;
+  std::map<std::string, std::shared_ptr<const EtaTable>> etas_;  // by program SHA-256
   std::map<std::string, std::vector<std::int64_t>> generating_;  // key -> jobs waiting for it
   std::map<std::string, std::shared_ptr<std::stop_source>> generation_stop_;
   struct PendingPlan {

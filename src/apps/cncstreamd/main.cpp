@@ -18,12 +18,15 @@ int main(int argc, char** argv) {
   CLI::App app{"cncstreamd: serves CNC machines over HTTP and WebSocket (API: docs/api-v1.md)"};
   std::string config_file, listen, data;
   std::vector<std::string> machines;
+  bool verbose = false;
   app.add_option("--config", config_file, "TOML configuration file");
   app.add_option("--listen", listen, "ADDR:PORT (default 127.0.0.1:8420; anything but loopback requires the token)");
   app.add_option("--data", data, "Data folder (uploads, programs, token)");
   app.add_option("--machine", machines, "NAME=PORT[,profile=P,baud=B,sim_speed=S] (replaces the file's machines)");
+  app.add_flag("-v,--verbose", verbose, "Log requests that fail on the wire (debug level)");
   CLI11_PARSE(app, argc, argv);
   setup_journald_logging();
+  if (verbose) spdlog::set_level(spdlog::level::debug);
   try {
     DaemonConfig c = config_file.empty() ? DaemonConfig{} : load_config(config_file);
     if (!listen.empty()) apply_listen(c, listen);
