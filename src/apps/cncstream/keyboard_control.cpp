@@ -17,7 +17,11 @@ termios g_saved{};
 
 const char* KeyboardControl::help() { return job_keys_help(); }
 
-KeyboardControl::KeyboardControl(session::StreamRunner& runner) : runner_(runner) {
+KeyboardControl::KeyboardControl(session::StreamRunner& runner)
+    : KeyboardControl(JobKeyActions{[&runner] { runner.request_toggle_pause(); }, [&runner] { runner.request_stop(); },
+                                    [&runner](protocol::Realtime r) { runner.request_realtime(r); }}) {}
+
+KeyboardControl::KeyboardControl(JobKeyActions actions) : actions_(std::move(actions)) {
   if (!::isatty(STDIN_FILENO) || ::tcgetattr(STDIN_FILENO, &g_saved) != 0) return;
   termios raw = g_saved;
   raw.c_lflag &= static_cast<tcflag_t>(~(ICANON | ECHO));  // keep ISIG: Ctrl-C still stops
@@ -68,18 +72,18 @@ void KeyboardControl::loop() {
       if (k.key != Key::Char) continue;  // Esc, function keys: nothing during a job
       const char c = k.ch;
       switch (c) {
-        case ' ': runner_.request_toggle_pause(); break;
-        case 's': case 'S': runner_.request_stop(); break;
-        case '+': runner_.request_realtime(Realtime::FeedOvPlus10); break;
-        case '-': runner_.request_realtime(Realtime::FeedOvMinus10); break;
-        case ']': runner_.request_realtime(Realtime::FeedOvPlus1); break;
-        case '[': runner_.request_realtime(Realtime::FeedOvMinus1); break;
-        case '0': runner_.request_realtime(Realtime::FeedOvReset); break;
-        case '>': runner_.request_realtime(Realtime::SpindleOvPlus10); break;
-        case '<': runner_.request_realtime(Realtime::SpindleOvMinus10); break;
-        case '1': runner_.request_realtime(Realtime::RapidOvReset); break;
-        case '2': runner_.request_realtime(Realtime::RapidOvMedium); break;
-        case '3': runner_.request_realtime(Realtime::RapidOvLow); break;
+        case ' ': actions_.toggle_pause(); break;
+        case 's': case 'S': actions_.stop(); break;
+        case '+': actions_.realtime(Realtime::FeedOvPlus10); break;
+        case '-': actions_.realtime(Realtime::FeedOvMinus10); break;
+        case ']': actions_.realtime(Realtime::FeedOvPlus1); break;
+        case '[': actions_.realtime(Realtime::FeedOvMinus1); break;
+        case '0': actions_.realtime(Realtime::FeedOvReset); break;
+        case '>': actions_.realtime(Realtime::SpindleOvPlus10); break;
+        case '<': actions_.realtime(Realtime::SpindleOvMinus10); break;
+        case '1': actions_.realtime(Realtime::RapidOvReset); break;
+        case '2': actions_.realtime(Realtime::RapidOvMedium); break;
+        case '3': actions_.realtime(Realtime::RapidOvLow); break;
         case '?': case 'h': show_help_ = !show_help_; break;
         default: break;
       }

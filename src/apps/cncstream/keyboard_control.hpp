@@ -6,6 +6,7 @@
 // so an arrow's escape sequence is not taken for its '[' (feed -1 %): the
 // jog keys are refused with a note while the job runs.
 #include <atomic>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -15,9 +16,18 @@
 
 namespace cncstream::app {
 
+// What the keys do: a local StreamRunner's requests, or the daemon's API
+// calls when the job was handed to the daemon. Called on the key thread.
+struct JobKeyActions {
+  std::function<void()> toggle_pause;
+  std::function<void()> stop;
+  std::function<void(protocol::Realtime)> realtime;
+};
+
 class KeyboardControl {
  public:
   explicit KeyboardControl(session::StreamRunner& runner);
+  explicit KeyboardControl(JobKeyActions actions);
   ~KeyboardControl();  // restores the terminal
   KeyboardControl(const KeyboardControl&) = delete;
   KeyboardControl& operator=(const KeyboardControl&) = delete;
@@ -32,7 +42,7 @@ class KeyboardControl {
   void note(std::string text);
   std::mutex note_mu_;
   std::optional<std::string> note_;
-  session::StreamRunner& runner_;
+  JobKeyActions actions_;
   std::atomic<bool> running_{true};
   bool active_ = false;
   std::atomic<bool> show_help_{false};
