@@ -377,6 +377,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
     const double eta = num_or(m, "eta_s", num_or(last_progress, "eta_s", -1));
     view.eta_s = eta >= 0 ? std::optional<double>(eta) : std::nullopt;
   };
+  bool status_has_rx = false;
   auto apply_status = [&](const json& s) {
     view.machine_state = str_or(s, "state_text", str_or(s, "state"));
     view.wpos = axes_of(s, "wpos");
@@ -385,7 +386,18 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
       view.overrides = std::array<int, 3>{s["overrides"][0].get<int>(), s["overrides"][1].get<int>(),
                                           s["overrides"][2].get<int>()};
     const double rx_free = num_or(obj_or(s, "buffer"), "rx_free", -1);
-    if (rx_free >= 0 && capacity > 0) view.buffer_fill = std::clamp(1.0 - rx_free / capacity, 0.0, 1.0);
+    if (rx_free >= 0 && capacity > 0) {
+      view.buffer_fill = std::clamp(1.0 - rx_free / capacity, 0.0, 1.0);
+      status_has_rx = true;
+    }
+  };
+  // Controllers that do not report Bf: the daemon's count of bytes in
+  // flight, as a local run shows.
+  auto apply_machine = [&](const json& ms) {
+    if (ms.contains("status") && ms["status"].is_object()) apply_status(ms["status"]);
+    const json b = obj_or(ms, "buffer");
+    const double in_flight = num_or(b, "in_flight", -1), cap = num_or(b, "capacity", capacity);
+    if (!status_has_rx && in_flight >= 0 && cap > 0) view.buffer_fill = std::clamp(in_flight / cap, 0.0, 1.0);
   };
 
   auto last_poll = Clock::now() - std::chrono::seconds(1);
@@ -454,10 +466,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
     if (Clock::now() - last_poll >= std::chrono::milliseconds(ws ? 1000 : 250)) {
       last_poll = Clock::now();
       call("job state", [&] { apply_job(api.get(jpath)); });
-      if (!ws) call("machine state", [&] {
-          const json ms = api.get(mpath);
-          if (ms.contains("status") && ms["status"].is_object()) apply_status(ms["status"]);
-        });
+      if (!ws || !status_has_rx) call("machine state", [&] { apply_machine(api.get(mpath)); });
     }
     view.elapsed_s = elapsed();
     view.show_help = keys && keys->help_shown();
