@@ -557,6 +557,10 @@ def main():
         print(f"FAIL: no cncstreamd to test (--daemon or CNCSTREAMD): {args.daemon!r}")
         return 1
     os.makedirs(args.output, exist_ok=True)
+    # The artefacts are this run's: no screenshot of an earlier run left to mislead.
+    for f in os.listdir(args.output):
+        if f.endswith((".png", ".log", ".html")):
+            os.remove(os.path.join(args.output, f))
     d = browser()
     try:
         shots = main_flow(args, args.output, d)
