@@ -66,12 +66,19 @@ class ApiError extends Error {
 }
 
 let tokenPrompt = null;  // one prompt at a time, however many requests hit 401
+let tokenDeclined = false;  // the operator cancelled: no prompt at every reconnect, a banner instead
 async function askToken() {
+  if (tokenDeclined) return false;
   if (!tokenPrompt) {
     tokenPrompt = Promise.resolve().then(() => {
       const t = window.prompt('This controller needs its access token (printed in the daemon log, or in its data folder as "token"):', '');
-      if (t) { S.token = t.trim(); sessionStorage.setItem('cncstream.token', S.token); }
-      return !!t;
+      if (t) { S.token = t.trim(); sessionStorage.setItem('cncstream.token', S.token); closeBanner('token'); return true; }
+      tokenDeclined = true;
+      showBanner({ key: 'token', kind: 'error', title: 'This controller needs its access token',
+        text: 'Without it the page cannot show or control the machines.',
+        todo: 'Open the page as …/#token=<token>, or enter the token (in the daemon\'s data folder, file "token").',
+        actions: [{ label: 'Enter the token', fn: async () => { tokenDeclined = false; if (await askToken()) { wsBackoff = 500; scheduleConnect(0); } } }] });
+      return false;
     }).finally(() => { setTimeout(() => { tokenPrompt = null; }, 0); });
   }
   return tokenPrompt;
@@ -255,7 +262,13 @@ const fmt = (v, d = 3) => (typeof v === 'number' && isFinite(v) ? v.toFixed(d) :
 function renderMachine() {
   const rec = S.machines.get(S.current);
   const stEl = $('#state');
-  if (!rec) { stEl.textContent = 'No machine'; stEl.className = 'state state-unknown'; return; }
+  if (!rec) {
+    // Nothing known yet (not connected): nothing to press but STOP.
+    stEl.textContent = 'No machine';
+    stEl.className = 'state state-unknown';
+    document.querySelectorAll('#panel-jog button:not(#jog-stop), #panel-job .run-actions button, #panel-job .overrides button').forEach((b) => { b.disabled = true; });
+    return;
+  }
   const st = stateOf(rec);
   stEl.textContent = st.label;
   stEl.className = 'state state-' + st.cls;
@@ -288,6 +301,7 @@ function renderMachine() {
   $('#unlock').disabled = !ready || jobActive;
   $('#home').disabled = !ready || jobActive;
   $('#reset').disabled = !ready;
+  document.querySelectorAll('#panel-job .overrides button').forEach((b) => { b.disabled = !ready; });
   renderAlarm(rec, alarm);
 }
 
@@ -768,15 +782,27 @@ function drawPreview(m) {
 // ---------------------------------------------------------------- WebSocket
 let wsBackoff = 500;
 let pingTimer = null;
+let wsTimer = null;
+function scheduleConnect(ms) {
+  clearTimeout(wsTimer);
+  wsTimer = setTimeout(connectWs, ms);
+}
+function retryConnect() {
+  scheduleConnect(wsBackoff);
+  wsBackoff = Math.min(wsBackoff * 2, 5000);
+}
 async function connectWs() {
+  if (S.ws) return;  // one socket at a time
   let oneShot = '';
   try {
     const r = await api('POST', '/ws-token', {});
     oneShot = r.token;
   } catch (e) {
-    // Still try without it: on loopback the daemon needs no token.
+    if (e.status === 401) { setLink(false, false); retryConnect(); return; }  // no token: a socket would be refused too
+    // Otherwise still try without it: on loopback the daemon needs no token.
     if (e.status !== 404) console.warn('ws-token', e);
   }
+  if (S.ws) return;
   const proto = location.protocol === 'https:' ? 'wss' : 'ws';
   const q = `client_id=${enc(S.clientId)}` + (oneShot ? `&token=${enc(oneShot)}` : '');
   const ws = new WebSocket(`${proto}://${location.host}${API}/ws?${q}`);
@@ -800,8 +826,7 @@ async function connectWs() {
     setLink(false);
     // The daemon cancels our jog when the socket drops; stop renewing at once.
     releaseJog('connection lost');
-    setTimeout(connectWs, wsBackoff);
-    wsBackoff = Math.min(wsBackoff * 2, 5000);
+    retryConnect();
   };
 }
 
@@ -810,13 +835,13 @@ function wsSend(m) {
   return false;
 }
 
-function setLink(up) {
+function setLink(up, banner = true) {
   const l = $('#link');
   l.textContent = up ? 'connected' : 'not connected — retrying';
   l.className = 'link ' + (up ? 'link-up' : 'link-down');
   l.dataset.up = up ? '1' : '0';
   if (up) closeBanner('link');
-  else showBanner({ key: 'link', kind: 'error', title: 'No connection to the controller',
+  else if (banner) showBanner({ key: 'link', kind: 'error', title: 'No connection to the controller',
     text: 'The page cannot reach cncstreamd; the DRO and progress are not live.',
     todo: 'Check the network or that the daemon runs; the page reconnects by itself. A running job continues on the controller.' });
 }

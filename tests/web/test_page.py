@@ -511,6 +511,19 @@ def token_flow(args, out, d):
         alert.accept()
         p.wait("the page to connect with the typed token", p.connected, 30)
         p.shot("15-token-prompt-connected")
+        # Cancelled: no prompt at every reconnect, a banner that asks again when pressed.
+        d.execute_script("sessionStorage.clear()")
+        d.get(daemon.url)
+        p.wait("the page to ask for the token", lambda: _alert(d), 20).dismiss()
+        p.wait("the token banner", lambda: d.find_elements(By.CSS_SELECTOR, ".banner[data-key=token]"), 20)
+        assert not p.connected()
+        p.shot("16-token-declined")
+        p.click(d.execute_script("return [...document.querySelectorAll('.banner[data-key=token] button')].find(b => b.textContent === 'Enter the token')"))
+        alert = p.wait("the page to ask again", lambda: _alert(d), 20)
+        alert.send_keys(daemon.token)
+        alert.accept()
+        p.wait("the page to connect after the banner", p.connected, 30)
+        assert not d.find_elements(By.CSS_SELECTOR, ".banner[data-key=token]"), "the token banner stayed"
         errs = [e for e in p.console_errors() if "401" not in e["message"]]  # the first, refused request is expected
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:
@@ -544,6 +557,10 @@ def main():
         print(f"FAIL: no cncstreamd to test (--daemon or CNCSTREAMD): {args.daemon!r}")
         return 1
     os.makedirs(args.output, exist_ok=True)
+    # The artefacts are this run's: no screenshot of an earlier run left to mislead.
+    for f in os.listdir(args.output):
+        if f.endswith((".png", ".log", ".html")):
+            os.remove(os.path.join(args.output, f))
     d = browser()
     try:
         shots = main_flow(args, args.output, d)
