@@ -172,6 +172,18 @@ void validate(const DaemonConfig& c) {
     if (!(m.reconnect_s > 0 && m.reconnect_s <= 3600))
       throw std::invalid_argument("machine '" + m.name + "': reconnect_s must be in (0, 3600]");
   }
+  for (const auto& p : c.pendants)
+    if (!names.count(p.machine))
+      throw std::invalid_argument("pendant: no machine named '" + p.machine + "' (configured: " +
+                                  [&] {
+                                    std::string all;
+                                    for (const auto& m : c.machines) {
+                                      if (!all.empty()) all.append(", ");
+                                      all.append(m.name);
+                                    }
+                                    return all;
+                                  }() +
+                                  ")");
 }
 
 DaemonConfig parse_config(std::string_view text, const std::string& source) {
@@ -185,7 +197,7 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
   }
   DaemonConfig c;
   Reader top{source, root, ""};
-  top.known({"listen", "data_dir", "journal", "machine", "limits", "security", "web"});
+  top.known({"listen", "data_dir", "journal", "machine", "pendant", "limits", "security", "web"});
   if (const auto* n = root.get("listen")) {
     if (!n->is_string()) fail(source, *n, "listen: expected \"ADDR:PORT\"");
     try {
@@ -219,6 +231,22 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       m.sim_resolution = r.number("sim_resolution", m.sim_resolution, 0.01, 10);
       m.sim_tolerance = r.number("sim_tolerance", m.sim_tolerance, 0.001, 10);
       c.machines.push_back(m);
+    }
+  }
+  if (const auto* n = root.get("pendant")) {
+    const auto* arr = n->as_array();
+    if (!arr) fail(source, *n, "pendant: expected [[pendant]] tables");
+    for (const auto& e : *arr) {
+      const auto* t = e.as_table();
+      if (!t) fail(source, e, "pendant: expected a table");
+      Reader r{source, *t, "pendant."};
+      r.known({"machine", "lease_s", "macros"});
+      PendantSection p;
+      r.str("machine", p.machine);
+      p.lease_s = r.number("lease_s", p.lease_s, 0.05, 2);
+      r.strings("macros", p.macros);
+      if (p.machine.empty()) fail(source, e, "pendant: name the machine it drives (machine = \"...\")");
+      c.pendants.push_back(p);
     }
   }
   if (const auto* n = root.get("limits")) {

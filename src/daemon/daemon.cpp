@@ -16,6 +16,9 @@
 #include "cncstream/daemon/job_manager.hpp"
 #include "cncstream/daemon/machines.hpp"
 #include "cncstream/daemon/ws_hub.hpp"
+#include "cncstream/pendant/pendant_controller.hpp"
+#include "cncstream/pendant/pendant_usb.hpp"
+#include "cncstream/pendant/usb_pendant_reader.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "cncstream/transport/port_lock.hpp"
 
@@ -76,6 +79,43 @@ fs::path find_web_root(const DaemonConfig& c) {
   return {};
 }
 
+// A WHB04B pendant on one machine: its USB receiver, the controller that
+// turns its keys and wheel into that machine's session commands, and the
+// reader thread between them (destroyed in that reverse order).
+struct DaemonPendant {
+  std::unique_ptr<pendant::PendantUsb> usb;
+  std::unique_ptr<pendant::PendantController> controller;
+  std::unique_ptr<pendant::UsbPendantReader> reader;
+  ~DaemonPendant() {
+    reader.reset();
+    controller.reset();
+    usb.reset();
+  }
+};
+
+std::unique_ptr<DaemonPendant> Daemon::start_pendant(const PendantSection& p) {
+  Machine* m = machines_->find(p.machine);
+  if (!m || !m->session) throw std::invalid_argument("pendant: no machine named '" + p.machine + "'");
+  pendant::PendantConfig pc;
+  pc.lease_s = p.lease_s;
+  pc.macros = pendant::default_macros();
+  for (const auto& text : p.macros) {
+    auto [n, action] = pendant::parse_macro_option(text);
+    pc.macros[n] = action;
+  }
+  auto d = std::make_unique<DaemonPendant>();
+  d->usb = pendant::make_libusb_pendant();  // throws naming libusb's error
+  d->controller = std::make_unique<pendant::PendantController>(*m->session, pc);
+  const std::string name = p.machine;
+  d->controller->set_log([name](pendant::LogLevel level, const std::string& text) {
+    if (level == pendant::LogLevel::Warning) spdlog::warn("pendant ({}): {}", name, text);
+    else if (level == pendant::LogLevel::Info) spdlog::info("pendant ({}): {}", name, text);
+  });
+  d->reader = std::make_unique<pendant::UsbPendantReader>(*d->usb, *d->controller);
+  spdlog::info("pendant: a WHB04B receiver (10ce:eb93) drives machine '{}' when plugged in", p.machine);
+  return d;
+}
+
 Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_count(config_)) {
   validate(config_);
   if (config_.data_dir.empty()) config_.data_dir = default_data_dir();
@@ -93,6 +133,15 @@ Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_c
   files_ = std::make_unique<FileStore>(config_.data_dir / "files");
   auth_ = std::make_unique<Auth>(config_, token);
   machines_ = std::make_unique<Machines>(io_, pool_, config_, *hub_, journal);
+  for (const auto& p : config_.pendants) {
+    // A pendant that cannot work (no libusb) is said loudly, but the
+    // machines and the API still serve: nothing moves because of it.
+    try {
+      pendants_.push_back(start_pendant(p));
+    } catch (const std::runtime_error& e) {
+      spdlog::error("pendant for machine '{}' not started: {}", p.machine, e.what());
+    }
+  }
   jobs_ = std::make_unique<JobManager>(io_, pool_, config_, *files_, *machines_, *hub_, journal,
                                        config_.data_dir / "programs");
   jobs_->recover();
@@ -126,6 +175,7 @@ Daemon::~Daemon() {
   jobs_.reset();
   server_.reset();
   api_.reset();
+  pendants_.clear();  // the pendants drive the machines' sessions
   machines_.reset();
 }
 

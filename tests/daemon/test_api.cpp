@@ -386,3 +386,19 @@ TEST(DaemonApi, OpenApiDocumentDescribesExactlyTheRoutes) {
   d.shutdown();
   std::filesystem::remove_all(dir);
 }
+
+// A pendant configured for a machine: the daemon starts, serves, and looks
+// for the receiver without one plugged in (hotplug or polling), and stops
+// cleanly with its reader thread.
+TEST(DaemonApi, StartsWithAPendantForAMachineAndNoReceiverPluggedIn) {
+  const auto dir = temp_dir("pendant");
+  auto cfg = test_config(dir);
+  cncstream::daemon::PendantSection p;
+  p.machine = cfg.machines.front().name;
+  cfg.pendants.push_back(p);
+  RunningDaemon d(cfg);
+  EXPECT_EQ(d.daemon().pendant_count(), 1u);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return machines_ready(h); }, 30));
+  d.shutdown();
+}

@@ -239,3 +239,28 @@ TEST(JobParams, AbsurdValuesAreRefusedNamingTheField) {
   EXPECT_EQ(ok.canonical["origin"], "min");
   EXPECT_LT(ok.grid_nodes, 1e6);
 }
+
+TEST(Config, PendantsNameTheMachineTheyDrive) {
+  const auto c = parse_config(R"([[machine]]
+name = "router"
+port = "sim"
+[[pendant]]
+machine = "router"
+lease_s = 0.25
+macros = ["2=G0 Z10", "5=@unlock"]
+)",
+                              "pendant.toml");
+  ASSERT_EQ(c.pendants.size(), 1u);
+  EXPECT_EQ(c.pendants[0].machine, "router");
+  EXPECT_DOUBLE_EQ(c.pendants[0].lease_s, 0.25);
+  EXPECT_EQ(c.pendants[0].macros.size(), 2u);
+  try {
+    parse_config("[[machine]]\nname = \"router\"\n[[pendant]]\nmachine = \"mill\"\n", "wrong.toml");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no machine named 'mill' (configured: router)"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_config("[[pendant]]\nlease_s = 0.2\n", "nomachine.toml"), std::invalid_argument);
+  EXPECT_THROW(parse_config("[[machine]]\nname = \"a\"\n[[pendant]]\nmachine = \"a\"\nlease_s = 9\n", "lease.toml"),
+               std::invalid_argument);
+}

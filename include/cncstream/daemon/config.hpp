@@ -25,6 +25,14 @@ struct MachineConfig {
   double sim_tolerance = 0.05;       // verify tolerance, mm
 };
 
+// A WHB04B pendant driving one machine ([[pendant]] in the file). The daemon
+// opens the USB receiver (and keeps looking while none is plugged in).
+struct PendantSection {
+  std::string machine;                // the machine it drives (must be configured)
+  double lease_s = 0.2;               // a continuous jog ends this long after the last wheel report
+  std::vector<std::string> macros;    // "N=ACTION" (docs/pendant.md)
+};
+
 struct Limits {
   std::uint64_t max_upload_bytes = 200'000'000;
   std::size_t max_json_bytes = 1 << 20;
@@ -51,6 +59,7 @@ struct DaemonConfig {
   std::filesystem::path journal;      // "" : the CLI's journal (transport::Journal::default_path())
   std::filesystem::path web_root;     // "" : found at start (share/cncstream/web, then the source tree's web/)
   std::vector<MachineConfig> machines{MachineConfig{}};
+  std::vector<PendantSection> pendants;
   Limits limits;
   SecurityConfig security;
 

@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cncstream/daemon/config.hpp"
 
@@ -19,6 +20,7 @@ class Machines;
 class JobManager;
 class Api;
 class HttpServer;
+struct DaemonPendant;
 
 class Daemon {
  public:
@@ -39,8 +41,10 @@ class Daemon {
   JobManager& jobs() { return *jobs_; }
   Machines& machines() { return *machines_; }
   Api& api() { return *api_; }
+  std::size_t pendant_count() const { return pendants_.size(); }
 
  private:
+  std::unique_ptr<DaemonPendant> start_pendant(const PendantSection& p);
   DaemonConfig config_;
   boost::asio::io_context io_;
   boost::asio::thread_pool pool_;
@@ -49,6 +53,8 @@ class Daemon {
   std::unique_ptr<FileStore> files_;
   std::unique_ptr<Auth> auth_;
   std::unique_ptr<Machines> machines_;
+  // After the machines: destroyed before them (a pendant drives a session).
+  std::vector<std::unique_ptr<DaemonPendant>> pendants_;
   std::unique_ptr<JobManager> jobs_;
   std::unique_ptr<Api> api_;
   std::unique_ptr<HttpServer> server_;

@@ -470,6 +470,8 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
     }
     view.elapsed_s = elapsed();
     view.show_help = keys && keys->help_shown();
+    if (keys)
+      if (auto note = keys->take_note()) panel.message(*note);
     panel.update(view, view.elapsed_s);
   }
   keys.reset();
