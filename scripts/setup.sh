@@ -7,8 +7,10 @@ packages=(
   libboost-dev libserialport-dev libusb-1.0-0-dev
   libglfw3-dev libgl-dev libegl-dev xvfb
   libsqlite3-dev libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
-  libspdlog-dev libfmt-dev libtbb-dev libpng-dev
+  libspdlog-dev libfmt-dev libtbb-dev libpng-dev nettle-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
+  tmux  # the terminal jog tests drive `cncstream jog` in a tmux session
+  chromium chromium-driver python3-selenium libjs-three
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -21,7 +21,8 @@ declare -A may_include=(
   [protocol]="geometry image cam gcode"
   [transport]="geometry image cam gcode protocol"
   [session]="geometry image cam gcode protocol transport"
-  [daemon]="geometry image cam gcode jobs protocol transport session"
+  [pendant]="geometry image cam gcode protocol transport session"
+  [daemon]="geometry image cam gcode jobs protocol transport session pendant"
 )
 # The machine session serves `PORT=sim` with the in-process simulator: it
 # may include cncsim (the simulator never includes it back).
@@ -63,4 +64,4 @@ while IFS= read -r -d '' f; do check "$f" sim "$sim_may_include" yes; done \
   < <(find sim -type f \( -name '*.cpp' -o -name '*.hpp' \) -print0)
 
 if (( bad )); then echo "layer order broken (see above)"; exit 1; fi
-echo "layers: every include follows the table (geometry < image < cam < gcode < jobs; gcode < protocol < transport < session; apps above all); sim/ stays below protocol"
+echo "layers: every include follows the table (geometry < image < cam < gcode < jobs; gcode < protocol < transport < session < pendant; daemon above jobs, session and pendant; apps above all); sim/ stays below protocol"

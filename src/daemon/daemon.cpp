@@ -21,6 +21,7 @@
 #include "cncstream/daemon/machines.hpp"
 #include "cncstream/daemon/ws_hub.hpp"
 #include "cncstream/transport/journal.hpp"
+#include "cncstream/transport/port_lock.hpp"
 
 #ifndef CNCSTREAM_SOURCE_WEB_DIR
 #define CNCSTREAM_SOURCE_WEB_DIR ""
@@ -122,6 +123,16 @@ Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_c
   spdlog::info("listening on {}:{} ({}), data in {}, journal {}, {} machine(s)", config_.listen_address, port(),
                config_.token_required() ? "token required" : "loopback, no token", config_.data_dir.string(),
                journal.string(), config_.machines.size());
+  // The lock files of the machines' ports name this daemon and its API, so a
+  // `cncstream FILE PORT` finding the port taken hands its job over here. A
+  // wildcard listen address is reached locally through loopback.
+  std::string api_host = config_.listen_address;
+  if (api_host == "0.0.0.0" || api_host.empty()) api_host = "127.0.0.1";
+  else if (api_host == "::") api_host = "::1";
+  if (api_host.find(':') != std::string::npos) api_host = "[" + api_host + "]";
+  std::string api = "http://";
+  api.append(api_host).append(":").append(std::to_string(port()));
+  transport::set_lock_identity({"cncstreamd", api});
   machines_->open_all();
 }
 

@@ -106,8 +106,13 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
   // bad word must not hide that word's error: process words first.
   for (const Word& w : lexed.words) {
     const double value = w.value;
-    const int int_value = static_cast<int>(std::trunc(value));
-    int mantissa = static_cast<int>(std::lround(100 * (value - int_value)));
+    // A value beyond any command or index (1e71, found by tests/fuzz) would
+    // overflow int: it becomes one no case matches, so the usual range and
+    // unsupported-command errors answer it.
+    constexpr double kBeyond = 1e9;
+    const bool huge = !(std::fabs(value) < kBeyond);
+    const int int_value = huge ? (value < 0 ? -1000000000 : 1000000000) : static_cast<int>(std::trunc(value));
+    int mantissa = huge ? 0 : static_cast<int>(std::lround(100 * (value - int_value)));
     unsigned group = 0;
     switch (w.letter) {
       case 'G': {

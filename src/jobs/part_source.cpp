@@ -1,5 +1,7 @@
 #include "cncstream/jobs/part_source.hpp"
 
+#include "cncstream/jobs/size_limits.hpp"
+
 namespace cncstream::jobs {
 
 std::shared_ptr<const Mesh> load_part(const PartSource& part) {
@@ -12,6 +14,7 @@ std::shared_ptr<const Mesh> load_part(const PartSource& part) {
   }
   if (mesh->triangles.empty())
     throw StlError(part.stl + ": the file holds no facets with area; nothing to machine");
+  check_part_size(mesh->bounds(), part.stl.empty() ? std::string("the part") : part.stl, part.max_extent_mm);
   return mesh;
 }
 

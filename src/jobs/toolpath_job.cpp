@@ -1,5 +1,7 @@
 #include "cncstream/jobs/toolpath_job.hpp"
 
+#include "cncstream/jobs/size_limits.hpp"
+
 #include <chrono>
 
 #include "cncstream/cam/cl_engine.hpp"
@@ -45,7 +47,15 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     ro.direction = p.direction;
     ro.tolerance = p.tolerance;
     ro.lattice = work.lattice;
-    r.path = build_raster(engine, p.bounds.value_or(default_bounds(*mesh, r.cutter)), ro, run.checkpoint());
+    const XYBounds region = p.bounds.value_or(default_bounds(*mesh, r.cutter));
+    {
+      // Rows across, points along (the raster's default step), before any is made.
+      const double step = p.step > 0 ? p.step : std::min(p.stepover / 4, 0.1);
+      const bool along_x = p.direction != RasterDirection::Y;
+      const double w = region.x1 - region.x0, h = region.y1 - region.y0;
+      check_grid_memory((along_x ? w : h) / step + 1, (along_x ? h : w) / p.stepover + 1, 48, step, "the tool path");
+    }
+    r.path = build_raster(engine, region, ro, run.checkpoint());
     r.seconds_path = seconds_since(t0);
 
     run.stage("G-code", kGcodeFrom, end_of_gcode);

@@ -157,6 +157,7 @@ void MachineSession::connect_transport() {
   banner_.clear();
   set_link(LinkState::Connecting, "identifying the controller on " + opt_.port->describe());
   log("opened " + path + " at " + std::to_string(opt_.serial.baud) + " baud");
+  if (!transport_->lock_note().empty()) log(transport_->lock_note());
   std::weak_ptr<bool> alive = alive_;
   transport::SerialTransport* self = transport_.get();
   transport_->start(

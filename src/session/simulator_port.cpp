@@ -27,6 +27,7 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
   if (!opt_.settings_file.empty()) mo.store_path = opt_.settings_file;
   mo.strict = opt_.strict;
   mo.faults = opt_.faults;
+  mo.probe_surface_z = opt_.probe_surface_z;
   cncsim::PtyOptions po;
   po.speed = parse_sim_speed(opt_.speed);
   po.link = opt_.link;

@@ -6,7 +6,9 @@
 #include <sys/ioctl.h>
 #include <termios.h>
 
+#include <cerrno>
 #include <charconv>
+#include <cstring>
 #include <stdexcept>
 #include <thread>
 
@@ -36,20 +38,53 @@ SerialSettings parse_serial_settings(const std::string& spec) {
 SerialTransport::SerialTransport(boost::asio::io_context& io, SerialSettings settings)
     : port_(io), settings_(settings) {}
 
-SerialTransport::~SerialTransport() {
-  boost::system::error_code ec;
-  port_.close(ec);
+SerialTransport::~SerialTransport() { shut(); }
+
+void SerialTransport::shut() {
+  // TIOCEXCL stays on a tty that another process still holds open (the
+  // simulator's pty keeps its slave open): clear it before closing, or the
+  // next open of that pty by a non-root user fails with EBUSY.
+  if (port_.is_open()) ::ioctl(port_.native_handle(), TIOCNXCL);
+  boost::system::error_code ignored;
+  port_.close(ignored);
+  lock_.release();
 }
 
 void SerialTransport::open(const std::string& path) {
   path_ = path;
+  lock_ = PortLock::acquire(path);  // throws PortBusyError naming the owner
+  lock_note_ = lock_.note();
   boost::system::error_code ec;
   port_.open(path, ec);
-  if (ec) throw std::runtime_error(path + ": cannot open serial port: " + ec.message());
+  if (ec) {
+    lock_.release();
+    if (ec == boost::system::errc::device_or_resource_busy) {
+      // TIOCEXCL of a program that takes no lock file: name whoever has it
+      // open, as far as /proc lets this user see.
+      const auto users = processes_using(path);
+      std::string m = "cannot open " + path + ": it is in use by another process (TIOCEXCL)";
+      if (!users.empty()) {
+        m += "; open in";
+        for (std::size_t i = 0; i < users.size(); ++i) m.append(i ? ", " : " ").append(users[i].describe());
+      }
+      PortOwner owner = users.empty() ? PortOwner{} : users.front();
+      owner.device = resolve_device(path);
+      throw PortBusyError(m, owner);
+    }
+    throw std::runtime_error(path + ": cannot open serial port: " + ec.message());
+  }
+  // Refuse every later open() of this tty, by programs that ignore lock files
+  // too (root excepted: the kernel lets CAP_SYS_ADMIN through).
+  if (::ioctl(port_.native_handle(), TIOCEXCL) != 0)
+    lock_note_ += std::string(lock_note_.empty() ? "" : "; ") + path + ": no exclusive mode (TIOCEXCL): " +
+                  std::strerror(errno);
   using sp = boost::asio::serial_port_base;
   auto set = [&](const auto& opt, const char* what) {
     port_.set_option(opt, ec);
-    if (ec) throw std::runtime_error(path + ": cannot set " + what + ": " + ec.message());
+    if (ec) {
+      shut();
+      throw std::runtime_error(path + ": cannot set " + what + ": " + ec.message());
+    }
   };
   set(sp::baud_rate(settings_.baud), "baud rate");
   set(sp::character_size(settings_.data_bits), "data bits");
@@ -120,8 +155,7 @@ void SerialTransport::write_next() {
 }
 
 void SerialTransport::closed(const std::string& reason) {
-  boost::system::error_code ignored;
-  port_.close(ignored);
+  shut();
   if (close_reported_) return;
   close_reported_ = true;
   if (on_close_) on_close_(reason);
@@ -134,8 +168,7 @@ void SerialTransport::close_when_flushed() {
 
 void SerialTransport::close() {
   close_reported_ = true;  // a deliberate close is not a disconnect
-  boost::system::error_code ignored;
-  port_.close(ignored);
+  shut();
 }
 
 }  // namespace cncstream::transport

@@ -78,6 +78,17 @@ TEST(Profiles, ErrorsNameFileAndLine) {
   } catch (const ProfileError& e) {
     EXPECT_NE(std::string(e.what()).find("'pattern', 'text' and 'action'"), std::string::npos) << e.what();
   }
+  // Found by tests/fuzz: a table header that does not start with a key made
+  // toml++ 3.3 assert (undefined behaviour in a release build).
+  for (const char* header : {"[[^larms]]", "[ =x]", "[[ .a]]"}) {
+    { std::ofstream(dir / "bad5.toml") << "family = \"grbl\"\nbanner_patterns = ['x']\n" << header << "\ncode = 1\n"; }
+    try {
+      load_firmware_profile(dir / "bad5.toml");
+      FAIL() << header;
+    } catch (const ProfileError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad5.toml:3"), std::string::npos) << e.what();
+    }
+  }
   std::filesystem::remove_all(dir);
 }
 

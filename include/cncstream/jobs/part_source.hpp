@@ -14,10 +14,12 @@ struct PartSource {
   LengthUnit units = LengthUnit::Millimetre;
   double scale = 1.0;                // after the unit conversion
   std::shared_ptr<const Mesh> mesh;  // already loaded, model coordinates in mm
+  double max_extent_mm = 3000;       // larger parts are refused (jobs/size_limits.hpp)
 };
 
 // The mesh: `mesh` if given, else the STL read. Throws StlError naming the
-// file when it holds no facet with area (nothing to machine).
+// file when it holds no facet with area (nothing to machine), and
+// std::invalid_argument when it is larger than max_extent_mm.
 std::shared_ptr<const Mesh> load_part(const PartSource& part);
 
 }  // namespace cncstream::jobs

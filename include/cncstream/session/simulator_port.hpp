@@ -36,6 +36,7 @@ struct SimulatorOptions {
   std::optional<cncsim::ToolTable> tools;  // T number -> cutter (else `cutter` throughout)
   std::string result;       // machined surface written here (.f32 + .txt, and .stl)
   std::optional<std::filesystem::path> link;  // a stable symlink to the pty (e.g. for a reconnect test)
+  std::optional<double> probe_surface_z;       // G38.x touches this Z plane (machine coordinates)
 };
 
 // Parses "max" or a positive number; throws std::invalid_argument naming the text.

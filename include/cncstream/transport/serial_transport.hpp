@@ -2,6 +2,8 @@
 // Serial transport over Boost.Asio: works on real ports and pseudo-terminals.
 // Reads are continuous and asynchronous; a read error or end of file (USB
 // unplugged, EIO) is reported once through the close handler at once.
+// Opening a port takes it exclusively (port_lock.hpp: a lock file and
+// TIOCEXCL); closing it, or the end of the process, gives it back.
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/serial_port.hpp>
 
@@ -10,6 +12,8 @@
 #include <functional>
 #include <string>
 #include <string_view>
+
+#include "cncstream/transport/port_lock.hpp"
 
 namespace cncstream::transport {
 
@@ -34,7 +38,9 @@ class SerialTransport {
   SerialTransport(boost::asio::io_context& io, SerialSettings settings);
   ~SerialTransport();
 
-  // Opens and configures the port; throws std::runtime_error naming the path.
+  // Takes the port (lock file, then TIOCEXCL), opens and configures it;
+  // throws PortBusyError naming the owner when another process has it,
+  // std::runtime_error naming the path for anything else.
   void open(const std::string& path);
   // Starts reading: `on_data` for every chunk, `on_close` once on EOF/error.
   void start(DataHandler on_data, CloseHandler on_close);
@@ -48,15 +54,22 @@ class SerialTransport {
   const std::string& path() const { return path_; }
   std::size_t bytes_written() const { return bytes_written_; }
   std::size_t bytes_read() const { return bytes_read_; }
+  // What the operator should know about taking the port (a stale lock
+  // removed, a fallback lock folder); empty when nothing.
+  const std::string& lock_note() const { return lock_note_; }
+  const PortLock& lock() const { return lock_; }
 
  private:
   void read_some();
   void write_next();
   void closed(const std::string& reason);
+  void shut();  // gives the port back: TIOCNXCL, close, lock file
 
   boost::asio::serial_port port_;
   SerialSettings settings_;
   std::string path_;
+  PortLock lock_;
+  std::string lock_note_;
   DataHandler on_data_;
   CloseHandler on_close_;
   std::array<char, 4096> buf_{};

@@ -1,9 +1,11 @@
 #pragma once
-// SHA-256 (FIPS 180-4) for identifying a G-code file in the journal: the same
-// bytes give the same hash, so a restart can check it resumes the right file.
+// SHA-256 for identifying a file (the journal's G-code, the daemon's uploads):
+// the same bytes give the same hash, so a restart can check it resumes the
+// right file. Computed by nettle; its context stays out of this header.
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -12,16 +14,16 @@ namespace cncstream::transport {
 class Sha256 {
  public:
   Sha256();
+  ~Sha256();
+  Sha256(Sha256&&) noexcept;
+  Sha256& operator=(Sha256&&) noexcept;
   void update(std::string_view bytes);
-  std::array<std::uint8_t, 32> finish();
+  std::array<std::uint8_t, 32> finish();  // and starts over
   static std::string hex(const std::array<std::uint8_t, 32>& d);
 
  private:
-  void block(const std::uint8_t* p);
-  std::array<std::uint32_t, 8> h_;
-  std::array<std::uint8_t, 64> buf_{};
-  std::size_t buf_len_ = 0;
-  std::uint64_t total_ = 0;
+  struct State;
+  std::unique_ptr<State> state_;
 };
 
 std::string sha256_hex(std::string_view bytes);

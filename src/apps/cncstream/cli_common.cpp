@@ -12,6 +12,9 @@ void add_part_options(CLI::App* sub, PartOptions& o) {
   sub->add_option("--scale", o.scale, "Extra scale factor applied after the units")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  sub->add_option("--max-part-size", o.max_part_mm, "Refuse parts larger than this on any axis, mm (wrong units)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 }
 
 jobs::PartSource part_source(const PartOptions& o) {
@@ -19,6 +22,7 @@ jobs::PartSource part_source(const PartOptions& o) {
   p.stl = o.stl;
   p.units = parse_length_unit(o.units);
   p.scale = o.scale;
+  p.max_extent_mm = o.max_part_mm;
   return p;
 }
 

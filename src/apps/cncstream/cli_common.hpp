@@ -15,6 +15,7 @@ struct PartOptions {
   std::string stl;
   std::string units = "mm";
   double scale = 1.0;
+  double max_part_mm = 3000;  // jobs::kDefaultMaxPartMm
 };
 
 void add_part_options(CLI::App* sub, PartOptions& o);

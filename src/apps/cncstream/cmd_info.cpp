@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "cncstream/geometry/stl.hpp"
+#include "cncstream/jobs/size_limits.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
 
@@ -21,6 +22,12 @@ void register_info(CLI::App& app, CommandRegistry& registry) {
     std::cout << o->stl << " (" << (r.binary ? "binary" : "ASCII") << " STL";
     if (!r.solid_name.empty()) std::cout << ", '" << r.solid_name << "'";
     std::cout << ")\n" << summarize(r.mesh, r.dropped_degenerate).to_string();
+    // Info shows any file, but says what the jobs would refuse.
+    try {
+      jobs::check_part_size(r.mesh.bounds(), o->stl, o->max_part_mm);
+    } catch (const std::invalid_argument& e) {
+      std::cout << "warning: " << e.what() << "; tool paths would be refused\n";
+    }
     return 0;
   });
 }

@@ -1,7 +1,8 @@
 // `cncstream FILE PORT [options]` (also `cncstream stream FILE PORT`): stream a
 // G-code file, or machine an STL: generate the finishing path, show the plan,
 // confirm, stream. PORT may be a device, `auto`, or `sim` (built-in simulator).
-// Ctrl-C or `s` asks for a controlled stop (hold, wait, soft reset).
+// Ctrl-C or `s` asks for a controlled stop (hold, wait, soft reset). When a
+// running daemon owns PORT, the job is handed to it (daemon_handoff.hpp).
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -11,6 +12,7 @@
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "cncstream/transport/sha256.hpp"
 #include "commands.hpp"
+#include "daemon_handoff.hpp"
 #include "job_session.hpp"
 #include "toolpath_options.hpp"
 
@@ -68,6 +70,17 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       ->group("Tool path (STL input)");
   registry.add(sub, [o] {
     const auto& c = o->conn;
+    // A running daemon owns the port: it runs the job, this command follows it.
+    if (const auto daemon = daemon_owning_port(c.port)) {
+      HandoffJob h;
+      h.file = o->file;
+      h.stl = is_stl(o->file);
+      if (h.stl && o->tp.tool.empty())
+        throw std::invalid_argument(o->file + " is a part: say which cutter machines it with --tool (e.g. ball:3.175)");
+      h.tp = o->tp;
+      h.output = o->output;
+      return hand_off_to_daemon(*daemon, h, c);
+    }
     session::JobInput job;
     std::optional<VerifyTarget> verify;
     const auto limits = planning_limits(c, o->sim);

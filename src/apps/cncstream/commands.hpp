@@ -35,5 +35,8 @@ void register_stream(CLI::App& app, CommandRegistry& registry);
 void register_select(CLI::App& app, CommandRegistry& registry);
 void register_plan(CLI::App& app, CommandRegistry& registry);
 void register_resume(CLI::App& app, CommandRegistry& registry);
+void register_pendant(CLI::App& app, CommandRegistry& registry);
+void register_jog(CLI::App& app, CommandRegistry& registry);
+void register_status(CLI::App& app, CommandRegistry& registry);
 
 }  // namespace cncstream::app

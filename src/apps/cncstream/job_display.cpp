@@ -65,7 +65,9 @@ std::string buffer_text(const JobView& v) {
 
 const char* job_keys_help() {
   return "keys: space hold/resume | s stop (hold, reset) | +/- feed 10% | ]/[ feed 1% | 0 feed 100% | "
-         ">/< spindle 10% | 1/2/3 rapid 100/50/25% | ? help | Ctrl-C stop";
+         ">/< spindle 10% | 1/2/3 rapid 100/50/25% | ? or h help | Ctrl-C stop\n"
+         "arrows, PgUp/PgDn: no jogging while a job runs (refused); `cncstream jog PORT` jogs, and there "
+         "+/- set the jog feed, 0 zeroes, 1-4 the step, s is safe Z and h homes";
 }
 
 std::string format_job_panel(const JobView& v, int width) {
@@ -83,7 +85,10 @@ std::string format_job_panel(const JobView& v, int width) {
                "   " + overrides_text(v) + "   " + buffer_text(v),
            width)
     << "\n";
-  if (v.show_help) o << fit(job_keys_help(), width) << "\n";
+  if (v.show_help) {
+    std::istringstream help(job_keys_help());
+    for (std::string line; std::getline(help, line);) o << fit(line, width) << "\n";
+  }
   return o.str();
 }
 

@@ -46,26 +46,41 @@ std::string limits_text(const gcode::MotionLimits& m) {
 
 }  // namespace
 
-void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
+void add_link_options(CLI::App* sub, ConnectionOptions& o) {
   sub->add_option("--serial", o.serial, "Baud and frame, e.g. 115200 or 115200,8N1");
   sub->add_option("--profile", o.profile, "Force a firmware profile (grbl-1.1, grblhal, fluidnc, marlin)");
+  sub->add_flag("-v,--verbose", o.verbose, "Print controller messages and status");
+}
+
+void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
+  add_link_options(sub, o);
   sub->add_flag("--check", o.check,
                 "Run the file through check mode ($C) first; stream it only if no line has an error");
   sub->add_flag("--check-only", o.check_only, "Check mode ($C) only: report every G-code error, move nothing");
   sub->add_option("--journal", o.journal, "Journal database (default: $XDG_STATE_HOME/cncstream/journal.sqlite)");
   sub->add_flag("--no-journal", o.no_journal, "Do not journal this job");
-  sub->add_flag("-v,--verbose", o.verbose, "Print controller messages and status");
   sub->add_flag("-y,--yes", o.yes, "Do not ask for confirmation before starting");
   sub->add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines without a terminal")
       ->check(CLI::PositiveNumber);
   sub->add_option("--timeout", o.timeout_s, "Give up after this many seconds (0: never)")->check(CLI::NonNegativeNumber);
 }
 
-void add_sim_options(CLI::App* sub, SimCliOptions& o) {
+void add_sim_machine_options(CLI::App* sub, SimCliOptions& o) {
   const char* g = "Simulator (PORT=sim)";
   sub->add_option("--sim-speed", o.speed, "Simulator time scale: 'max' or K (1 = real time)")->group(g)->capture_default_str();
   sub->add_flag("--sim-lenient", o.lenient, "Drop overflowing RX bytes like the firmware instead of failing")->group(g);
   sub->add_option("--sim-settings", o.settings, "Simulator settings file ($$, offsets) kept across runs")->group(g);
+  sub->add_option("--sim-drop-every", o.drop_every, "Fault: drop every Nth byte received")->group(g);
+  sub->add_option("--sim-corrupt-every", o.corrupt_every, "Fault: flip a bit in every Nth byte received")->group(g);
+  sub->add_option("--sim-error-at", o.error_at, "Fault LINE:E: answer received line LINE with error:E")->group(g);
+  sub->add_option("--sim-alarm-at", o.alarm_at, "Fault LINE:A: raise ALARM:A at received line LINE")->group(g);
+  sub->add_option("--sim-stall-at", o.stall_at, "Fault LINE:S: stop answering for S seconds at line LINE")->group(g);
+  sub->add_option("--sim-vanish-after", o.vanish_after, "Fault: the port disappears after N answers")->group(g);
+}
+
+void add_sim_options(CLI::App* sub, SimCliOptions& o) {
+  add_sim_machine_options(sub, o);
+  const char* g = "Simulator (PORT=sim)";
   sub->add_flag("--no-sim-verify", o.no_verify, "Do not cut a stock and verify it (STL jobs verify by default)")->group(g);
   sub->add_option("--sim-design", o.design, "Design STL to verify a G-code job against (machine coordinates)")->group(g);
   sub->add_option("--sim-tool", o.tool, "Cutter for --sim-design, e.g. ball:3.175")->group(g);
@@ -76,12 +91,31 @@ void add_sim_options(CLI::App* sub, SimCliOptions& o) {
   sub->add_option("--sim-result", o.result, "Write the machined surface here (.f32 height field, and .stl)")->group(g);
   sub->add_option("--sim-resolution", o.resolution, "Stock grid step for the verify, mm")->check(CLI::PositiveNumber)->group(g);
   sub->add_option("--sim-tolerance", o.tolerance, "Verify tolerance, mm")->check(CLI::PositiveNumber)->group(g);
-  sub->add_option("--sim-drop-every", o.drop_every, "Fault: drop every Nth byte received")->group(g);
-  sub->add_option("--sim-corrupt-every", o.corrupt_every, "Fault: flip a bit in every Nth byte received")->group(g);
-  sub->add_option("--sim-error-at", o.error_at, "Fault LINE:E: answer received line LINE with error:E")->group(g);
-  sub->add_option("--sim-alarm-at", o.alarm_at, "Fault LINE:A: raise ALARM:A at received line LINE")->group(g);
-  sub->add_option("--sim-stall-at", o.stall_at, "Fault LINE:S: stop answering for S seconds at line LINE")->group(g);
-  sub->add_option("--sim-vanish-after", o.vanish_after, "Fault: the port disappears after N answers")->group(g);
+}
+
+session::SimulatorOptions simulator_options(const SimCliOptions& s) {
+  session::SimulatorOptions so;
+  so.speed = s.speed;
+  so.strict = !s.lenient;
+  so.settings_file = s.settings;
+  so.faults.drop_every = s.drop_every;
+  so.faults.corrupt_every = s.corrupt_every;
+  so.faults.vanish_after = s.vanish_after;
+  parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
+  parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
+  parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
+  return so;
+}
+
+std::optional<std::string> device_path(const std::string& port) {
+  if (port != "auto") return port;
+  const auto choice = transport::choose_auto_port(transport::list_ports());
+  if (!choice.port) {
+    std::cerr << "cncstream: error: " << choice.message << "\n";
+    return std::nullopt;
+  }
+  std::cerr << choice.message << "\n";
+  return choice.port->path;
 }
 
 std::filesystem::path journal_path(const ConnectionOptions& o) {
@@ -126,16 +160,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
   std::shared_ptr<session::SimulatorPort> sim;
   session::RunnerOptions ro;
   if (c.port == "sim") {
-    session::SimulatorOptions so;
-    so.speed = s.speed;
-    so.strict = !s.lenient;
-    so.settings_file = s.settings;
-    so.faults.drop_every = s.drop_every;
-    so.faults.corrupt_every = s.corrupt_every;
-    so.faults.vanish_after = s.vanish_after;
-    parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
-    parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
-    parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
+    session::SimulatorOptions so = simulator_options(s);
     if (!s.design.empty()) {
       if (s.tool.empty()) throw std::invalid_argument("--sim-design needs --sim-tool (the cutter that cuts it)");
       verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool)};
@@ -156,16 +181,10 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     ro.machine_port = sim;
     std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << s.speed << ", "
               << (s.lenient ? "lenient" : "strict") << " RX buffer)\n";
-  } else if (c.port == "auto") {
-    const auto choice = transport::choose_auto_port(transport::list_ports());
-    if (!choice.port) {
-      std::cerr << "cncstream: error: " << choice.message << "\n";
-      return 2;
-    }
-    std::cerr << choice.message << "\n";
-    ro.port = choice.port->path;
   } else {
-    ro.port = c.port;
+    const auto device = device_path(c.port);
+    if (!device) return 2;
+    ro.port = *device;
   }
   ro.serial = transport::parse_serial_settings(c.serial);
   ro.profiles_dir = protocol::default_profiles_dir();
@@ -242,6 +261,8 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     if (snap.buffer.bytes && snap.buffer.capacity > 0)
       view.buffer_fill = double(snap.buffer.in_flight) / double(snap.buffer.capacity);
     view.show_help = keys && keys->help_shown();
+    if (keys)
+      if (auto note = keys->take_note()) panel.message(*note);
     panel.update(view, snap.now);
   };
 

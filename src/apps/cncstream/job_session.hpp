@@ -13,6 +13,7 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/gcode/motion_planner.hpp"
 #include "cncstream/geometry/mesh.hpp"
+#include "cncstream/session/simulator_port.hpp"
 #include "cncstream/session/stream_runner.hpp"
 #include "job_display.hpp"
 
@@ -42,8 +43,22 @@ struct SimCliOptions {
 // Options after the positional FILE/JOB and PORT.
 void add_connection_options(CLI::App* sub, ConnectionOptions& o);
 void add_sim_options(CLI::App* sub, SimCliOptions& o);
+// The parts of those that any session needs, not only a job's: the link
+// (--serial, --profile, --verbose) and the simulated machine (speed, RX
+// buffer, settings, faults).
+void add_link_options(CLI::App* sub, ConnectionOptions& o);
+void add_sim_machine_options(CLI::App* sub, SimCliOptions& o);
 
 std::filesystem::path journal_path(const ConnectionOptions& o);
+
+// PORT=sim: the simulator's speed, RX buffer, settings file and faults (the
+// cut and its verify are a job's, added by run_session). Throws
+// std::invalid_argument for a malformed fault.
+session::SimulatorOptions simulator_options(const SimCliOptions& s);
+// The device for a PORT other than `sim`: `auto` picks the one known
+// controller board (saying which on stderr); nullopt, after saying why on
+// stderr, when there is not exactly one.
+std::optional<std::string> device_path(const std::string& port);
 
 // What the simulator should verify the cut against (from an STL job).
 struct VerifyTarget {

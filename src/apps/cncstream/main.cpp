@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   cncstream::app::register_resume(app, registry);
   cncstream::app::register_select(app, registry);
   cncstream::app::register_plan(app, registry);
+  cncstream::app::register_pendant(app, registry);
+  cncstream::app::register_jog(app, registry);
+  cncstream::app::register_status(app, registry);
   // The bare form `cncstream FILE PORT ...` is `cncstream stream FILE PORT ...`:
   // anything first that is neither a subcommand nor an option is a file.
   std::vector<std::string> args(argv + 1, argv + argc);

@@ -1,0 +1,28 @@
+#pragma once
+// Sizes beyond reason, refused before any work starts: a part far larger than
+// a router (coordinates in the wrong unit), or a grid whose nodes would not
+// fit in memory. Estimated from the sizes alone, before anything is allocated.
+#include <cstddef>
+#include <string>
+
+#include "cncstream/geometry/mesh.hpp"
+
+namespace cncstream::jobs {
+
+// A part larger than this on any axis is refused (a few metres: a big router).
+constexpr double kDefaultMaxPartMm = 3000;
+
+// Throws std::invalid_argument naming `source`, the part's size and the
+// likely cause (its units) when an extent exceeds `limit_mm`.
+void check_part_size(const Box3& bounds, const std::string& source, double limit_mm = kDefaultMaxPartMm);
+
+// Half of this machine's physical memory: what one job may plan to use.
+std::size_t memory_budget_bytes();
+
+// Throws std::invalid_argument when nx × ny nodes of `bytes_per_node` exceed
+// `budget` (0: memory_budget_bytes()), naming `what`, the node count, the
+// bytes and the step that makes them.
+void check_grid_memory(double nx, double ny, double bytes_per_node, double step_mm, const std::string& what,
+                       std::size_t budget = 0);
+
+}  // namespace cncstream::jobs

@@ -1,0 +1,17 @@
+// STL bytes (binary or ASCII) -> a mesh, or StlError naming the byte/line.
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "cncstream/geometry/stl.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string bytes(reinterpret_cast<const char*>(data), size);
+  try {
+    const auto r = cncstream::parse_stl(bytes, "fuzz.stl");
+    (void)r.mesh.bounds();
+  } catch (const cncstream::StlError&) {
+  }
+  return 0;
+}
