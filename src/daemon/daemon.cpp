@@ -6,8 +6,12 @@
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <thread>
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <unistd.h>
+
+#include <latch>
+#include <thread>
 
 #include "cncstream/daemon/api.hpp"
 #include "cncstream/daemon/auth.hpp"
@@ -118,6 +122,21 @@ std::unique_ptr<DaemonPendant> Daemon::start_pendant(const PendantSection& p) {
 
 Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_count(config_)) {
   validate(config_);
+  // The workers (tool paths, uploads, verifies) run at a lower priority than
+  // the event loop, so status keeps flowing while a big part is computed;
+  // threads they start (oneTBB's) inherit it. One task per thread: each
+  // waits until all have started, so every thread runs exactly one.
+  {
+    const unsigned n = worker_count(config_);
+    // Shared: a task may still be returning from its wait when ours ends.
+    auto started = std::make_shared<std::latch>(static_cast<std::ptrdiff_t>(n));
+    for (unsigned i = 0; i < n; ++i)
+      boost::asio::post(pool_, [started] {
+        ::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 10);
+        started->arrive_and_wait();
+      });
+    started->wait();
+  }
   if (config_.data_dir.empty()) config_.data_dir = default_data_dir();
   fs::create_directories(config_.data_dir);
   const fs::path journal = config_.journal.empty() ? transport::Journal::default_path() : config_.journal;

@@ -50,6 +50,17 @@ void register_jobs(CLI::App& app, CommandRegistry& registry) {
       }
       return 0;
     }
+    // The daemon's (cncstreamd) queue: jobs created but not run yet, or running now.
+    int queued = 0;
+    for (const auto& d : j.daemon_jobs(o->limit)) {
+      if (d.ended_at) continue;
+      if (queued++ == 0) std::cout << "cncstreamd queue:\n";
+      std::cout << std::setw(5) << d.id << "  " << d.created_at << "  " << std::setw(12) << std::left << d.state
+                << std::right << "  " << d.machine << "  " << d.file_name;
+      if (d.journal_id) std::cout << "  (journal job " << d.journal_id << ")";
+      std::cout << "\n";
+    }
+    if (queued) std::cout << "journaled runs (the CLI's and cncstreamd's):\n";
     const auto jobs = j.jobs(o->limit);
     if (jobs.empty()) std::cout << "no jobs in " << path.string() << "\n";
     for (const auto& job : jobs) {
