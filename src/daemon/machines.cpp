@@ -132,12 +132,25 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
 Machines::~Machines() { *alive_ = false; }
 
 void Machines::open_all() {
-  for (auto& m : machines_) {
-    try {
-      m->session->open();
-    } catch (const std::exception& e) {
-      spdlog::warn("machine {}: {} (retrying every {} s)", m->config.name, e.what(), m->config.reconnect_s);
-    }
+  for (auto& m : machines_) try_open(*m);
+}
+
+void Machines::try_open(Machine& m) {
+  try {
+    m.session->open();
+    if (m.open_failures) spdlog::info("machine {}: the port is there now", m.config.name);
+    m.open_failures = 0;
+  } catch (const std::exception& e) {
+    if (m.open_failures++ == 0)
+      spdlog::warn("machine {}: {} (trying again every {} s)", m.config.name, e.what(), m.config.reconnect_s);
+    if (m.session->link() != session::LinkState::Closed) return;  // the session retries by itself
+    if (!m.open_retry) m.open_retry = std::make_unique<boost::asio::steady_timer>(io_);
+    m.open_retry->expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(m.config.reconnect_s)));
+    m.open_retry->async_wait([this, &m, alive = alive_](const boost::system::error_code& ec) {
+      if (ec || !*alive || m.session->link() != session::LinkState::Closed) return;
+      try_open(m);
+    });
   }
 }
 

@@ -8,6 +8,7 @@
 
 #include "cncstream/daemon/api.hpp"
 #include "cncstream/daemon/job_manager.hpp"
+#include "cncstream/session/simulator_port.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "daemon_test_util.hpp"
 
@@ -288,6 +289,30 @@ TEST(DaemonApi, VanishingSimulatorInterruptsTheJobAndReconnects) {
   EXPECT_FALSE(h.get("/api/v1/machines/flaky").j()["job_active"].get<bool>());  // never resumed by itself
   EXPECT_EQ(job(h, id)["state"], "interrupted");
   d.shutdown();
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DaemonApi, APortAbsentAtStartIsOpenedWhenItAppears) {
+  const auto dir = temp_dir("absent");
+  auto cfg = test_config(dir);
+  cncstream::daemon::MachineConfig m;
+  m.name = "late";
+  m.port = (dir / "ttyLATE").string();  // a device path that does not exist yet
+  m.reconnect_s = 0.2;
+  cfg.machines = {m};
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  EXPECT_NE(h.get("/api/v1/machines/late").j()["link"], "ready");
+  // The controller appears (a simulator behind a symlink at that path).
+  cncstream::session::SimulatorOptions so;
+  so.link = dir / "ttyLATE";
+  cncstream::session::SimulatorPort sim(so);
+  sim.start();
+  // Identification: no banner reaches a port opened after power-on, so it
+  // asks ($I) after its banner time-out (3 s).
+  EXPECT_TRUE(wait_for([&] { return h.get("/api/v1/machines/late").j()["link"] == "ready"; }, 20));
+  d.shutdown();
+  sim.finish(false);
   std::filesystem::remove_all(dir);
 }
 

@@ -4,6 +4,7 @@
 // Turns session events into WebSocket frames, keeps who holds control, and
 // tells the job manager when a job starts, progresses and ends.
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/thread_pool.hpp>
 
 #include <nlohmann/json.hpp>
@@ -77,6 +78,10 @@ struct Machine {
   std::optional<session::JobInput> pending_start;
   bool verifying = false;  // the running job's simulator verifies its cut
   std::optional<protocol::CodeInfo> last_alarm;  // while in alarm
+  // A port absent at start (unplugged, powered off) is tried again every
+  // reconnect_s: the session itself only retries a port it had open.
+  std::unique_ptr<boost::asio::steady_timer> open_retry;
+  int open_failures = 0;
 };
 
 class Machines {
@@ -112,6 +117,7 @@ class Machines {
 
  private:
   void on_event(Machine& m, const session::SessionEvent& e);
+  void try_open(Machine& m);
   void publish(Machine& m, nlohmann::json j);
   boost::asio::io_context& io_;
   boost::asio::thread_pool& pool_;
