@@ -344,7 +344,7 @@ void GrblSession::pump() {
       ++progress_.lines_sent;
       continue;
     }
-    if (!is_active(progress_.state) && jog_pending()) {
+    if (!is_active(progress_.state) && jog_.busy()) {
       // A jog line is at most ~60 bytes: ask the jog engine only when one fits,
       // so a move it hands out is always sent.
       PreparedLine room;
@@ -507,7 +507,5 @@ void GrblSession::pump_jog() {
   pump();
   emit_jog_notes();
 }
-
-bool GrblSession::jog_pending() const { return jog_.busy(); }
 
 }  // namespace cncstream::protocol

@@ -10,6 +10,7 @@
 #include <cstdlib>
 
 #include "app_run.hpp"
+#include "support/pty.hpp"
 #include "cncstream/transport/port_lock.hpp"
 
 using namespace apptest;
@@ -17,16 +18,7 @@ namespace tr = cncstream::transport;
 
 namespace {
 
-struct Pty {
-  Pty() {
-    master = ::posix_openpt(O_RDWR | O_NOCTTY);
-    if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) throw std::runtime_error("no pty");
-    slave = ::ptsname(master);
-  }
-  ~Pty() { ::close(master); }
-  int master = -1;
-  std::string slave;
-};
+using test_support::Pty;
 
 // A private lock folder and an address where no daemon listens, for this
 // process and the programs it runs.

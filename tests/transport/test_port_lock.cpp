@@ -22,22 +22,14 @@
 
 #include "cncstream/transport/port_lock.hpp"
 #include "cncstream/transport/serial_transport.hpp"
+#include "support/pty.hpp"
 
 using namespace cncstream::transport;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Pty {
-  Pty() {
-    master = ::posix_openpt(O_RDWR | O_NOCTTY);
-    if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) throw std::runtime_error("no pty");
-    slave = ::ptsname(master);
-  }
-  ~Pty() { ::close(master); }
-  int master = -1;
-  std::string slave;
-};
+using test_support::Pty;
 
 std::string read_text(const fs::path& p) {
   std::ifstream f(p);

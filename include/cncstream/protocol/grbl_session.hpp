@@ -57,7 +57,6 @@ class GrblSession final : public ProtocolEngine {
 
   void pump();
   void pump_jog() override;
-  bool jog_pending() const;
   void on_answer(bool ok, int code, double now);
   void on_banner();
   void on_status(const StatusReport& r);
