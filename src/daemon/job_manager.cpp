@@ -161,11 +161,11 @@ json JobManager::to_json(const DaemonJob& j) const {
   json prog = nullptr;
   const EtaTable* et = eta_table(j);
   if (j.program) prog = {{"lines", j.program->lines.size()}, {"estimated_s", et ? json(et->estimated_s) : json(nullptr)}};
-  const double total = j.program ? double(j.program->total_lines) : 0;
   json progress = {{"lines_sent", j.progress.lines_sent},
                    {"lines_answered", j.progress.lines_answered},
                    {"last_answered_line", std::max<std::int64_t>(r.last_line, j.progress.last_answered_line)},
-                   {"fraction", total > 0 ? double(j.progress.lines_answered) / total : 0.0},
+                   {"executing_line", j.progress.executing_line},
+                   {"fraction", fraction(j)},
                    {"eta_s", eta(j) ? json(*eta(j)) : json(nullptr)}};
   json verify = nullptr;
   if (j.verify)
@@ -205,8 +205,21 @@ std::optional<double> JobManager::eta(const DaemonJob& j) const {
   if (!t || t->end_by_line.empty()) return std::nullopt;
   const auto& e = t->end_by_line;
   if (j.row.state != "running" && j.row.state != "held") return t->estimated_s;
-  const auto line = static_cast<std::size_t>(std::clamp<long>(j.progress.last_answered_line, 0, long(e.size()) - 1));
+  const auto line = static_cast<std::size_t>(std::clamp<long>(j.progress.executing_line, 0, long(e.size()) - 1));
   return std::max(0.0, e.back() - e[line]);
+}
+
+// The share of the program that has run: the executing line (answered lines
+// less the controller's planner queue), not the answered ones, which run
+// ahead of the motion by up to a planner's worth of moves.
+double JobManager::fraction(const DaemonJob& j) const {
+  if (j.row.state == "done") return 1.0;
+  const double total = j.program ? double(j.program->total_lines) : 0;
+  if (total <= 0) return 0.0;
+  // Lines are the program's own (a resumed job's keep their numbers), and a
+  // resumed job has done the lines up to the one it continues after.
+  const long done = std::max<long>(j.progress.executing_line - 1, j.resume ? j.row.from_line : 0);
+  return std::clamp(double(done) / total, 0.0, 1.0);
 }
 
 void JobManager::publish_job(const DaemonJob& j) {

@@ -193,6 +193,14 @@ std::string Machines::status_frame(Machine& m) {
   return j.dump();
 }
 
+// Progress frames at most 10 per second: the status frames carry the pace.
+void Machines::push_progress(const std::string& name, Machine& m) {
+  const double now = m.session->now();
+  if (now - m.last_progress_push < 0.1 || !m.session->engine() || !listener_.progress) return;
+  m.last_progress_push = now;
+  listener_.progress(name, m.session->engine()->progress());
+}
+
 void Machines::on_event(Machine& m, const session::SessionEvent& e) {
   using session::SessionEventKind;
   const std::string& name = m.config.name;
@@ -272,16 +280,10 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
     case EventKind::Status:
       if (m.session->status() && m.session->status()->state != protocol::MachineState::Alarm) m.last_alarm.reset();
       hub_.publish_status(name, WsHub::frame(status_frame(m)));
+      // The executing line moves with the planner (Bf:), not only with answers.
+      if (m.session->job_active()) push_progress(name, m);
       return;
-    case EventKind::LineAnswered: {
-      const double now = m.session->now();
-      // Progress frames at most 10 per second: the status frames carry the pace.
-      if (now - m.last_progress_push >= 0.1 && m.session->engine() && listener_.progress) {
-        m.last_progress_push = now;
-        listener_.progress(name, m.session->engine()->progress());
-      }
-      return;
-    }
+    case EventKind::LineAnswered: push_progress(name, m); return;
     case EventKind::JobState:
       if (m.session->engine() && listener_.state) {
         const auto st = m.session->engine()->progress().state;

@@ -143,6 +143,9 @@ void GrblSession::on_answer(bool ok, int code, double) {
       if (ok) {
         ++progress_.lines_answered;
         apply_answered_line(modal_, line->text);
+        execution_.on_answered(line->source_line, line->text);
+        if (progress_.mode == JobMode::Check) execution_.all_done();  // nothing moves in a check
+        progress_.executing_line = execution_.executing_line();
         Event e{EventKind::LineAnswered, "ok"};
         e.source_line = line->source_line;
         e.line_text = line->text;
@@ -267,6 +270,10 @@ void GrblSession::on_status(const StatusReport& raw) {
   e.status = r;
   emit(std::move(e));
   jog_.on_status(r, now_);
+  if (is_active(progress_.state) && progress_.mode == JobMode::Run) {
+    execution_.on_status(r.planner_free, r.state == MachineState::Idle, profile_.planner_blocks);
+    progress_.executing_line = execution_.executing_line();
+  }
   if (r.mpg) {
     if (*r.mpg && !mpg_owned_) emit({EventKind::Warning, "a pendant (MPG) owns the controller; sending paused"});
     if (!*r.mpg && mpg_owned_) emit({EventKind::Info, "MPG released; sending continues"});
@@ -381,6 +388,7 @@ void GrblSession::start_job(PreparedProgram program, JobMode mode, double now) {
   program_ = std::move(program);
   next_index_ = 0;
   progress_ = JobProgress{};
+  execution_.reset();
   run_after_check_ = mode == JobMode::CheckThenRun;
   if (mode == JobMode::CheckThenRun) mode = JobMode::Check;
   progress_.mode = mode;
@@ -410,6 +418,12 @@ void GrblSession::finish_job(JobOutcome o, const std::string& text) {
   progress_.outcome = o;
   draining_ = false;
   if (o == JobOutcome::Completed) progress_.lines_answered = progress_.total_lines;
+  // Completed: every line ran. Otherwise what ran is unknown past the
+  // estimate (the planner was flushed), which stays as it was.
+  if (o == JobOutcome::Completed || o == JobOutcome::CheckPassed || o == JobOutcome::CheckFailed) {
+    execution_.all_done();
+    progress_.executing_line = execution_.executing_line();
+  }
   stop_requested_ = false;
   progress_.state = JobState::Finished;
   Event e{EventKind::JobFinished, std::string(to_string(o)) + ": " + text};

@@ -171,6 +171,11 @@ void MarlinSession::on_ok(const Response& r) {
     ++progress_.lines_answered;
     progress_.last_answered_line = s.line.source_line;
     apply_answered_line(modal_, s.line.text);
+    // Marlin's `ok P<free>` (ADVANCED_OK) says how full the planner is;
+    // without it the planner is taken to be full while the job streams.
+    execution_.on_answered(s.line.source_line, s.line.text);
+    execution_.on_status(r.ok_planner_free, false, profile_.planner_blocks);
+    progress_.executing_line = execution_.executing_line();
     Event e{EventKind::LineAnswered, "ok"};
     e.source_line = s.line.source_line;
     e.line_text = s.line.text;
@@ -282,6 +287,7 @@ void MarlinSession::start_job(PreparedProgram program, JobMode mode, double now)
   program_ = std::move(program);
   next_index_ = 0;
   progress_ = JobProgress{};
+  execution_.reset();
   progress_.total_lines = program_.lines.size();
   progress_.state = JobState::Running;
   modal_ = gcode::ParserState{};
@@ -370,7 +376,11 @@ void MarlinSession::disconnected() {
 void MarlinSession::finish_job(JobOutcome o, const std::string& text) {
   progress_.outcome = o;
   progress_.state = JobState::Finished;
-  if (o == JobOutcome::Completed) progress_.lines_answered = progress_.total_lines;
+  if (o == JobOutcome::Completed) {
+    progress_.lines_answered = progress_.total_lines;
+    execution_.all_done();
+    progress_.executing_line = execution_.executing_line();
+  }
   Event e{EventKind::JobFinished, std::string(to_string(o)) + ": " + text};
   e.source_line = progress_.last_answered_line;
   emit(std::move(e));

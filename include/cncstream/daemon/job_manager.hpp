@@ -113,6 +113,7 @@ class JobManager {
   void on_ended(const std::string& machine, protocol::JobOutcome o, long last_line, const std::string& text);
   void on_verified(const std::string& machine, SimVerifyReport rep);
   void on_start_failed(const std::string& machine, const std::string& why);
+  double fraction(const DaemonJob& j) const;
   std::optional<double> eta(const DaemonJob& j) const;
   const EtaTable* eta_table(const DaemonJob& j) const;
 

@@ -117,6 +117,7 @@ class Machines {
 
  private:
   void on_event(Machine& m, const session::SessionEvent& e);
+  void push_progress(const std::string& name, Machine& m);
   void try_open(Machine& m);
   void publish(Machine& m, nlohmann::json j);
   boost::asio::io_context& io_;

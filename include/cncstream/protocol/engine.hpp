@@ -65,6 +65,10 @@ struct JobProgress {
   std::size_t lines_sent = 0;        // file lines handed to the controller (blank ones count when passed)
   std::size_t lines_answered = 0;    // file lines answered ok (or skipped as blank) in order
   long last_answered_line = 0;       // 1-based file line of the last answered one, 0 = none
+  // 1-based file line the machine is estimated to be executing (answered
+  // lines less the planner's queue: execution_estimate.hpp); what progress
+  // and ETA shown to an operator follow. 0 = none yet.
+  long executing_line = 0;
   std::vector<Event> check_errors;   // check mode: every error with its line
 };
 

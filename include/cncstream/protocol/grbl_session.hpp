@@ -8,6 +8,7 @@
 
 #include "cncstream/protocol/character_counting.hpp"
 #include "cncstream/protocol/engine.hpp"
+#include "cncstream/protocol/execution_estimate.hpp"
 #include "cncstream/protocol/jog.hpp"
 #include "cncstream/protocol/modal_state.hpp"
 #include "cncstream/protocol/response.hpp"
@@ -77,6 +78,7 @@ class GrblSession final : public ProtocolEngine {
   PreparedProgram program_;
   std::size_t next_index_ = 0;
   JobProgress progress_;
+  ExecutionEstimate execution_;
   CheckPhase check_phase_ = CheckPhase::None;
   bool run_after_check_ = false;
   bool error_seen_ = false;

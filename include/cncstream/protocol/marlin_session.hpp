@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "cncstream/protocol/engine.hpp"
+#include "cncstream/protocol/execution_estimate.hpp"
 #include "cncstream/protocol/modal_state.hpp"
 #include "cncstream/protocol/response.hpp"
 
@@ -83,6 +84,7 @@ class MarlinSession final : public ProtocolEngine {
   PreparedProgram program_;
   std::size_t next_index_ = 0;
   JobProgress progress_;
+  ExecutionEstimate execution_;
   std::deque<PreparedLine> commands_;
   std::deque<std::pair<std::string, JogRole>> jog_lines_;  // the lines of a jog move not sent yet
   double now_ = 0;
