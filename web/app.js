@@ -57,6 +57,7 @@ const S = {
   wsUp: false,
   lastGenerated: null,   // id of the job the form made (its preview is shown when ready)
   previewJob: null,
+  previewUrl: null,      // the object URL the preview picture is shown from
   upload: null,          // FileInfo of the last upload
 };
 
@@ -84,18 +85,19 @@ async function askToken() {
   return tokenPrompt;
 }
 
-async function api(method, path, body, { raw = false, retry = true } = {}) {
+async function api(method, path, body, { raw = false, blob = false, retry = true } = {}) {
   const headers = { 'X-Client-Id': S.clientId };
   if (S.token) headers.Authorization = 'Bearer ' + S.token;
   let payload;
   if (body !== undefined) { headers['Content-Type'] = 'application/json'; payload = JSON.stringify(body); }
   const r = await fetch(API + path, { method, headers, body: payload, cache: 'no-store' });
   if (r.status === 401 && retry) {
-    if (await askToken()) return api(method, path, body, { raw, retry: false });
+    if (await askToken()) return api(method, path, body, { raw, blob, retry: false });
     throw new ApiError(401, 'unauthorized', 'This controller needs an access token.');
   }
   if (!r.ok) throw await errorOf(r);
   if (raw) return r.text();
+  if (blob) return r.blob();
   if (r.status === 204) return null;
   const text = await r.text();
   return text ? JSON.parse(text) : null;
@@ -411,7 +413,7 @@ function queueActions(j0) {
   const st = j0.state;
   if (st === 'ready') {
     acts.push(b('start', 'Start', 'btn-go', () => controlled(m, () => api('POST', `/jobs/${id}/start`, {}))));
-    if (j0.kind === 'stl') acts.push(b('preview', 'Preview', '', () => showPreview(id)));
+    acts.push(b('preview', 'Preview', '', () => showPreview(id)));
   }
   if (st === 'queued') acts.push(b('generate', 'Generate', '', () => api('POST', `/jobs/${id}/generate`, {})));
   if (st === 'running') acts.push(b('hold', 'Hold', 'btn-warn', () => api('POST', `/jobs/${id}/hold`, {})));
@@ -619,161 +621,126 @@ function renderFormStatus() {
   else if (j.state === 'failed') s.textContent = `#${j.id} failed: ${j.message}`;
   else s.textContent = `#${j.id}: ${j.state}`;
   s.dataset.state = j.state;
-  if (j.state === 'ready' && j.kind === 'stl' && S.previewJob !== j.id && j.program) {
+  if (j.state === 'ready' && S.previewJob !== j.id && j.program) {
     S.previewJob = j.id;
     run('Preview', () => showPreview(j.id));
   }
 }
 
 // ---------------------------------------------------------------- preview
-// The program itself is the truth about the path: its cutting moves give the
-// tool-tip (CL) heights, drawn as a height map, and the rows drawn over it.
+// The daemon draws the tool tip's heights (GET …/clmap.png, colour = Z between
+// the Job's preview.z) and thins the program's path (GET …/path), so a phone
+// never downloads a whole program to see it. The path is drawn over the
+// picture, rapids dashed.
 async function showPreview(id) {
   S.previewJob = id;
-  const text = await api('GET', `/jobs/${id}/gcode`, undefined, { raw: true });
-  const moves = parseMoves(text);
+  // The bounds and heights come with the Job: at `ready` for an STL job, a
+  // moment later for G-code (the daemon traces it with the time estimate).
+  let j = await api('GET', `/jobs/${id}`);
+  for (let waited = 0; j.program && !j.preview && waited < 30000 && S.previewJob === id; waited += 500) {
+    await new Promise((r) => setTimeout(r, 500));
+    j = await api('GET', `/jobs/${id}`);
+  }
+  if (S.previewJob !== id) return;  // another preview was asked for meanwhile
   $('#preview').hidden = false;  // shown first: the drawing is sized to its width
-  drawPreview(moves);
-  const j = S.jobs.get(id);
-  $('#preview-meta').textContent = `${j ? jobTitle(j) : '#' + id} · ${moves.count.toLocaleString()} moves · X ${fmt(moves.x0, 1)}…${fmt(moves.x1, 1)} Y ${fmt(moves.y0, 1)}…${fmt(moves.y1, 1)} Z ${fmt(moves.zMin, 2)}…${fmt(moves.zCutMax, 2)} mm`;
-  $('#preview').hidden = false;
+  const cv = $('#preview-canvas');
+  const dpr = Math.min(2, window.devicePixelRatio || 1);
+  const W = Math.round(Math.max(320, Math.min(900, cv.parentElement.clientWidth || 640) * dpr));
+  const pv = j.preview;
+  let img = null, path = { cuts: [], rapids: [], points: 0, total_points: 0 };
+  if (pv) {
+    // About as many pixels as the canvas has, and points enough for its
+    // width, in steps, so that screens of about the same size share the
+    // daemon's cached answers.
+    const max = Math.min(1024, Math.ceil(W / 128) * 128);
+    const points = Math.min(20000, Math.max(2000, Math.round(W * 16 / 2000) * 2000));
+    [img, path] = await Promise.all([loadPreviewImage(id, max), api('GET', `/jobs/${id}/path?max_points=${points}`)]);
+    if (S.previewJob !== id) return;
+  }
+  const none = !j.program ? 'No program yet' : 'No cutting moves to show (or still being traced)';
+  drawPreview(cv, W, dpr, pv, img, path, none);
+  const title = jobTitle(j);
+  if (!pv) $('#preview-meta').textContent = `${title} · ${none.toLowerCase()}`;
+  else {
+    const [x0, y0, x1, y1] = pv.bounds;
+    const drawn = path.points < path.total_points ? ` (${path.points.toLocaleString()} drawn)` : '';
+    $('#preview-meta').textContent = `${title} · ${path.total_points.toLocaleString()} points${drawn} · X ${fmt(x0, 1)}…${fmt(x1, 1)} Y ${fmt(y0, 1)}…${fmt(y1, 1)} Z ${fmt(pv.z[0], 2)}…${fmt(pv.z[1], 2)} mm`;
+  }
   $('#preview').dataset.job = id;
 }
 
-function parseMoves(text) {
-  const pts = [];  // x, y, z, rapid
-  let x = 0, y = 0, z = 0, mode = 0, absolute = true;
-  const word = /([GXYZ])\s*(-?\d*\.?\d+)/gi;
-  for (const raw of text.split('\n')) {
-    const line = raw.replace(/\(.*?\)|;.*$/g, '');
-    let nx = x, ny = y, nz = z, moved = false;
-    word.lastIndex = 0;
-    let w;
-    while ((w = word.exec(line))) {
-      const v = Number(w[2]);
-      switch (w[1].toUpperCase()) {
-        case 'G': if (v === 0 || v === 1 || v === 2 || v === 3) mode = v; else if (v === 90) absolute = true; else if (v === 91) absolute = false; break;
-        case 'X': nx = absolute ? v : x + v; moved = true; break;
-        case 'Y': ny = absolute ? v : y + v; moved = true; break;
-        case 'Z': nz = absolute ? v : z + v; moved = true; break;
-      }
-    }
-    if (moved) { x = nx; y = ny; z = nz; pts.push(x, y, z, mode === 0 ? 1 : 0); }
-  }
-  const m = { pts, count: pts.length / 4, x0: Infinity, x1: -Infinity, y0: Infinity, y1: -Infinity, zMin: Infinity, zCutMax: -Infinity };
-  for (let i = 0; i < pts.length; i += 4) {
-    if (pts[i + 3]) continue;  // rapids do not cut: they set neither the box nor the colours
-    m.x0 = Math.min(m.x0, pts[i]); m.x1 = Math.max(m.x1, pts[i]);
-    m.y0 = Math.min(m.y0, pts[i + 1]); m.y1 = Math.max(m.y1, pts[i + 1]);
-    m.zMin = Math.min(m.zMin, pts[i + 2]); m.zCutMax = Math.max(m.zCutMax, pts[i + 2]);
-  }
-  return m;
+// The PNG through fetch (it needs the token header an <img src> cannot send),
+// shown by the page's hidden <img> (the canvas draws from it).
+async function loadPreviewImage(id, max) {
+  const blob = await api('GET', `/jobs/${id}/clmap.png?max=${max}`, undefined, { blob: true });
+  const img = $('#preview-img');
+  const url = URL.createObjectURL(blob);
+  await new Promise((ok, fail) => {
+    img.onload = ok;
+    img.onerror = () => fail(new Error('the preview picture could not be decoded'));
+    img.src = url;
+  });
+  if (S.previewUrl) URL.revokeObjectURL(S.previewUrl);
+  S.previewUrl = url;
+  return img;
 }
 
-// Blue (deep) to yellow (high), readable on a dark background.
-function heightColour(t) {
-  const stops = [[48, 18, 59], [40, 110, 220], [30, 190, 160], [170, 220, 50], [250, 240, 80]];
-  t = Math.max(0, Math.min(1, t)) * (stops.length - 1);
-  const i = Math.min(stops.length - 2, Math.floor(t)), f = t - i;
-  return stops[i].map((c, k) => Math.round(c + (stops[i + 1][k] - c) * f));
-}
+// The daemon's ramp (viridis), for the legend.
+const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
 
-function drawPreview(m) {
-  const cv = $('#preview-canvas');
-  const dpr = Math.min(2, window.devicePixelRatio || 1);
-  const W = cv.width = Math.round(Math.max(320, Math.min(900, cv.parentElement.clientWidth || 640) * dpr));
-  const sx = m.x1 - m.x0 || 1, sy = m.y1 - m.y0 || 1;
-  const pad = 24 * dpr;
-  const scale = (W - 2 * pad) / sx;
-  const H = cv.height = Math.min(Math.round(sy * scale + 2 * pad), 2 * W);
-  const s = Math.min(scale, (H - 2 * pad) / sy);
+function drawPreview(cv, W, dpr, pv, img, path, none) {
   const ctx = cv.getContext('2d');
+  const pad = 24 * dpr;
+  if (!pv) {
+    cv.width = W; cv.height = Math.round(W / 4);
+    ctx.fillStyle = '#0b0d10';
+    ctx.fillRect(0, 0, cv.width, cv.height);
+    ctx.fillStyle = '#9aa5b1';
+    ctx.font = `${Math.round(14 * dpr)}px sans-serif`;
+    ctx.fillText(none, pad, pad + 14 * dpr);
+    return;
+  }
+  const [x0, y0, x1, y1] = pv.bounds;
+  const sx = x1 - x0 || 1, sy = y1 - y0 || 1;
+  const scale = (W - 2 * pad) / sx;
+  cv.width = W;
+  const H = cv.height = Math.max(Math.round(4 * pad), Math.min(Math.round(sy * scale + 2 * pad), 2 * W));
+  const s = Math.min(scale, (H - 2 * pad) / sy);
+  const X = (x) => pad + (x - x0) * s, Y = (y) => H - pad - (y - y0) * s;
   ctx.fillStyle = '#0b0d10';
   ctx.fillRect(0, 0, W, H);
-  if (!isFinite(m.x0)) { ctx.fillStyle = '#9aa5b1'; ctx.fillText('No cutting moves in this program', pad, pad); return; }
-  const X = (x) => pad + (x - m.x0) * s, Y = (y) => H - pad - (y - m.y0) * s;
-  const zr = m.zCutMax - m.zMin || 1;
-  // Height map: every cutting point splatted into a grid cell, the highest wins.
-  const cell = 2 * dpr;
-  const gw = Math.max(1, Math.round(sx * s / cell)), gh = Math.max(1, Math.round(sy * s / cell));
-  const grid = new Float32Array(gw * gh).fill(NaN);
-  const p = m.pts;
-  for (let i = 4; i < p.length; i += 4) {
-    if (p[i + 3]) continue;
-    // Sample along the move so long straight moves fill their cells too.
-    const n = Math.max(1, Math.ceil(Math.hypot(p[i] - p[i - 4], p[i + 1] - p[i - 3]) * s / cell));
-    for (let k = 1; k <= n; k++) {
-      const f = k / n, x = p[i - 4] + (p[i] - p[i - 4]) * f, y = p[i - 3] + (p[i + 1] - p[i - 3]) * f, z = p[i - 2] + (p[i + 2] - p[i - 2]) * f;
-      const gx = Math.min(gw - 1, Math.floor((x - m.x0) / sx * gw)), gy = Math.min(gh - 1, Math.floor((y - m.y0) / sy * gh));
-      const c = gy * gw + gx;
-      if (!(grid[c] >= z)) grid[c] = z;
-    }
-  }
-  // Rows are a stepover apart, wider than a cell: grow each row's heights
-  // into the empty cells beside it (a few passes, so a sparse contour
-  // program is not smeared across the whole box).
-  for (let pass = 0, grew = true; grew && pass < 16; pass++) {
-    grew = false;
-    const prev = grid.slice();
-    for (let gy = 0; gy < gh; gy++) for (let gx = 0; gx < gw; gx++) {
-      const c = gy * gw + gx;
-      if (!isNaN(prev[c])) continue;
-      let best = NaN;
-      const take = (v) => { if (!isNaN(v) && !(best >= v)) best = v; };  // the highest known neighbour
-      if (gx > 0) take(prev[c - 1]);
-      if (gx < gw - 1) take(prev[c + 1]);
-      if (gy > 0) take(prev[c - gw]);
-      if (gy < gh - 1) take(prev[c + gw]);
-      if (!isNaN(best)) { grid[c] = best; grew = true; }
-    }
-  }
-  const img = ctx.createImageData(gw, gh);
-  for (let gy = 0; gy < gh; gy++) for (let gx = 0; gx < gw; gx++) {
-    const z = grid[gy * gw + gx], o = ((gh - 1 - gy) * gw + gx) * 4;
-    if (isNaN(z)) continue;
-    const [r, g, b] = heightColour((z - m.zMin) / zr);
-    img.data[o] = r; img.data[o + 1] = g; img.data[o + 2] = b; img.data[o + 3] = 255;
-  }
-  const off = document.createElement('canvas');
-  off.width = gw; off.height = gh;
-  off.getContext('2d').putImageData(img, 0, 0);
+  // The picture spans the bounds exactly, north up.
   ctx.imageSmoothingEnabled = true;
-  ctx.drawImage(off, X(m.x0), Y(m.y1), sx * s, sy * s);
-  // The path over it: cutting moves thin and dark, rapids dashed red.
+  ctx.drawImage(img, X(x0), Y(y1), (x1 - x0) * s || 1, (y1 - y0) * s || 1);
+  const stroke = (lines) => {
+    ctx.beginPath();
+    for (const l of lines) {
+      ctx.moveTo(X(l[0]), Y(l[1]));
+      for (let i = 3; i < l.length; i += 3) ctx.lineTo(X(l[i]), Y(l[i + 1]));
+    }
+    ctx.stroke();
+  };
+  // Cutting moves thin and dark, rapids dashed red.
   ctx.lineWidth = 1;
   ctx.strokeStyle = 'rgba(0,0,0,0.35)';
-  ctx.beginPath();
-  const step = Math.max(1, Math.floor(m.count / 200000));  // keep drawing fast on huge programs
-  for (let i = 4; i < p.length; i += 4 * step) {
-    if (p[i + 3]) continue;
-    ctx.moveTo(X(p[i - 4]), Y(p[i - 3]));
-    ctx.lineTo(X(p[i]), Y(p[i + 1]));
-  }
-  ctx.stroke();
+  stroke(path.cuts);
   ctx.strokeStyle = 'rgba(255,90,90,0.8)';
-  ctx.setLineDash([4, 4]);
-  ctx.beginPath();
-  for (let i = 4; i < p.length; i += 4) {
-    if (!p[i + 3]) continue;
-    ctx.moveTo(X(p[i - 4]), Y(p[i - 3]));
-    ctx.lineTo(X(p[i]), Y(p[i + 1]));
-  }
-  ctx.stroke();
+  ctx.setLineDash([4 * dpr, 4 * dpr]);
+  stroke(path.rapids);
   ctx.setLineDash([]);
-  // Scale: the colours' heights and the work zero.
   // Legend: the colours' heights, laid out left to right by measured width.
   ctx.font = `${Math.round(14 * dpr)}px sans-serif`;
   ctx.fillStyle = '#e8ecf0';
-  const lo = `tool tip Z ${fmt(m.zMin, 2)}`, hi = `${fmt(m.zCutMax, 2)} mm`, base = H - 6 * dpr;
+  const lo = `tool tip Z ${fmt(pv.z[0], 2)}`, hi = `${fmt(pv.z[1], 2)} mm`, base = H - 6 * dpr;
   ctx.fillText(lo, pad, base);
   const gx0 = pad + ctx.measureText(lo).width + 8 * dpr, gw0 = Math.min(120 * dpr, W - gx0 - ctx.measureText(hi).width - pad - 8 * dpr);
   const lg = ctx.createLinearGradient(gx0, 0, gx0 + gw0, 0);
-  for (let k = 0; k <= 4; k++) lg.addColorStop(k / 4, `rgb(${heightColour(k / 4).join(',')})`);
+  VIRIDIS.forEach((c, k) => lg.addColorStop(k / (VIRIDIS.length - 1), `rgb(${c.join(',')})`));
   ctx.fillStyle = lg;
   ctx.fillRect(gx0, H - 16 * dpr, gw0, 10 * dpr);
   ctx.fillStyle = '#e8ecf0';
   ctx.fillText(hi, gx0 + gw0 + 8 * dpr, base);
-  if (m.x0 <= 0 && m.x1 >= 0 && m.y0 <= 0 && m.y1 >= 0) {
+  if (x0 <= 0 && x1 >= 0 && y0 <= 0 && y1 >= 0) {  // the work zero
     ctx.strokeStyle = '#fff';
     ctx.beginPath(); ctx.arc(X(0), Y(0), 5 * dpr, 0, 2 * Math.PI); ctx.stroke();
   }
@@ -1098,4 +1065,4 @@ renderMachine();
 renderHistory();
 connectWs();
 // For the browser tests and for debugging from the console.
-window.cncstream = { state: S };
+window.cncstream = { state: S, showPreview };  // the browser test drives and reads these

@@ -1,10 +1,29 @@
-// Jobs: create, list, get, the program, start, generate, hold, resume, stop,
-// cancel, move, resume-plan and resume-confirm.
+// Jobs: create, list, get, the program, its preview (height PNG, thinned
+// path), start, generate, hold, resume, stop, cancel, move, resume-plan and
+// resume-confirm.
 #include "cncstream/daemon/api.hpp"
 
 namespace cncstream::daemon {
 
 using nlohmann::json;
+
+namespace {
+
+// An optional whole-number query parameter within [lo, hi]; 400 otherwise.
+long long bounded_query(const Request& r, const std::string& name, long long fallback, long long lo, long long hi) {
+  const auto v = r.query_value(name);
+  if (!v) return fallback;
+  const auto bad = [&] {
+    return ApiError{400, "bad_request", cat({name, ": a whole number from ", std::to_string(lo), " to ", std::to_string(hi),
+                                             " (got '", v->substr(0, 24), "')"})};
+  };
+  if (v->empty() || v->size() > 12 || v->find_first_not_of("0123456789") != std::string::npos) throw bad();
+  const long long n = std::stoll(*v);
+  if (n < lo || n > hi) throw bad();
+  return n;
+}
+
+}  // namespace
 
 void Api::job_routes() {
   router_.add("POST", "/api/v1/jobs", [this](Request& r, Respond res) {
@@ -24,6 +43,18 @@ void Api::job_routes() {
     resp.content_type = "text/plain; charset=us-ascii";
     resp.file = p->path;
     res(std::move(resp));
+  });
+  router_.add("GET", "/api/v1/jobs/{id}/clmap.png", [this](Request& r, Respond res) {
+    const auto id = job_id(r);
+    jobs_.get(id);  // 404 first
+    const auto max = bounded_query(r, "max", Previews::kMaxPixels, Previews::kMinPixels, Previews::kMaxPixels);
+    jobs_.preview_png(id, static_cast<int>(max), std::move(res));
+  });
+  router_.add("GET", "/api/v1/jobs/{id}/path", [this](Request& r, Respond res) {
+    const auto id = job_id(r);
+    jobs_.get(id);
+    const auto n = bounded_query(r, "max_points", Previews::kDefaultPoints, Previews::kMinPoints, Previews::kMaxPoints);
+    jobs_.preview_path(id, static_cast<std::size_t>(n), std::move(res));
   });
   router_.add("POST", "/api/v1/jobs/{id}/start", [this](Request& r, Respond res) {
     res(Response::json(202, jobs_.start(job_id(r), r.client_id)));

@@ -12,6 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cncstream/transport/journal.hpp"
+
 namespace cncstream::daemon {
 
 namespace {
@@ -109,6 +111,12 @@ std::filesystem::path default_data_dir() {
   if (const char* h = std::getenv("HOME"); h && *h)
     return std::filesystem::path(h) / ".local" / "state" / "cncstream" / "daemon";
   return std::filesystem::path("cncstream-daemon");
+}
+
+std::filesystem::path journal_path(const DaemonConfig& c) {
+  if (!c.journal.empty()) return c.journal;
+  if (!c.data_dir.empty()) return c.data_dir / "journal.sqlite";
+  return transport::Journal::default_path();
 }
 
 void apply_listen(DaemonConfig& c, const std::string& text) {

@@ -137,9 +137,11 @@ Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_c
       });
     started->wait();
   }
+  // The journal first: where it goes depends on whether data_dir was given.
+  config_.journal = journal_path(config_);
+  const fs::path journal = config_.journal;
   if (config_.data_dir.empty()) config_.data_dir = default_data_dir();
   fs::create_directories(config_.data_dir);
-  const fs::path journal = config_.journal.empty() ? transport::Journal::default_path() : config_.journal;
   std::string token;
   if (config_.token_required()) {
     token = load_or_create_token(config_.data_dir, token_created_);

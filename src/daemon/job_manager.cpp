@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -57,9 +58,8 @@ std::shared_ptr<Program> make_program(const std::string& text, const fs::path& p
   return p;
 }
 
-std::shared_ptr<EtaTable> make_eta(const std::string& text, std::size_t lines, const gcode::MotionLimits& limits) {
+std::shared_ptr<EtaTable> make_eta(const gcode::ProgramTrace& trace, std::size_t lines, const gcode::MotionLimits& limits) {
   auto e = std::make_shared<EtaTable>();
-  const auto trace = gcode::trace_program(text);
   const auto ends = gcode::estimate_line_end_times(trace, limits, lines);
   e->end_by_line.assign(lines + 1, 0.0);
   for (std::size_t i = 0; i < ends.size() && i + 1 < e->end_by_line.size(); ++i) e->end_by_line[i + 1] = ends[i];
@@ -87,7 +87,8 @@ JobManager::JobManager(boost::asio::io_context& io, boost::asio::thread_pool& po
       machines_(machines),
       hub_(hub),
       programs_dir_(programs_dir),
-      journal_(journal_path) {
+      journal_(journal_path),
+      previews_(io, pool) {
   fs::create_directories(programs_dir_);
   MachineJobListener l;
   l.started = [this](const std::string& m, std::int64_t id) { on_started(m, id); };
@@ -167,6 +168,17 @@ json JobManager::to_json(const DaemonJob& j) const {
                    {"executing_line", j.progress.executing_line},
                    {"fraction", fraction(j)},
                    {"eta_s", eta(j) ? json(*eta(j)) : json(nullptr)}};
+  json preview = nullptr;
+  if (j.program && j.program->height && !j.program->height->empty()) {
+    const auto& h = *j.program->height;
+    const XYBounds b = h.bounds();
+    const auto r4 = [](double v) { return std::round(v * 1e4) / 1e4; };
+    const std::string base = cat({"/api/v1/jobs/", std::to_string(r.id)});
+    preview = {{"bounds", {r4(b.x0), r4(b.y0), r4(b.x1), r4(b.y1)}},
+               {"z", {r4(h.z_min), r4(h.z_max)}},
+               {"png", cat({base, "/clmap.png"})},
+               {"path", cat({base, "/path"})}};
+  }
   json verify = nullptr;
   if (j.verify)
     verify = {{"gouged", j.verify->gouged},
@@ -187,6 +199,7 @@ json JobManager::to_json(const DaemonJob& j) const {
           {"generation", gen},
           {"program", prog},
           {"progress", progress},
+          {"preview", preview},
           {"verify", verify},
           {"journal_id", r.journal_id ? json(r.journal_id) : json(nullptr)},
           {"resumed_from", r.resumed_from},
@@ -442,6 +455,7 @@ void JobManager::kick_generation(DaemonJob& j) {
         prog = make_program(text, programs_dir_);
         prog->work_mesh = std::move(r.work_mesh);
         prog->cutter = r.cutter;
+        prog->height = std::make_shared<const jobs::HeightPreview>(std::move(r.preview));
       } else {
         text = read_all(file);
         prog = make_program(text, programs_dir_);
@@ -456,12 +470,18 @@ void JobManager::kick_generation(DaemonJob& j) {
       if (*alive) on_generated(key, prog, error, cancelled);
     });
     if (!prog || stop->stop_requested()) return;
-    // The ETA table after the job is ready: tracing the program takes a
-    // while for a big one, and nothing waits for it.
+    // The ETA table (and a G-code program's preview heights) after the job
+    // is ready: tracing the program takes a while for a big one, and nothing
+    // waits for it.
     try {
-      auto eta = make_eta(text, prog->lines.size(), limits);
-      boost::asio::post(io_, [this, sha = prog->sha256, eta, alive] {
+      const auto trace = gcode::trace_program(text);
+      auto eta = make_eta(trace, prog->lines.size(), limits);
+      std::shared_ptr<const jobs::HeightPreview> height;
+      if (!stl) height = std::make_shared<const jobs::HeightPreview>(jobs::height_preview_from_trace(trace));
+      boost::asio::post(io_, [this, prog, eta, height, alive] {
         if (!*alive) return;
+        if (height && !prog->height) prog->height = height;
+        const std::string& sha = prog->sha256;
         etas_[sha] = eta;
         if (etas_.size() > 64) etas_.erase(etas_.begin());
         for (auto& [id, j] : jobs_)
@@ -505,6 +525,25 @@ json JobManager::generate(std::int64_t id) {
     throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state + ", not queued"};
   kick_generation(j);
   return to_json(j);
+}
+
+// ---- preview ----------------------------------------------------------------
+
+std::shared_ptr<const Program> JobManager::program_for_preview(std::int64_t id) {
+  const auto& j = get(id);
+  if (!j.program)
+    throw ApiError{409, "bad_state", cat({"job ", std::to_string(id), " has no program yet (", j.row.state, ")"})};
+  return j.program;
+}
+
+void JobManager::preview_png(std::int64_t id, int max_px, Respond respond) {
+  auto p = program_for_preview(id);
+  previews_.png(std::move(p), max_px, std::move(respond));
+}
+
+void JobManager::preview_path(std::int64_t id, std::size_t max_points, Respond respond) {
+  auto p = program_for_preview(id);
+  previews_.path(std::move(p), max_points, std::move(respond));
 }
 
 // ---- running ----------------------------------------------------------------

@@ -147,4 +147,45 @@ RgbImage render_height_map(const MapGrid& grid, std::span<const double> values,
   return std::move(f.image);
 }
 
+RgbImage render_height_image(const MapGrid& grid, std::span<const float> values, const HeightImageOptions& o) {
+  if (grid.size() == 0) throw std::invalid_argument("height image: the grid is empty");
+  if (values.size() != grid.size())
+    throw std::invalid_argument("height image: " + std::to_string(values.size()) + " values for a grid of " +
+                                std::to_string(grid.size()) + " nodes");
+  if (o.width < 1 || o.height < 1 || o.width > 8000 || o.height > 8000)
+    throw std::invalid_argument("height image: size " + std::to_string(o.width) + "x" + std::to_string(o.height) +
+                                " is outside 1..8000");
+  RgbImage img(o.width, o.height, o.no_data);
+  const double span = o.z_max > o.z_min ? o.z_max - o.z_min : 0;
+  const auto z_at = [&](std::size_t i, std::size_t j) { return values[j * grid.nx + i]; };
+  for (int py = 0; py < o.height; ++py) {
+    // Pixel centres spread over the node range [0, n-1]; row 0 is the north edge.
+    const double v = grid.ny > 1 ? (o.height - py - 0.5) / o.height * double(grid.ny - 1) : 0;
+    const std::size_t j0 = std::min(static_cast<std::size_t>(v), grid.ny - 1), j1 = std::min(j0 + 1, grid.ny - 1);
+    const double b = v - double(j0);
+    const std::size_t jn = b < 0.5 ? j0 : j1;
+    for (int px = 0; px < o.width; ++px) {
+      const double u = grid.nx > 1 ? (px + 0.5) / o.width * double(grid.nx - 1) : 0;
+      const std::size_t i0 = std::min(static_cast<std::size_t>(u), grid.nx - 1), i1 = std::min(i0 + 1, grid.nx - 1);
+      const double a = u - double(i0);
+      // Holes keep their true outline: the nearest node decides.
+      if (!std::isfinite(z_at(a < 0.5 ? i0 : i1, jn))) continue;
+      double acc = 0, wsum = 0;
+      const std::size_t is[2] = {i0, i1}, js[2] = {j0, j1};
+      const double wi[2] = {1 - a, a}, wj[2] = {1 - b, b};
+      for (int q = 0; q < 2; ++q)
+        for (int p = 0; p < 2; ++p) {
+          const float z = z_at(is[p], js[q]);
+          const double w = wi[p] * wj[q];
+          if (!std::isfinite(z) || w <= 0) continue;
+          acc += w * z;
+          wsum += w;
+        }
+      if (wsum <= 0) continue;
+      img.set(px, py, colormap_viridis(span > 0 ? (acc / wsum - o.z_min) / span : 0.5));
+    }
+  }
+  return img;
+}
+
 }  // namespace cncstream

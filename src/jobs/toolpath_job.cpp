@@ -47,6 +47,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     ro.direction = p.direction;
     ro.tolerance = p.tolerance;
     ro.lattice = work.lattice;
+    ro.keep_grid = true;  // for the preview, then let go
     const XYBounds region = p.bounds.value_or(default_bounds(*mesh, r.cutter));
     {
       // Rows across, points along (the raster's default step), before any is made.
@@ -56,6 +57,8 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
       check_grid_memory((along_x ? w : h) / step + 1, (along_x ? h : w) / p.stepover + 1, 48, step, "the tool path");
     }
     r.path = build_raster(engine, region, ro, run.checkpoint());
+    r.preview = height_preview_from_grid(r.path.grid, r.path.bounds, work.offset);
+    r.path.grid = ClGrid{};
     r.seconds_path = seconds_since(t0);
 
     run.stage("G-code", kGcodeFrom, end_of_gcode);

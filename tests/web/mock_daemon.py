@@ -13,10 +13,12 @@ import hashlib
 import json
 import math
 import os
+import re
 import secrets
 import struct
 import threading
 import time
+import zlib
 from datetime import datetime, timezone
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from urllib.parse import parse_qs, unquote, urlsplit
@@ -101,7 +103,19 @@ class Job:
                 "progress": {"lines_sent": int(self.answered), "lines_answered": int(self.answered),
                              "last_answered_line": int(self.answered), "fraction": frac,
                              "eta_s": (total - self.answered) / rate if self.state == "running" else None},
+                "preview": self.preview(),
                 "journal_id": None, "resumed_from": 0, "from_line": 0}
+
+    def preview(self):
+        if self.gcode is None:
+            return None
+        cut = [p for p in parse_moves(self.gcode) if not p[3]]
+        if not cut:
+            return None
+        xs, ys, zs = [p[0] for p in cut], [p[1] for p in cut], [p[2] for p in cut]
+        base = f"/api/v1/jobs/{self.id}"
+        return {"bounds": [min(xs), min(ys), max(xs), max(ys)], "z": [min(zs), max(zs)],
+                "png": base + "/clmap.png", "path": base + "/path"}
 
 
 MACHINES = {}
@@ -154,6 +168,91 @@ def fake_program(f, params):
             out.append(f"G1 X{x:.3f} Z{z:.3f}")
     out += ["G0 Z5", "M5", "M2"]
     return "\n".join(out) + "\n"
+
+
+def parse_moves(text):
+    """(x, y, z, rapid) where the program starts and after every motion line."""
+    x = y = z = 0.0
+    mode = 0
+    pts = [(x, y, z, True)]
+    for raw in text.splitlines():
+        line = re.sub(r"\(.*?\)|;.*$", "", raw).upper()
+        moved = False
+        for w, v in re.findall(r"([GXYZ])\s*(-?\d*\.?\d+)", line):
+            v = float(v)
+            if w == "G":
+                mode = int(v) if v in (0, 1, 2, 3) else mode
+            elif w == "X":
+                x, moved = v, True
+            elif w == "Y":
+                y, moved = v, True
+            else:
+                z, moved = v, True
+        if moved:
+            pts.append((x, y, z, mode == 0))
+    return pts
+
+
+VIRIDIS = [(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)]
+
+
+def viridis(t):
+    t = min(1.0, max(0.0, t)) * (len(VIRIDIS) - 1)
+    i = min(len(VIRIDIS) - 2, int(t))
+    f = t - i
+    return bytes(round(a + (b - a) * f) for a, b in zip(VIRIDIS[i], VIRIDIS[i + 1]))
+
+
+def preview_png(job, long_side):
+    """The cutting points splatted onto a coarse grid (the deepest wins), the gaps
+    between rows grown from their neighbours, coloured as the daemon colours them."""
+    pv = job.preview()
+    x0, y0, x1, y1 = pv["bounds"]
+    z0, z1 = pv["z"]
+    sx, sy = (x1 - x0) or 1.0, (y1 - y0) or 1.0
+    w = long_side if sx >= sy else max(1, round(long_side * sx / sy))
+    h = long_side if sy >= sx else max(1, round(long_side * sy / sx))
+    gw, gh = max(1, w * 64 // long_side), max(1, h * 64 // long_side)
+    cell = [[None] * gw for _ in range(gh)]
+    for x, y, z, rapid in parse_moves(job.gcode):
+        if rapid:
+            continue
+        cx, cy = min(gw - 1, int((x - x0) / sx * gw)), min(gh - 1, int((y1 - y) / sy * gh))
+        if cell[cy][cx] is None or z < cell[cy][cx]:
+            cell[cy][cx] = z
+    for _ in range(16):
+        prev = [row[:] for row in cell]
+        for cy in range(gh):
+            for cx in range(gw):
+                if prev[cy][cx] is None:
+                    near = [prev[ny][nx] for nx, ny in ((cx - 1, cy), (cx + 1, cy), (cx, cy - 1), (cx, cy + 1))
+                            if 0 <= nx < gw and 0 <= ny < gh and prev[ny][nx] is not None]
+                    if near:
+                        cell[cy][cx] = sum(near) / len(near)
+    colour = [[b"\x0b\x0d\x10" if z is None else viridis((z - z0) / ((z1 - z0) or 1)) for z in row] for row in cell]
+    raw = b"".join(b"\0" + b"".join(colour[py * gh // h][px * gw // w] for px in range(w)) for py in range(h))
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def preview_path(job, max_points):
+    """Every point (a stride past max_points), cuts and rapids apart, flat [x, y, z, ...]."""
+    pts = parse_moves(job.gcode)
+    stride = max(1, -(-len(pts) // max(2, max_points // 2)))
+    keep = [p for i, p in enumerate(pts) if i % stride == 0 or i == len(pts) - 1]
+    out = {"cuts": [], "rapids": []}
+    run = None
+    for a, b in zip(keep, keep[1:]):
+        kind = "rapids" if b[3] else "cuts"
+        if kind != run:
+            out[kind].append(list(a[:3]))
+            run = kind
+        out[kind][-1] += list(b[:3])
+    n = sum(len(l) // 3 for k in out for l in out[k])
+    return {"points": n, "total_points": len(pts), **out}
 
 
 # ------------------------------------------------------------------ WebSocket
@@ -548,6 +647,14 @@ class Handler(BaseHTTPRequestHandler):
                 if j.gcode is None:
                     raise ApiErr(409, "bad_state", "not generated yet")
                 return self.reply(200, j.gcode.encode(), "text/plain")
+            if rest in (["clmap.png"], ["path"]):
+                if j.gcode is None:
+                    raise ApiErr(409, "bad_state", f"job {j.id} has no program yet ({j.state})")
+                if j.preview() is None:
+                    raise ApiErr(404, "not_found", "the program has no cutting move")
+                if rest == ["path"]:
+                    return self.reply(200, preview_path(j, int(q.get("max_points", 20000))))
+                return self.reply(200, preview_png(j, int(q.get("max", 1024))), "image/png")
             self.body()
             act = rest[0]
             if act == "start":

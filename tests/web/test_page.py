@@ -79,9 +79,8 @@ class Daemon:
             cfg = os.path.join(self.data, "cncstreamd.toml")
             with open(cfg, "w") as f:
                 f.write(f'listen = "127.0.0.1:{self.port}"\n'
+                        # The journal defaults into data_dir: never the user's, and no jobs from an earlier run.
                         f'data_dir = {json.dumps(os.path.join(self.data, "state"))}\n'
-                        # Its own journal: never the user's, and no jobs from an earlier run.
-                        f'journal = {json.dumps(os.path.join(self.data, "journal.sqlite"))}\n'
                         # sim: as fast as it goes, for the job; bench: real time, so
                         # a held jog moves for as long as it is held (the dead man matters).
                         '[[machine]]\nname = "sim"\nport = "sim"\nsim_speed = "max"\n'
@@ -266,6 +265,14 @@ def main_flow(args, out, d):
             for (let i = 0; i < d.length; i += 4) if (d[i] + d[i+1] + d[i+2] > 120) n++;
             return n / (c.width * c.height);""")
         assert coloured > 0.2, f"the preview is mostly empty ({coloured:.0%} coloured)"
+        # Drawn from the daemon's picture and thinned path, not from the whole program.
+        natural = d.execute_script("const i = document.getElementById('preview-img'); return [i.complete, i.naturalWidth, i.naturalHeight];")
+        assert natural[0] and natural[1] > 0 and natural[2] > 0, f"the preview picture did not load: {natural}"
+        fetched = d.execute_script("return performance.getEntriesByType('resource').map(e => e.name);")
+        assert any("/clmap.png" in u for u in fetched) and any("/path?max_points=" in u for u in fetched), fetched
+        assert not any(u.split("?")[0].endswith("/gcode") for u in fetched), f"the page downloaded a program: {fetched}"
+        if not args.mock:
+            assert os.path.exists(os.path.join(daemon.data, "state", "journal.sqlite")), "the journal is not in data_dir"
         d.execute_script("document.getElementById('preview').scrollIntoView()")
         p.shot("03-ready-preview")
         say(f"job #{job_id} ready: {meta}")
@@ -453,6 +460,17 @@ def main_flow(args, out, d):
             assert w >= 44 and h >= 44 and right <= 390, f"a jog button is too small or off screen: {w}x{h} at {right}"
         assert "mono" in geo["droFont"].lower(), geo["droFont"]
         p.shot("12-phone-top")
+        # The plaque's preview on the phone: a picture sized for the screen, nothing wider than it.
+        d.execute_script("window.cncstream.showPreview(Number(arguments[0]))", job_id)
+        p.wait("the preview on the phone", lambda: p.q("#preview").is_displayed() and p.q("#preview").get_attribute("data-job") == job_id, 30)
+        pg = d.execute_script("""
+            const i = document.getElementById('preview-img'), c = document.getElementById('preview-canvas').getBoundingClientRect();
+            return {natural: [i.naturalWidth, i.naturalHeight], canvas: [c.left, c.right], scrollW: document.documentElement.scrollWidth};""")
+        say(f"phone preview: {pg}")
+        assert 0 < max(pg["natural"]) <= 2 * 390, f"the preview picture is not sized for the phone: {pg}"
+        assert pg["canvas"][0] >= 0 and pg["canvas"][1] <= 390 and pg["scrollW"] <= 390, f"the preview does not fit the phone: {pg}"
+        d.execute_script("document.getElementById('preview').scrollIntoView()")
+        p.shot("12b-phone-preview")
         d.execute_script("document.getElementById('panel-jog').scrollIntoView()")
         p.shot("13-phone-jog")
 

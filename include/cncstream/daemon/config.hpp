@@ -56,7 +56,7 @@ struct DaemonConfig {
   std::string listen_address = "127.0.0.1";
   unsigned short listen_port = 8420;  // 0: any free port (tests)
   std::filesystem::path data_dir;     // "" : default_data_dir()
-  std::filesystem::path journal;      // "" : the CLI's journal (transport::Journal::default_path())
+  std::filesystem::path journal;      // "" : <data_dir>/journal.sqlite, or the CLI's journal without a data_dir
   std::filesystem::path web_root;     // "" : found at start (share/cncstream/web, then the source tree's web/)
   std::vector<MachineConfig> machines{MachineConfig{}};
   std::vector<PendantSection> pendants;
@@ -69,6 +69,12 @@ struct DaemonConfig {
 
 // $XDG_STATE_HOME/cncstream/daemon, else ~/.local/state/cncstream/daemon.
 std::filesystem::path default_data_dir();
+
+// The journal the daemon uses: `journal` when set; else, when `data_dir` is
+// set, <data_dir>/journal.sqlite (a daemon given its own folder keeps its
+// history there too); else the CLI's (transport::Journal::default_path()),
+// so `cncstream jobs` lists the default daemon's jobs.
+std::filesystem::path journal_path(const DaemonConfig& c);
 
 // Throws std::invalid_argument naming the file, line and key of a bad value.
 DaemonConfig load_config(const std::filesystem::path& file);

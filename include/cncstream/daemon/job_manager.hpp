@@ -21,6 +21,8 @@
 #include "cncstream/daemon/file_store.hpp"
 #include "cncstream/daemon/http_types.hpp"
 #include "cncstream/daemon/machines.hpp"
+#include "cncstream/daemon/previews.hpp"
+#include "cncstream/jobs/height_preview.hpp"
 #include "cncstream/jobs/resume_job.hpp"
 #include "cncstream/transport/journal.hpp"
 
@@ -36,6 +38,11 @@ struct Program {
   std::optional<Mesh> work_mesh;   // STL jobs: the part in work coordinates (the simulator's verify)
   std::optional<Cutter> cutter;
   double seconds = 0;              // generation time
+  // The tool-tip heights for the preview (work coordinates): an STL
+  // program's from its CL grid, set before the program is shared; a G-code
+  // program's traced after `ready`, set on the event loop's thread (the only
+  // thread that reads or writes it once the program is shared).
+  mutable std::shared_ptr<const jobs::HeightPreview> height;
 };
 
 // When each file line's motion ends (s), for the ETA: computed after the
@@ -75,6 +82,9 @@ class JobManager {
   DaemonJob& get(std::int64_t id);  // throws ApiError 404
   nlohmann::json to_json(const DaemonJob& j) const;
   std::shared_ptr<const Program> program(const DaemonJob& j) const { return j.program; }
+  // The preview's height PNG and thinned path of a job's program (answer later).
+  void preview_png(std::int64_t id, int max_px, Respond respond);
+  void preview_path(std::int64_t id, std::size_t max_points, Respond respond);
 
   nlohmann::json start(std::int64_t id, const std::string& client);
   nlohmann::json generate(std::int64_t id);
@@ -116,6 +126,7 @@ class JobManager {
   double fraction(const DaemonJob& j) const;
   std::optional<double> eta(const DaemonJob& j) const;
   const EtaTable* eta_table(const DaemonJob& j) const;
+  std::shared_ptr<const Program> program_for_preview(std::int64_t id);
 
   boost::asio::io_context& io_;
   boost::asio::thread_pool& pool_;
@@ -140,6 +151,7 @@ class JobManager {
     double expires;
   };
   std::map<std::string, PendingPlan> plans_;
+  Previews previews_;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };
 

@@ -28,4 +28,20 @@ struct HeightMapOptions {
 RgbImage render_height_map(const MapGrid& grid, std::span<const double> values,
                            std::span<const std::uint8_t> invalid, const HeightMapOptions& options);
 
+// The map alone, for a client to draw under its own overlay: no frame,
+// legend or shading, so a pixel's colour is the viridis colour of its height
+// between z_min and z_max (a reader can tell the height back from it).
+struct HeightImageOptions {
+  int width = 0, height = 0;          // pixels, 1..8000 each
+  double z_min = 0, z_max = 0;        // the ramp's ends
+  Rgb no_data{205, 205, 205};
+};
+
+// values: grid.size() heights, NaN where there is none. The image spans the
+// nodes' centres exactly: pixel edges 0 and width lie on the first and last
+// column of nodes (x0 and x0 + (nx-1)dx), north (+y) up. Heights are blended
+// bilinearly between valid nodes; a pixel whose nearest node has no value is
+// no_data. Throws std::invalid_argument on a bad size or mismatched values.
+RgbImage render_height_image(const MapGrid& grid, std::span<const float> values, const HeightImageOptions& options);
+
 }  // namespace cncstream

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace cncstream {
@@ -41,6 +42,9 @@ class RgbImage {
 void write_png(const std::filesystem::path& path, const RgbImage& image);
 // Reads an 8-bit RGB/RGBA/grey PNG (tests look at what was written).
 RgbImage read_png(const std::filesystem::path& path);
+// The same in memory (a PNG sent over HTTP); both throw std::runtime_error.
+std::string encode_png(const RgbImage& image);
+RgbImage decode_png(std::string_view bytes);
 
 // t in [0, 1] -> colour.
 Rgb colormap_viridis(double t);

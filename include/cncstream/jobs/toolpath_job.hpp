@@ -11,6 +11,7 @@
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/gcode/finishing_program.hpp"
 #include "cncstream/geometry/mesh.hpp"
+#include "cncstream/jobs/height_preview.hpp"
 #include "cncstream/jobs/job_control.hpp"
 #include "cncstream/jobs/part_source.hpp"
 
@@ -43,6 +44,10 @@ struct ToolpathProgram {
   std::size_t facets = 0;
   Vec3 work_offset;  // model -> work coordinates
   Mesh work_mesh;    // the part placed in work coordinates (for a verify)
+  // The CL grid the rows were sampled from, resampled small (at most
+  // kPreviewSideMax nodes a side) in work coordinates, for a preview; the
+  // full grid is not kept (path.grid is empty).
+  HeightPreview preview;
   double seconds_load = 0, seconds_path = 0, seconds_gcode = 0;
 };
 
