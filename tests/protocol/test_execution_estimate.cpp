@@ -91,11 +91,23 @@ TEST(ExecutionEstimate, GrblProgressFollowsTheMotionNotTheAnswers) {
 
 TEST(ExecutionEstimate, MarlinUsesOkPlannerFree) {
   MarlinSession s(profile("marlin.toml"));
+  s.tick(0);
+  s.take_output();
+  s.on_bytes("ok\n", 0);  // M110's
   std::vector<std::string> lines;
   for (int i = 1; i <= 6; ++i) lines.push_back("G1X" + std::to_string(i) + "F500");
   s.start_job(prepare_program(lines, "slow.nc", 80), JobMode::Run, 0);
-  s.take_output();
-  s.on_bytes("ok N1 P15 B3\nok N2 P14 B3\nok N3 P13 B3\n", 0.1);  // 16 blocks: 3 queued
+  // One line in flight at a time (send_window 1); 16 planner blocks.
+  s.on_bytes("ok N1 P15 B3\n", 0.1);
+  s.on_bytes("ok N2 P14 B3\n", 0.2);
+  s.on_bytes("ok N3 P13 B3\n", 0.3);  // 3 queued: line 1 still runs
   EXPECT_EQ(s.progress().last_answered_line, 3);
   EXPECT_EQ(s.progress().executing_line, 1);
+  s.on_bytes("ok N4 P15 B3\n", 5);  // only line 4 left in the planner
+  EXPECT_EQ(s.progress().executing_line, 4);
+  s.on_bytes("ok N5\n", 6);  // no P: the planner is taken to be full
+  EXPECT_EQ(s.progress().executing_line, 4);
+  s.on_bytes("ok N6\n", 7);
+  EXPECT_EQ(s.progress().outcome, JobOutcome::Completed);
+  EXPECT_EQ(s.progress().executing_line, 6);  // completed: everything ran
 }
