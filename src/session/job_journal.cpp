@@ -47,6 +47,13 @@ void JobJournal::record(const std::string& reason) {
   dirty_ = false;
 }
 
+void JobJournal::end_now(const std::string& outcome, const std::string& message) {
+  if (!open_) return;
+  record("end");
+  journal_.end_job(job_id_, outcome, message);
+  open_ = false;
+}
+
 void JobJournal::on_event(const SessionEvent& e) {
   switch (e.kind) {
     case SessionEventKind::JobStarted: {

@@ -28,6 +28,10 @@ struct ResumeInput {
   std::int64_t last_line = 0;
   std::optional<Vec3> status_work_pos;
   std::int64_t status_line = 0;
+  // When the job was itself a resume: the line it continued after. If it
+  // answered no file line past it (killed in its preamble, before its first
+  // progress row), the same line is where to continue again.
+  std::int64_t resumed_after = 0;
   // The operator's choice: continue after this 1-based line; < 0: chosen from
   // the status report (see gcode::choose_resume_line).
   long from_line = -1;

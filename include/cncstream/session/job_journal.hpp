@@ -23,6 +23,9 @@ class JobJournal {
   // The journal id of the current or last job (0: none yet).
   std::int64_t job_id() const { return job_id_; }
   transport::Journal& journal() { return journal_; }
+  // Ends the current job's record now, with its end row, when the job did
+  // not end by itself (its runner gave up or failed with it still running).
+  void end_now(const std::string& outcome, const std::string& message);
 
  private:
   void on_event(const SessionEvent& e);

@@ -74,6 +74,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
         in.status_work_pos = Vec3{(*last->status_work_pos)[0], (*last->status_work_pos)[1], (*last->status_work_pos)[2]};
       in.status_line = last->status_line;
     }
+    if (rec->resumed_from > 0) in.resumed_after = rec->from_line;
     in.from_line = o->from_line;
     in.machine_safe_z = o->machine_safe_z;
     in.safe_z = o->safe_z;
