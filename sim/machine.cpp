@@ -200,8 +200,8 @@ void Machine::receive(std::string_view bytes) {
     const bool eol = c == '\n' || c == '\r';
     bool drop = f.drop_every && bytes_received_ % f.drop_every == 0;
     bool corrupt = !drop && f.corrupt_every && bytes_received_ % f.corrupt_every == 0;
-    if (line_byte && !drop && wire_fault(f.drop_byte_at, eol)) drop = true;
-    if (line_byte && !drop && !corrupt && wire_fault(f.corrupt_byte_at, eol)) corrupt = true;
+    if (line_byte && !drop && wire_fault(f.drop_byte_at, c, eol)) drop = true;
+    if (line_byte && !drop && !corrupt && wire_fault(f.corrupt_byte_at, c, eol)) corrupt = true;
     if (line_byte) ++arriving_offset_;
     if (drop) {
       ++applied_.dropped_bytes;
@@ -221,9 +221,12 @@ void Machine::receive(std::string_view bytes) {
   }
 }
 
-bool Machine::wire_fault(std::map<std::size_t, std::size_t>& at, bool eol) {
+bool Machine::wire_fault(std::map<std::size_t, ByteOfLine>& at, unsigned char c, bool eol) {
   const auto it = at.find(arriving_line_);
-  if (it == at.end() || !(it->second == kLineEnd ? eol : it->second == arriving_offset_)) return false;
+  if (it == at.end()) return false;
+  const ByteOfLine& b = it->second;
+  const bool hit = b.eol ? eol : b.letter ? c == static_cast<unsigned char>(b.letter) : arriving_offset_ == b.offset;
+  if (!hit) return false;
   at.erase(it);  // once: a merged line keeps this line's number
   return true;
 }

@@ -6,7 +6,9 @@
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <cctype>
 #include <csignal>
+#include <cstring>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -38,19 +40,24 @@ void parse_line_faults(const std::vector<std::string>& specs, const char* flag, 
   }
 }
 
-// "LINE:OFFSET" or "LINE:eol" for the wire faults at a point.
-void parse_byte_faults(const std::vector<std::string>& specs, const char* flag, std::map<std::size_t, std::size_t>& out) {
+// "LINE:OFFSET", "LINE:eol" or "LINE:X" (its first X) for the wire faults at a point.
+void parse_byte_faults(const std::vector<std::string>& specs, const char* flag,
+                       std::map<std::size_t, cncsim::ByteOfLine>& out) {
   for (const std::string& s : specs) {
     std::size_t line = 0, offset = 0;
     char tail = 0;
     char word[8] = {};
     if (std::sscanf(s.c_str(), "%zu:%zu%c", &line, &offset, &tail) == 2 && line > 0) {
-      out[line] = offset;
+      out[line] = cncsim::ByteOfLine::at(offset);
     } else if (std::sscanf(s.c_str(), "%zu:%4s%c", &line, word, &tail) == 2 && line > 0 && std::string(word) == "eol") {
-      out[line] = cncsim::kLineEnd;
+      out[line] = cncsim::ByteOfLine::end_of_line();
+    } else if (std::sscanf(s.c_str(), "%zu:%4s%c", &line, word, &tail) == 2 && line > 0 && std::strlen(word) == 1 &&
+               std::isalpha(static_cast<unsigned char>(word[0]))) {
+      out[line] = cncsim::ByteOfLine::first(static_cast<char>(std::toupper(static_cast<unsigned char>(word[0]))));
     } else {
       throw std::invalid_argument(std::string(flag) + " '" + s +
-                                  "': expected LINE:OFFSET (0-based byte of that line) or LINE:eol, LINE >= 1");
+                                  "': expected LINE:OFFSET (0-based byte of that line), LINE:eol or LINE:LETTER, "
+                                  "LINE >= 1");
     }
   }
 }
@@ -118,8 +125,9 @@ int main(int argc, char** argv) {
   app.add_option("--error-at", error_at, "LINE:E answer line LINE with error:E (repeatable)");
   app.add_option("--alarm-at", alarm_at, "LINE:A raise ALARM:A when line LINE arrives (repeatable)");
   app.add_option("--stall-at", stall_at, "LINE:S stop answering for S seconds at line LINE (repeatable)");
-  app.add_option("--drop-at", drop_at, "LINE:OFFSET drop that byte of line LINE, or LINE:eol its end of line (repeatable)");
-  app.add_option("--corrupt-at", corrupt_at, "LINE:OFFSET flip a bit in that byte of line LINE, or LINE:eol (repeatable)");
+  app.add_option("--drop-at", drop_at,
+                 "LINE:OFFSET drop that byte of line LINE; LINE:eol its end of line; LINE:X its first X (repeatable)");
+  app.add_option("--corrupt-at", corrupt_at, "LINE:OFFSET|eol|LETTER flip a bit in that byte of line LINE (repeatable)");
   app.add_option("--vanish-after", vanish_after, "close the pty after N answered lines");
   app.add_option("--homing-fail", homing_fail, "make $H fail with ALARM:A (6-9)")->check(CLI::Range(6, 9));
   app.add_option("--probe-z", probe_z, "G38.x touches the plane Z (machine coordinates)");

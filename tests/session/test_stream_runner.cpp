@@ -229,7 +229,7 @@ TEST(StreamRunner, GivingUpSaysHowFarTheJobGotAndJournalsItsEnd) {
   const auto prog = temp_dir() / "lost_eol.nc";
   std::ofstream(prog) << "G21 G90\nG1 X1 F500\nG1 X2\nG1 X3\n";
   SimulatorOptions so;
-  so.faults.drop_byte_at[2 + 4] = cncsim::kLineEnd;  // after $I and $$: the 4th file line
+  so.faults.drop_byte_at[2 + 4] = cncsim::ByteOfLine::end_of_line();  // after $I and $$: the 4th file line
   const auto sim = std::make_shared<SimulatorPort>(so);
   RunnerOptions o;
   o.machine_port = sim;

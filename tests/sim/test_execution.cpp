@@ -140,9 +140,12 @@ TEST(Execution, CheckModeRunsNothing) {
 
 TEST(Execution, WireFaultsAtAPointDamageOneLineOnce) {
   Faults f;
-  f.drop_byte_at[2] = 3;        // "N2 G1..." loses its 4th byte ('G')
-  f.corrupt_byte_at[3] = 1;     // "N3..." -> "N2...": the number itself
-  f.drop_byte_at[4] = kLineEnd; // N4 and N5 merge: one line, a repeated N word
+  f.drop_byte_at[2] = ByteOfLine::at(3);            // "N2 G1..." loses its 4th byte ('G')
+  f.corrupt_byte_at[3] = ByteOfLine::at(1);         // "N3..." -> "N2...": the number itself
+  f.drop_byte_at[4] = ByteOfLine::end_of_line();    // N4 and N5 merge: one line, a repeated N word
+  // From here a received line is one file line ahead: N4 and N5 came as one.
+  f.drop_byte_at[5] = ByteOfLine::first('Q');       // N6 has no Q: left alone
+  f.corrupt_byte_at[6] = ByteOfLine::first('X');    // N7's X -> Y: a repeated word
   Machine m = fast_machine(f);
   Recorder r;
   r.attach(m);
@@ -159,12 +162,13 @@ TEST(Execution, WireFaultsAtAPointDamageOneLineOnce) {
   }();
   ASSERT_EQ(answers.size(), 6u) << "one answer per line as the firmware saw them";
   EXPECT_EQ(answers[3], "error:25") << "merged N4N5: repeated word";
+  EXPECT_EQ(answers[5], "error:25") << "N7 with two Y words";
   EXPECT_EQ(m.faults_applied().dropped_bytes, 2u);
-  EXPECT_EQ(m.faults_applied().corrupted_bytes, 1u);
+  EXPECT_EQ(m.faults_applied().corrupted_bytes, 2u);
   // Damage the firmware cannot see runs, as on a real GRBL (no checksum):
   // N2 lost its G and ran as N21, N3's number became N2.
-  EXPECT_EQ(r.n, (std::vector<long>{1, 21, 2, 6, 7}));
-  EXPECT_TRUE(m.faults().drop_byte_at.empty());
+  EXPECT_EQ(r.n, (std::vector<long>{1, 21, 2, 6}));
+  EXPECT_EQ(m.faults().drop_byte_at.size(), 1u) << "N6's fault found no Q and waits";
   EXPECT_TRUE(m.faults().corrupt_byte_at.empty());
   EXPECT_EQ(m.lines_received(), 6u);
 }
@@ -179,4 +183,28 @@ TEST(Execution, StartsWhereASavedStateLeftTheTool) {
   m.run_until_idle();
   EXPECT_NEAR(m.machine_position().x, -9, 1e-9);
   EXPECT_NEAR(m.machine_position().y, -20, 1e-9);
+}
+
+// A feed hold at any moment of a job comes to rest (Hold:0): a streamer
+// waits for it before a controlled stop or a resume. The soak once found
+// the simulator in Hold:1 for ever with nothing left in its planner.
+TEST(Execution, AFeedHoldAtAnyMomentComesToRest) {
+  int stuck = 0;
+  std::string example;
+  for (int i = 0; i < 600; ++i) {
+    MachineOptions o;
+    Machine m(o);
+    m.take_output();
+    m.receive("G21 G90 G1 F2400\n");
+    for (int k = 1; k <= 6; ++k) m.receive(numbered_move(k) + "\n");
+    m.receive("N7 G2 X7 Y2 I1 J0\n");
+    m.advance(0.05 + i * 0.0075);
+    m.receive("!");
+    for (int k = 0; k < 200 && m.state_name() != "Hold:0" && m.state() == MachineState::Hold; ++k) m.advance(0.05);
+    if (m.state() == MachineState::Hold && m.state_name() != "Hold:0") {
+      ++stuck;
+      example = m.status_report() + " planner " + std::to_string(m.planner_blocks());
+    }
+  }
+  EXPECT_EQ(stuck, 0) << example;
 }

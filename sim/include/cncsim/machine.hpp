@@ -33,20 +33,27 @@ inline constexpr const char* kBanner = "Grbl 1.1h ['$' for help]";
 
 enum class MachineState { Idle, Run, Hold, Jog, Alarm, Door, Check, Home, Sleep };
 
-// A byte offset meaning "the end-of-line byte of that line" in the wire faults.
-inline constexpr std::size_t kLineEnd = std::numeric_limits<std::size_t>::max();
+// Which byte of a line a wire fault hits: by its offset (0-based, real-time
+// bytes not counted), the first byte equal to a letter, or the end of line
+// (the line then merges with the next and keeps this line's number).
+struct ByteOfLine {
+  std::size_t offset = 0;
+  char letter = 0;   // instead of the offset
+  bool eol = false;  // instead of the offset
+  static ByteOfLine at(std::size_t o) { return {o, 0, false}; }
+  static ByteOfLine first(char c) { return {0, c, false}; }
+  static ByteOfLine end_of_line() { return {0, 0, true}; }
+};
 
 // Faults on demand. Line numbers count the lines the firmware has received
 // (1-based, every line including empty ones).
 struct Faults {
   std::size_t drop_every = 0;     // drop every Nth received byte (0 = never)
   std::size_t corrupt_every = 0;  // flip a bit in every Nth received byte
-  // Wire damage at one point: line -> byte offset within it (0-based,
-  // real-time bytes not counted; kLineEnd: its end of line, so it merges
-  // with the next). Each applies once. A damaged end of line keeps the
-  // line's number for the merged line.
-  std::map<std::size_t, std::size_t> drop_byte_at;
-  std::map<std::size_t, std::size_t> corrupt_byte_at;
+  // Wire damage at one point: line -> the byte it hits. Each applies once
+  // (a line without the letter is left alone).
+  std::map<std::size_t, ByteOfLine> drop_byte_at;
+  std::map<std::size_t, ByteOfLine> corrupt_byte_at;
   std::map<std::size_t, int> error_at;     // line -> answer error:E instead of running it
   std::map<std::size_t, int> alarm_at;     // line -> raise ALARM:A when it arrives
   std::map<std::size_t, double> stall_at;  // line -> stop answering for S seconds
@@ -197,7 +204,7 @@ class Machine {
   void clear_planner();         // drops the planner's blocks: their lines did not run
   void forget_unanswered();     // lines that will never be answered (steps dropped)
   void complete_lines();
-  bool wire_fault(std::map<std::size_t, std::size_t>& at, bool eol);
+  bool wire_fault(std::map<std::size_t, ByteOfLine>& at, unsigned char c, bool eol);
 
   MachineOptions options_;
   PersistentStore store_;
