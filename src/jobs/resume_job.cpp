@@ -8,6 +8,12 @@
 
 namespace cncstream::jobs {
 
+namespace {
+// grblHAL's planner (firmware-profiles/grblhal.toml): the deepest a journal
+// that did not record the controller's may have had.
+constexpr std::size_t kDeepestPlanner = 35;
+}  // namespace
+
 ResumePlan plan_resume(const ResumeInput& in, const JobControl& control) {
   JobRun run(control);
   ResumePlan plan;
@@ -30,7 +36,9 @@ ResumePlan plan_resume(const ResumeInput& in, const JobControl& control) {
   } else if (n < 0) {
     std::optional<gcode::LastSeen> seen;
     if (in.status_work_pos) seen = gcode::LastSeen{*in.status_work_pos, static_cast<std::size_t>(in.status_line)};
-    const auto choice = gcode::choose_resume_line(trace, static_cast<std::size_t>(in.last_line), seen);
+    const std::size_t blocks = in.planner_blocks > 0 ? static_cast<std::size_t>(in.planner_blocks) : kDeepestPlanner;
+    const std::size_t window = blocks + 1 + 3 * static_cast<std::size_t>(std::max(in.error_answers, 0));
+    const auto choice = gcode::choose_resume_line(trace, static_cast<std::size_t>(in.last_line), seen, window);
     n = static_cast<long>(choice.after_line);
     plan.reason = choice.reason;
   }

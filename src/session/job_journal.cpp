@@ -60,7 +60,7 @@ void JobJournal::on_event(const SessionEvent& e) {
       const auto* engine = session_.engine();
       job_id_ = journal_.begin_job(std::filesystem::absolute(e.job->file).string(), e.job->file_sha256,
                                    engine ? engine->profile().id : "", port_label_, e.text, e.job->total_lines,
-                                   e.job->resumed_from, e.job->from_line);
+                                   e.job->resumed_from, e.job->from_line, engine ? engine->profile().planner_blocks : 0);
       open_ = true;
       dirty_ = false;
       status_work_pos_.reset();

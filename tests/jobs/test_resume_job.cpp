@@ -201,3 +201,35 @@ TEST(ResumeJob, AResumeThatRanNoFileLineContinuesWhereItWasToContinue) {
   EXPECT_EQ(jobs::plan_resume(in).from_line, 6);
   EXPECT_EQ(jobs::plan_resume(in).reason, "the controller last reported the tool at X10 Y5 Z-1, on line 7");
 }
+
+// The lines the controller may not have run reach back one planner queue
+// from the last report, and further for every error answer (up to three
+// program lines that took no planner block, see ResumeInput). The window
+// used to be 16 motion lines whatever the controller (grblHAL plans 35) and
+// whatever the errors: the soak found resumes after an error that skipped a
+// line that never ran.
+TEST(ResumeJob, TheWindowCoversThePlannerAndTheLinesAnsweredWithAnError) {
+  std::vector<std::string> prog = {"G21 G90 G94", "G0 Z1", "G1 Z-1 F300"};
+  for (int k = 4; k <= 63; ++k) prog.push_back("G1 X" + std::to_string(k - 3) + " F800");  // line k ends at X(k-3)
+  jobs::ResumeInput in;
+  in.file = "row.nc";
+  in.lines = prog;
+  in.last_line = 63;
+  in.planner_blocks = 15;
+  EXPECT_EQ(jobs::plan_resume(in).from_line, 47) << "no report: back off 16 motion lines";
+  in.error_answers = 1;
+  EXPECT_EQ(jobs::plan_resume(in).from_line, 44) << "one error: three more";
+  in.error_answers = 0;
+  in.planner_blocks = 0;
+  EXPECT_EQ(jobs::plan_resume(in).from_line, 27) << "planner unknown: grblHAL's 35 + 1";
+  // The last report put the tool on line 46, 18 motion lines back.
+  in.planner_blocks = 15;
+  in.status_work_pos = Vec3{42.5, 0, -1};
+  in.status_line = 63;
+  in.error_answers = 1;
+  const auto plan = jobs::plan_resume(in);
+  EXPECT_EQ(plan.from_line, 45);
+  EXPECT_EQ(plan.reason, "the controller last reported the tool at X42.5 Y0 Z-1, on line 46");
+  in.error_answers = 0;  // a window too short for it backs off from the last answered line instead
+  EXPECT_EQ(jobs::plan_resume(in).from_line, 47);
+}

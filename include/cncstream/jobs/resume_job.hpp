@@ -32,6 +32,16 @@ struct ResumeInput {
   // answered no file line past it (killed in its preamble, before its first
   // progress row), the same line is where to continue again.
   std::int64_t resumed_after = 0;
+  // The controller's planner depth (0: unknown, taken as the deepest of the
+  // shipped profiles, grblHAL's 35) and how many of the job's lines were
+  // answered with an error. An error answer stands for up to three motion
+  // lines of the program that took no planner block: the line itself, a
+  // second one merged into it by a lost end of line, and the next, which may
+  // move nowhere on the machine once the failed one did not move (a failed
+  // G0 Z2 makes the following G1 Z-1 a zero-length move). The lines the
+  // controller may not have run reach that much further back.
+  int planner_blocks = 0;
+  int error_answers = 0;
   // The operator's choice: continue after this 1-based line; < 0: chosen from
   // the status report (see gcode::choose_resume_line).
   long from_line = -1;
