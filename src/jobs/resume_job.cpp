@@ -37,10 +37,18 @@ ResumePlan plan_resume(const ResumeInput& in, const JobControl& control) {
     std::optional<gcode::LastSeen> seen;
     if (in.status_work_pos) seen = gcode::LastSeen{*in.status_work_pos, static_cast<std::size_t>(in.status_line)};
     const std::size_t blocks = in.planner_blocks > 0 ? static_cast<std::size_t>(in.planner_blocks) : kDeepestPlanner;
-    const std::size_t window = blocks + 1 + 3 * static_cast<std::size_t>(std::max(in.error_answers, 0));
+    const std::size_t window = blocks + 1 + 3 * in.error_lines.size();
     const auto choice = gcode::choose_resume_line(trace, static_cast<std::size_t>(in.last_line), seen, window);
     n = static_cast<long>(choice.after_line);
     plan.reason = choice.reason;
+    // A line that failed near the end never ran, though the machine may have
+    // gone on past it. (One further back was passed over on purpose: the
+    // job went on after it.)
+    for (const std::int64_t e : in.error_lines) {
+      if (e > n || in.last_line - e >= static_cast<std::int64_t>(window)) continue;  // runs again anyway, or long passed
+      n = static_cast<long>(e) - 1;
+      plan.reason += "; line " + std::to_string(e) + " was answered with an error and never ran: it runs again";
+    }
   }
   if (n >= plan.total_lines)
     throw std::invalid_argument("--from-line " + std::to_string(n) + ": " + in.file.string() + " has only " +

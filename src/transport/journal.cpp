@@ -271,11 +271,12 @@ std::optional<ProgressRecord> Journal::last_progress(std::int64_t job_id) const 
   return p;
 }
 
-std::int64_t Journal::progress_count(std::int64_t job_id, const std::string& reason) const {
-  Stmt s(db_, path_, "SELECT COUNT(*) FROM progress WHERE job_id=? AND reason=?");
+std::vector<std::int64_t> Journal::progress_lines(std::int64_t job_id, const std::string& reason) const {
+  Stmt s(db_, path_, "SELECT last_line FROM progress WHERE job_id=? AND reason=? ORDER BY id");
   s.bind(1, job_id).bind(2, reason);
-  s.step();
-  return s.i64(0);
+  std::vector<std::int64_t> out;
+  while (s.step()) out.push_back(s.i64(0));
+  return out;
 }
 
 std::int64_t Journal::progress_count(std::int64_t job_id) const {

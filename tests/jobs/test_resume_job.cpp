@@ -217,19 +217,26 @@ TEST(ResumeJob, TheWindowCoversThePlannerAndTheLinesAnsweredWithAnError) {
   in.last_line = 63;
   in.planner_blocks = 15;
   EXPECT_EQ(jobs::plan_resume(in).from_line, 47) << "no report: back off 16 motion lines";
-  in.error_answers = 1;
+  in.error_lines = {10};  // long before: the job went on after it
   EXPECT_EQ(jobs::plan_resume(in).from_line, 44) << "one error: three more";
-  in.error_answers = 0;
+  in.error_lines = {};
   in.planner_blocks = 0;
   EXPECT_EQ(jobs::plan_resume(in).from_line, 27) << "planner unknown: grblHAL's 35 + 1";
   // The last report put the tool on line 46, 18 motion lines back.
   in.planner_blocks = 15;
   in.status_work_pos = Vec3{42.5, 0, -1};
   in.status_line = 63;
-  in.error_answers = 1;
+  in.error_lines = {10};
   const auto plan = jobs::plan_resume(in);
   EXPECT_EQ(plan.from_line, 45);
   EXPECT_EQ(plan.reason, "the controller last reported the tool at X42.5 Y0 Z-1, on line 46");
-  in.error_answers = 0;  // a window too short for it backs off from the last answered line instead
+  in.error_lines = {};  // a window too short for it backs off from the last answered line instead
   EXPECT_EQ(jobs::plan_resume(in).from_line, 47);
+  // The machine went on past a line that failed: it runs again.
+  in.status_work_pos = Vec3{52.5, 0, -1};  // on line 56
+  in.error_lines = {53};
+  const auto past = jobs::plan_resume(in);
+  EXPECT_EQ(past.from_line, 52);
+  EXPECT_EQ(past.reason, "the controller last reported the tool at X52.5 Y0 Z-1, on line 56; line 53 was answered "
+                         "with an error and never ran: it runs again");
 }

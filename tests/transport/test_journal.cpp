@@ -211,9 +211,10 @@ TEST(Journal, KeepsThePlannerDepthAndCountsRowsByReason) {
   p.job_id = id;
   for (const char* reason : {"periodic", "error", "periodic", "error", "end"}) {
     p.reason = reason;
+    ++p.last_line;
     j.record_progress(p);
   }
-  EXPECT_EQ(j.progress_count(id, "error"), 2);
-  EXPECT_EQ(j.progress_count(id, "end"), 1);
+  EXPECT_EQ(j.progress_lines(id, "error"), (std::vector<std::int64_t>{2, 4}));
+  EXPECT_EQ(j.progress_lines(id, "end"), (std::vector<std::int64_t>{5}));
   EXPECT_EQ(j.progress_count(id), 5);
 }

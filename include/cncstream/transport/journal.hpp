@@ -100,7 +100,9 @@ class Journal {
   std::optional<JobRecord> job(std::int64_t id) const;
   std::optional<ProgressRecord> last_progress(std::int64_t job_id) const;
   std::int64_t progress_count(std::int64_t job_id) const;
-  std::int64_t progress_count(std::int64_t job_id, const std::string& reason) const;
+  // The last answered line of each of the job's rows with this reason, oldest first
+  // ("error": the lines answered with an error).
+  std::vector<std::int64_t> progress_lines(std::int64_t job_id, const std::string& reason) const;
 
   static std::string now_iso8601();
 

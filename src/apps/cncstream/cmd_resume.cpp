@@ -49,13 +49,13 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     if (!std::filesystem::exists(jpath)) throw std::invalid_argument("no journal at " + jpath.string());
     std::optional<transport::JobRecord> rec;
     std::optional<transport::ProgressRecord> last;
-    std::int64_t error_answers = 0;
+    std::vector<std::int64_t> error_lines;
     {
       transport::Journal j(jpath);
       rec = j.job(o->job);
       if (!rec) throw std::invalid_argument("no job " + std::to_string(o->job) + " in " + jpath.string());
       last = j.last_progress(o->job);
-      error_answers = j.progress_count(o->job, "error");
+      error_lines = j.progress_lines(o->job, "error");
     }
     const std::filesystem::path file = rec->file;
     if (!std::filesystem::exists(file))
@@ -78,7 +78,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     }
     if (rec->resumed_from > 0) in.resumed_after = rec->from_line;
     in.planner_blocks = static_cast<int>(rec->planner_blocks);
-    in.error_answers = static_cast<int>(error_answers);
+    in.error_lines = std::move(error_lines);
     in.from_line = o->from_line;
     in.machine_safe_z = o->machine_safe_z;
     in.safe_z = o->safe_z;
