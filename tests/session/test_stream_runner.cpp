@@ -253,3 +253,37 @@ TEST(StreamRunner, GivingUpSaysHowFarTheJobGotAndJournalsItsEnd) {
   EXPECT_EQ(last->last_line, 3);
   sim->finish(false);
 }
+
+// An error row names the line that failed. It used to take the last answered
+// line when the event was delivered, which could already be lines further
+// on when more answers came in the same read (found by the soak: a resume
+// then skipped the failed line).
+TEST(StreamRunner, AnErrorRowNamesTheLineThatFailed) {
+  const auto prog = temp_dir() / "error_row.nc";
+  {
+    std::ofstream f(prog);
+    f << "G21 G90 F3000\n";
+    for (int i = 1; i <= 30; ++i) f << "G1 X" << i % 7 << " Y" << i % 5 << "\n";
+  }
+  SimulatorOptions so;
+  so.faults.error_at[2 + 4] = 20;  // after $I and $$: file line 4
+  const auto sim = std::make_shared<SimulatorPort>(so);
+  RunnerOptions o;
+  o.machine_port = sim;
+  o.profiles_dir = CNCSTREAM_SOURCE_DIR "/firmware-profiles";
+  const auto journal = temp_dir() / "error_row.sqlite";
+  o.journal_path = journal;
+  o.max_run_s = 20;
+  StreamRunner* self = nullptr;
+  o.on_event = [&self](const cncstream::protocol::Event& e) {
+    if (e.kind == cncstream::protocol::EventKind::LineError && self) self->request_stop();
+  };
+  StreamRunner runner(o);
+  self = &runner;
+  const RunResult r = runner.run(prog);
+  EXPECT_EQ(r.outcome, JobOutcome::Error);
+  Journal j(journal);
+  EXPECT_EQ(j.progress_lines(r.job_id, "error"), (std::vector<std::int64_t>{4}));
+  EXPECT_GE(j.last_progress(r.job_id)->last_line, 4);
+  sim->finish(false);
+}

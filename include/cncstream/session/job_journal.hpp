@@ -29,7 +29,9 @@ class JobJournal {
 
  private:
   void on_event(const SessionEvent& e);
-  void record(const std::string& reason);
+  // `line`: the row's last_line when it is about one line (the one that
+  // failed); else the last answered line now.
+  void record(const std::string& reason, long line = 0);
 
   MachineSession& session_;
   transport::Journal journal_;

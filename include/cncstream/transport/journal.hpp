@@ -45,7 +45,7 @@ struct ProgressRecord {
   std::int64_t job_id = 0;
   std::string at;
   std::int64_t lines_ok = 0;   // file lines answered ok (blank lines count once passed)
-  std::int64_t last_line = 0;  // 1-based file line of the last answer
+  std::int64_t last_line = 0;  // 1-based file line of the last answer; an "error" row: the line that failed
   std::string reason;          // "periodic", "error", "alarm", "stop", "end", ...
   gcode::ParserState modal;  // modal groups, feed, spindle speed and tool (the rest is not kept)
   std::optional<std::array<double, 3>> wco;  // work offset the controller reported (MPos - WPos), mm
