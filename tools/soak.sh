@@ -19,9 +19,9 @@ CNCSOAK_LINES=${2:-1000000} CNCSOAK_FAULTS=${3:-60} CNCSOAK_SEED=${4:-16} \
   "$bin" --gtest_filter='Soak.*' >"$log" 2>&1
 code=$?
 set -e
-grep '^soak: ' "$log" | grep -v '^soak: job ' || true
+grep '^soak: ' "$log" | grep -v '^soak: job \|^soak:   ' || true
 echo "soak: jobs (resumed after line, planned fault -> outcome, last answered line, answered lines the simulator did not run | report):"
-grep '^soak: job ' "$log" | cut -c7-220 || true
+grep '^soak: job \|^soak:   ' "$log" | cut -c7-220 || true
 if [[ $code -ne 0 ]]; then
   sed -n '/Failure\|exception/,+12p' "$log"
   echo "soak: FAILED after $(( $(date +%s) - start )) s (full log: $log)"
