@@ -33,6 +33,10 @@ Machine::Machine(MachineOptions options) : options_(std::move(options)) {
   queue_.set_limits(store_.settings.motion_limits());
   parser_.coords = store_.coords;
   parser_.coord_system = store_.coords.wcs[0];
+  if (options_.start_position) {
+    queue_.set_position(*options_.start_position);
+    parser_.position = *options_.start_position;
+  }
   boot(true);
 }
 
@@ -48,7 +52,59 @@ void Machine::answer(int status) {
   if (vanished_) return;
   emit(status == 0 ? std::string("ok") : "error:" + std::to_string(status));
   ++lines_answered_;
-  if (options_.faults.vanish_after && lines_answered_ >= options_.faults.vanish_after) vanished_ = true;
+  line_answered(status == 0);
+  if (options_.faults.vanish_after && lines_answered_ >= options_.faults.vanish_after) {
+    vanished_ = true;
+    applied_.vanished = true;
+  }
+}
+
+// ---- execution accounting ---------------------------------------------------
+
+Machine::PendingLine* Machine::pending_line(std::size_t received) {
+  for (auto it = pending_lines_.rbegin(); it != pending_lines_.rend(); ++it)
+    if (it->received == received) return &*it;
+  return nullptr;
+}
+
+void Machine::line_answered(bool ok) {
+  // Lines are answered in the order they arrived: this answers the oldest unanswered one.
+  const auto it = std::find_if(pending_lines_.begin(), pending_lines_.end(), [](const PendingLine& p) { return !p.answered; });
+  if (it == pending_lines_.end()) return;
+  if (ok) it->answered = true;
+  else pending_lines_.erase(it);
+  complete_lines();
+}
+
+void Machine::blocks_completed(std::size_t n) {
+  for (; n > 0 && !planned_lines_.empty(); --n) {
+    if (PendingLine* p = pending_line(planned_lines_.front()); p && p->blocks_left > 0) --p->blocks_left;
+    planned_lines_.pop_front();
+  }
+  complete_lines();
+}
+
+void Machine::clear_planner() {
+  for (std::size_t received : planned_lines_)
+    std::erase_if(pending_lines_, [&](const PendingLine& p) { return p.received == received; });
+  planned_lines_.clear();
+  queue_.clear();
+  complete_lines();
+}
+
+void Machine::forget_unanswered() {
+  std::erase_if(pending_lines_, [](const PendingLine& p) { return !p.answered; });
+  complete_lines();
+}
+
+void Machine::complete_lines() {
+  while (!pending_lines_.empty() && pending_lines_.front().answered && pending_lines_.front().blocks_left == 0) {
+    const PendingLine done = pending_lines_.front();
+    pending_lines_.pop_front();
+    if (!done.runs) continue;
+    ++lines_executed_;
+    if (line_observer_) line_observer_(ExecutedLine{done.received, done.n});
+  }
 }
 
 std::string Machine::take_output() {
@@ -112,9 +168,10 @@ void Machine::soft_reset() {
     emit("ALARM:" + std::to_string(code));
   }
   const Vec3 where = queue_.position();
-  queue_.clear();
+  clear_planner();
   queue_.set_position(where);
   steps_.clear();
+  forget_unanswered();
   rx_.clear();
   assembler_.reset();
   critical_lock_ = false;
@@ -137,15 +194,41 @@ void Machine::receive(std::string_view bytes) {
     if (vanished_) return;
     auto c = static_cast<unsigned char>(ch);
     ++bytes_received_;
-    const Faults& f = options_.faults;
-    if (f.drop_every && bytes_received_ % f.drop_every == 0) continue;
-    if (f.corrupt_every && bytes_received_ % f.corrupt_every == 0) {
+    Faults& f = options_.faults;
+    // Real-time bytes are no part of a line: they move no line offset.
+    const bool line_byte = !is_realtime(c);
+    const bool eol = c == '\n' || c == '\r';
+    bool drop = f.drop_every && bytes_received_ % f.drop_every == 0;
+    bool corrupt = !drop && f.corrupt_every && bytes_received_ % f.corrupt_every == 0;
+    if (line_byte && !drop && wire_fault(f.drop_byte_at, c, eol)) drop = true;
+    if (line_byte && !drop && !corrupt && wire_fault(f.corrupt_byte_at, c, eol)) corrupt = true;
+    if (line_byte) ++arriving_offset_;
+    if (drop) {
+      ++applied_.dropped_bytes;
+      continue;
+    }
+    if (corrupt) {
       unsigned char flipped = c ^ 0x01;
       if (is_realtime(flipped)) flipped = c ^ 0x02;
       c = flipped;
+      ++applied_.corrupted_bytes;
+    }
+    if (line_byte && (c == '\n' || c == '\r')) {
+      ++arriving_line_;
+      arriving_offset_ = 0;
     }
     receive_byte(c);
   }
+}
+
+bool Machine::wire_fault(std::map<std::size_t, ByteOfLine>& at, unsigned char c, bool eol) {
+  const auto it = at.find(arriving_line_);
+  if (it == at.end()) return false;
+  const ByteOfLine& b = it->second;
+  const bool hit = b.eol ? eol : b.letter ? c == static_cast<unsigned char>(b.letter) : arriving_offset_ == b.offset;
+  if (!hit) return false;
+  at.erase(it);  // once: a merged line keeps this line's number
+  return true;
 }
 
 void Machine::receive_byte(unsigned char c) {
@@ -316,6 +399,8 @@ bool Machine::run_front_step() {
     case Step::Block:
       if (queue_.full()) return false;
       if (queue_.push(s.block)) {
+        planned_lines_.push_back(s.block.tag);
+        if (PendingLine* p = pending_line(s.block.tag)) ++p->blocks_left;
         if (s.jog && (state_ == MachineState::Idle || state_ == MachineState::Jog)) state_ = MachineState::Jog;
         else if (state_ == MachineState::Idle) state_ = MachineState::Run;
       }
@@ -391,8 +476,10 @@ void Machine::wait_instantly() {
 
 void Machine::process_line(const gc::CleanLine& line) {
   ++lines_received_;
+  pending_lines_.push_back({lines_received_, 0, 0, false, state_ != MachineState::Check});
   const Faults& f = options_.faults;
   if (auto it = f.stall_at.find(lines_received_); it != f.stall_at.end()) {
+    ++applied_.stalls;
     Step s;
     s.kind = Step::Delay;
     s.seconds = it->second;
@@ -400,6 +487,7 @@ void Machine::process_line(const gc::CleanLine& line) {
     steps_.push_back(s);
   }
   if (auto it = f.alarm_at.find(lines_received_); it != f.alarm_at.end()) {
+    ++applied_.alarms;
     if (it->second == grbl::kAlarmHardLimit || it->second == grbl::kAlarmSoftLimit) {
       raise_critical_alarm(it->second);
       return;  // the line is lost with the alarm; only a reset goes on
@@ -407,6 +495,7 @@ void Machine::process_line(const gc::CleanLine& line) {
     raise_alarm(it->second);
   }
   if (auto it = f.error_at.find(lines_received_); it != f.error_at.end()) {
+    ++applied_.errors;
     steps_.push_back({Step::Emit, {}, 0, "error:" + std::to_string(it->second), {}, false, 0});
     return;
   }
@@ -426,6 +515,7 @@ void Machine::process_gcode(const std::string& text) {
     steps_.push_back({Step::Emit, {}, 0, "error:" + std::to_string(r.status), {}, false, 0});
     return;
   }
+  pending_lines_.back().n = r.state.line_number;
   queue_actions(r);
   if (critical_lock_) return;
   steps_.push_back({Step::Emit, {}, 0, "", {}, false, 0});
@@ -540,7 +630,7 @@ void Machine::queue_actions(const gc::BlockResult& r) {
 void Machine::raise_alarm(int code) {
   if (!queue_.empty()) {
     const Vec3 where = queue_.position();
-    queue_.clear();
+    clear_planner();
     queue_.set_position(where);
     parser_.position = where;
   }
@@ -552,10 +642,11 @@ void Machine::raise_critical_alarm(int code) {
   // Hard limit: dead stop. Soft limit: the target was refused before moving
   // (the firmware holds first; any motion left is dropped with the alarm).
   const Vec3 where = queue_.position();
-  queue_.clear();
+  clear_planner();
   queue_.set_position(where);
   parser_.position = where;
   steps_.clear();
+  forget_unanswered();
   state_ = MachineState::Alarm;
   critical_lock_ = true;
   emit("ALARM:" + std::to_string(code));
@@ -740,9 +831,10 @@ void Machine::start_homing() {
       emit("ALARM:" + std::to_string(failure));
       steps_.clear();
       answer(0);  // the firmware still answers $H before its reset banner
+      forget_unanswered();
       state_ = MachineState::Alarm;
       const Vec3 where = queue_.position();
-      queue_.clear();
+      clear_planner();
       queue_.set_position(where);
       rx_.clear();
       assembler_.reset();
@@ -797,6 +889,7 @@ void Machine::advance_motion(double dt, bool stop_after_block) {
   const auto r = queue_.advance(dt, observer_ ? gc::MotionQueue::Traverse(traverse) : gc::MotionQueue::Traverse{},
                                 stop_after_block);
   now_ += r.time;
+  if (r.completed > 0) blocks_completed(r.completed);
 }
 
 void Machine::after_motion() {
@@ -804,7 +897,7 @@ void Machine::after_motion() {
     if (jog_cancel_) {
       // Jog cancel: flush the planner and sync the parser to where we stopped.
       const Vec3 where = queue_.position();
-      queue_.clear();
+      clear_planner();
       queue_.set_position(where);
       parser_.position = where;
       jog_cancel_ = false;

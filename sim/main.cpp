@@ -1,11 +1,14 @@
 // cncsim: a GRBL 1.1h router on a pseudo-terminal.
 //   cncsim [--link PATH] [--speed K|max] [--settings FILE] [--strict] [faults] [stock]
-//          (with --design: verify the cut at exit; --result writes it as .f32 and .stl)
+//          (with --design: verify the cut at exit; --result writes it as .f32 and .stl;
+//          --stock-from RESULT.f32 --position X,Y,Z start from a saved state)
 //   cncsim verify --design part.stl --result RESULT.f32 [--tolerance T] [--png MAP.png]
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <cctype>
 #include <csignal>
+#include <cstring>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -37,6 +40,58 @@ void parse_line_faults(const std::vector<std::string>& specs, const char* flag, 
   }
 }
 
+// "LINE:OFFSET", "LINE:eol" or "LINE:X" (its first X) for the wire faults at a point.
+void parse_byte_faults(const std::vector<std::string>& specs, const char* flag,
+                       std::map<std::size_t, cncsim::ByteOfLine>& out) {
+  for (const std::string& s : specs) {
+    std::size_t line = 0, offset = 0;
+    char tail = 0;
+    char word[8] = {};
+    if (std::sscanf(s.c_str(), "%zu:%zu%c", &line, &offset, &tail) == 2 && line > 0) {
+      out[line] = cncsim::ByteOfLine::at(offset);
+    } else if (std::sscanf(s.c_str(), "%zu:%4s%c", &line, word, &tail) == 2 && line > 0 && std::string(word) == "eol") {
+      out[line] = cncsim::ByteOfLine::end_of_line();
+    } else if (std::sscanf(s.c_str(), "%zu:%4s%c", &line, word, &tail) == 2 && line > 0 && std::strlen(word) == 1 &&
+               std::isalpha(static_cast<unsigned char>(word[0]))) {
+      out[line] = cncsim::ByteOfLine::first(static_cast<char>(std::toupper(static_cast<unsigned char>(word[0]))));
+    } else {
+      throw std::invalid_argument(std::string(flag) + " '" + s +
+                                  "': expected LINE:OFFSET (0-based byte of that line), LINE:eol or LINE:LETTER, "
+                                  "LINE >= 1");
+    }
+  }
+}
+
+cncstream::Vec3 parse_position(const std::string& text) {
+  cncstream::Vec3 p;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &p.x, &p.y, &p.z, &tail) != 3)
+    throw std::invalid_argument("--position '" + text + "': expected X,Y,Z (mm, machine coordinates)");
+  return p;
+}
+
+// How often each N word ran: a program numbered N1..Nk streamed once and
+// in full runs each exactly once.
+struct NumberedTally {
+  std::vector<std::uint32_t> times;  // times[N]
+  void add(long n) {
+    if (n <= 0) return;
+    if (static_cast<std::size_t>(n) >= times.size()) times.resize(static_cast<std::size_t>(n) + 1, 0);
+    ++times[static_cast<std::size_t>(n)];
+  }
+  std::string summary() const {
+    std::size_t distinct = 0, again = 0, missing = 0;
+    for (std::size_t n = 1; n < times.size(); ++n) {
+      if (times[n] == 0) ++missing;
+      else ++distinct;
+      if (times[n] > 1) ++again;
+    }
+    if (distinct == 0) return "";
+    return "numbered lines: " + std::to_string(distinct) + " of N1..N" + std::to_string(times.size() - 1) + " ran, " +
+           std::to_string(missing) + " never, " + std::to_string(again) + " more than once";
+  }
+};
+
 int run_verify(const std::string& design_path, const std::string& result_path, double tolerance,
                const std::string& png) {
   const auto design = cncstream::load_stl(design_path).mesh;
@@ -59,7 +114,8 @@ int main(int argc, char** argv) {
   int homing_fail = 0;
   double resolution = 0.1;
   std::optional<double> probe_z;
-  std::vector<std::string> error_at, alarm_at, stall_at;
+  std::vector<std::string> error_at, alarm_at, stall_at, drop_at, corrupt_at;
+  std::string stock_from, position_text;
   app.add_option("--link", link, "make PATH a symlink to the pty slave");
   app.add_option("--speed", speed_text, "time scale: K (1 = real time) or 'max'");
   app.add_option("--settings", settings_path, "settings file ($$, G10/G28.1/G30.1 data, $N lines) kept across runs");
@@ -69,6 +125,9 @@ int main(int argc, char** argv) {
   app.add_option("--error-at", error_at, "LINE:E answer line LINE with error:E (repeatable)");
   app.add_option("--alarm-at", alarm_at, "LINE:A raise ALARM:A when line LINE arrives (repeatable)");
   app.add_option("--stall-at", stall_at, "LINE:S stop answering for S seconds at line LINE (repeatable)");
+  app.add_option("--drop-at", drop_at,
+                 "LINE:OFFSET drop that byte of line LINE; LINE:eol its end of line; LINE:X its first X (repeatable)");
+  app.add_option("--corrupt-at", corrupt_at, "LINE:OFFSET|eol|LETTER flip a bit in that byte of line LINE (repeatable)");
   app.add_option("--vanish-after", vanish_after, "close the pty after N answered lines");
   app.add_option("--homing-fail", homing_fail, "make $H fail with ALARM:A (6-9)")->check(CLI::Range(6, 9));
   app.add_option("--probe-z", probe_z, "G38.x touches the plane Z (machine coordinates)");
@@ -77,6 +136,8 @@ int main(int argc, char** argv) {
   app.add_option("--resolution", resolution, "stock grid step, mm")->check(CLI::PositiveNumber);
   app.add_option("--tool", tool_spec, "cutter spec, e.g. ball:3.175, flat:6, bull:6:1");
   app.add_option("--result", result_path, "write the machined surface here on exit (.f32 + .f32.txt, and .stl)");
+  app.add_option("--stock-from", stock_from, "start with this machined surface (a --result .f32 of an earlier run) as the stock");
+  app.add_option("--position", position_text, "start with the tool here, X,Y,Z machine mm (where an earlier run stopped)");
   std::string tool_table_text, png_path;
   double tolerance = 0.05;
   app.add_option("--tool-table", tool_table_text,
@@ -107,6 +168,9 @@ int main(int argc, char** argv) {
     parse_line_faults(error_at, "--error-at", options.faults.error_at);
     parse_line_faults(alarm_at, "--alarm-at", options.faults.alarm_at);
     parse_line_faults(stall_at, "--stall-at", options.faults.stall_at);
+    parse_byte_faults(drop_at, "--drop-at", options.faults.drop_byte_at);
+    parse_byte_faults(corrupt_at, "--corrupt-at", options.faults.corrupt_byte_at);
+    if (!position_text.empty()) options.start_position = parse_position(position_text);
     cncsim::PtyOptions pty;
     if (!link.empty()) pty.link = link;
     if (speed_text == "max") {
@@ -122,7 +186,15 @@ int main(int argc, char** argv) {
     std::unique_ptr<cncsim::MaterialRemoval> removal;
     std::optional<cncstream::Mesh> design;
     if (!design_path.empty()) design = cncstream::load_stl(design_path).mesh;
-    if (!stock_text.empty() || design) {
+    if (!stock_from.empty()) {
+      // A saved state: the surface an earlier run left is the stock.
+      if (!stock_text.empty()) throw std::invalid_argument("--stock-from and --stock: give one");
+      const auto field = cncstream::read_height_field(stock_from);
+      removal = std::make_unique<cncsim::MaterialRemoval>(cncsim::stock_from_heights(field.grid, field.z),
+                                                          cncstream::parse_cutter_spec(tool_spec));
+      if (!tool_table_text.empty()) removal->set_tool_table(cncsim::parse_tool_table(tool_table_text));
+      if (!options.probe_surface_z) options.probe_surface_z = removal->stock().top();
+    } else if (!stock_text.empty() || design) {
       const cncstream::Cutter cutter = cncstream::parse_cutter_spec(tool_spec);
       const cncsim::StockBox box = !stock_text.empty() ? cncsim::parse_stock_box(stock_text, resolution)
                                                        : cncsim::stock_box_for(*design, resolution);
@@ -135,6 +207,8 @@ int main(int argc, char** argv) {
     }
     cncsim::Machine machine(options);
     if (removal) removal->attach(machine);
+    NumberedTally tally;
+    machine.set_line_observer([&tally](const cncsim::ExecutedLine& l) { tally.add(l.n); });
 
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
@@ -150,9 +224,18 @@ int main(int argc, char** argv) {
       code = 2;
     }
     std::cerr << "cncsim: " << machine.lines_received() << " lines received, " << machine.lines_answered()
-              << " answered, " << machine.rx_bytes_dropped() << " RX bytes dropped";
+              << " answered, " << machine.lines_executed() << " executed, " << machine.rx_bytes_dropped()
+              << " RX bytes dropped";
     if (removal) std::cerr << ", " << removal->stock().removed_volume() << " mm^3 removed";
     std::cerr << "\n";
+    if (const auto numbered = tally.summary(); !numbered.empty()) std::cerr << "cncsim: " << numbered << "\n";
+    {
+      const auto m = machine.machine_position();
+      char pos[128];
+      std::snprintf(pos, sizeof pos, "cncsim: final position MPos %.4f,%.4f,%.4f, state %s\n", m.x, m.y, m.z,
+                    machine.state_name().c_str());
+      std::cerr << pos;
+    }
     if (removal) {
       for (int t : removal->unknown_tools())
         std::cerr << "cncsim: warning: T" << t << " is not in the tool table; the cutter was kept\n";

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/inotify.h>
 #include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
@@ -35,6 +36,12 @@ PtyFrontEnd::PtyFrontEnd(Machine& machine, PtyOptions options)
   cfsetospeed(&tio, B115200);
   if (tcsetattr(slave_keepalive_, TCSANOW, &tio) != 0) throw PtyError(errno_text("tcsetattr"));
   fcntl(master_, F_SETFL, fcntl(master_, F_GETFL) | O_NONBLOCK);
+  // Without inotify the pty still works; only a killed host's exclusive mode stays.
+  host_watch_ = inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
+  if (host_watch_ >= 0 && inotify_add_watch(host_watch_, name, IN_OPEN | IN_CLOSE_WRITE | IN_CLOSE_NOWRITE) < 0) {
+    close(host_watch_);
+    host_watch_ = -1;
+  }
   if (options_.link) {
     std::error_code ec;
     std::filesystem::remove(*options_.link, ec);
@@ -46,9 +53,10 @@ PtyFrontEnd::PtyFrontEnd(Machine& machine, PtyOptions options)
 PtyFrontEnd::~PtyFrontEnd() { close_all(); }
 
 void PtyFrontEnd::close_all() {
+  if (host_watch_ >= 0) close(host_watch_);
   if (master_ >= 0) close(master_);
   if (slave_keepalive_ >= 0) close(slave_keepalive_);
-  master_ = slave_keepalive_ = -1;
+  master_ = slave_keepalive_ = host_watch_ = -1;
   if (options_.link) {
     std::error_code ec;
     if (std::filesystem::is_symlink(*options_.link, ec)) std::filesystem::remove(*options_.link, ec);
@@ -67,6 +75,23 @@ void PtyFrontEnd::flush_output() {
   }
 }
 
+void PtyFrontEnd::watch_host() {
+  alignas(inotify_event) char buf[4096];
+  for (;;) {
+    const ssize_t n = read(host_watch_, buf, sizeof buf);
+    if (n <= 0) return;
+    for (ssize_t at = 0; at < n;) {
+      const auto* e = reinterpret_cast<const inotify_event*>(buf + at);
+      if (e->mask & IN_OPEN) ++host_opens_;
+      if (e->mask & (IN_CLOSE_WRITE | IN_CLOSE_NOWRITE)) {
+        host_opens_ = host_opens_ > 0 ? host_opens_ - 1 : 0;
+        if (host_opens_ == 0) ioctl(slave_keepalive_, TIOCNXCL);
+      }
+      at += static_cast<ssize_t>(sizeof(inotify_event) + e->len);
+    }
+  }
+}
+
 PtyFrontEnd::Exit PtyFrontEnd::run(const std::atomic<bool>& stop) {
   using clock = std::chrono::steady_clock;
   const bool max_speed = options_.speed <= 0;
@@ -76,9 +101,11 @@ PtyFrontEnd::Exit PtyFrontEnd::run(const std::atomic<bool>& stop) {
   char buf[4096];
   while (!stop.load()) {
     flush_output();
-    pollfd p{master_, POLLIN, 0};
+    pollfd fds[2] = {{master_, POLLIN, 0}, {host_watch_, POLLIN, 0}};
     const int timeout_ms = machine_.busy() || !pending_out_.empty() ? 1 : 10;
-    poll(&p, 1, timeout_ms);
+    poll(fds, host_watch_ >= 0 ? 2 : 1, timeout_ms);
+    if (fds[1].revents & POLLIN) watch_host();
+    const pollfd& p = fds[0];
     if (p.revents & POLLIN) {
       for (;;) {
         const ssize_t n = read(master_, buf, sizeof buf);

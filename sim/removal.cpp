@@ -38,6 +38,11 @@ MaterialRemoval::MaterialRemoval(const StockBox& box, const cncstream::Cutter& c
       cutter_(cutter),
       bottom_(box.lo.z) {}
 
+MaterialRemoval::MaterialRemoval(cncstream::HeightFieldStock stock, const cncstream::Cutter& cutter)
+    : stock_(std::move(stock)), cutter_(cutter), bottom_(stock_.top()) {
+  for (double z : stock_.heights()) bottom_ = std::min(bottom_, z - 1.0);
+}
+
 ToolTable parse_tool_table(const std::string& text) {
   ToolTable table;
   auto trim = [](const std::string& s) {

@@ -131,7 +131,8 @@ MotionQueue::Advance MotionQueue::advance(double dt, const Traverse& on_traverse
       position_ = b.src.to;
       blocks_.pop_front();
       ++result.completed;
-      if (!blocks_.empty()) replan();
+      if (blocks_.empty()) speed_ = 0;
+      else replan();
       if (stop_after_block) break;
       continue;
     }
@@ -205,7 +206,10 @@ MotionQueue::Advance MotionQueue::advance(double dt, const Traverse& on_traverse
       blocks_.pop_front();
       ++result.completed;
       if (blocks_.empty()) {
-        if (!holding_) speed_ = 0;
+        // The end of the last block is a stop, held or not: a hold that was
+        // braking into it is complete (rounding may leave a sliver of speed
+        // with no block left to shed it in, and the hold would never end).
+        speed_ = 0;
       } else {
         replan();
       }

@@ -80,13 +80,33 @@ std::vector<std::string> resume_preamble(const ParserState& at, const ResumeOpti
   switch (m.motion) {
     case MotionMode::Rapid: l << "G0"; break;
     case MotionMode::Linear: l << "G1"; break;
-    case MotionMode::ArcCW: l << "G2"; break;
-    case MotionMode::ArcCCW: l << "G3"; break;
     case MotionMode::None: l << "G80"; break;
-    default: break;  // probing is never modal across lines in practice
+    default: break;  // arcs: with_modal_arc; probing is never modal across lines in practice
   }
   if (!l.str().empty()) emit();
   return out;
+}
+
+std::optional<ModalArcFix> with_modal_arc(std::span<const std::string> lines_after, MotionMode mode) {
+  if (mode != MotionMode::ArcCW && mode != MotionMode::ArcCCW) return std::nullopt;
+  for (std::size_t i = 0; i < lines_after.size(); ++i) {
+    const CleanLine clean = clean_line(lines_after[i]);
+    const LexResult lex = lex_words(clean.text);
+    if (lex.status != 0) return std::nullopt;  // the controller rejects it anyway
+    bool axis = false, names_motion = false, non_modal_axes = false;
+    for (const Word& w : lex.words) {
+      if (w.letter == 'X' || w.letter == 'Y' || w.letter == 'Z') axis = true;
+      if (w.letter != 'G') continue;
+      const double g = w.value;
+      if (g == 0 || g == 1 || g == 2 || g == 3 || g == 80 || (g > 38 && g < 39)) names_motion = true;
+      // G10, G28, G30, G53 with a motion, G92: their axis words are no motion in the modal mode.
+      if (g == 10 || g == 28 || g == 30 || g == 92 || (g > 28 && g < 29) || (g > 30 && g < 31) || (g > 92 && g < 93))
+        non_modal_axes = true;
+    }
+    if (names_motion) return std::nullopt;
+    if (axis && !non_modal_axes) return ModalArcFix{i, (mode == MotionMode::ArcCW ? "G2 " : "G3 ") + lines_after[i]};
+  }
+  return std::nullopt;
 }
 
 namespace {

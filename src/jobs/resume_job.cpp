@@ -8,6 +8,12 @@
 
 namespace cncstream::jobs {
 
+namespace {
+// grblHAL's planner (firmware-profiles/grblhal.toml): the deepest a journal
+// that did not record the controller's may have had.
+constexpr std::size_t kDeepestPlanner = 35;
+}  // namespace
+
 ResumePlan plan_resume(const ResumeInput& in, const JobControl& control) {
   JobRun run(control);
   ResumePlan plan;
@@ -23,12 +29,26 @@ ResumePlan plan_resume(const ResumeInput& in, const JobControl& control) {
   run.stage("choose line", 0.6, 0.7);
   plan.reason = "--from-line";
   long n = in.from_line;
-  if (n < 0) {
+  if (n < 0 && in.resumed_after > 0 && in.last_line <= in.resumed_after) {
+    n = static_cast<long>(in.resumed_after);
+    plan.reason = "the job resumed after line " + std::to_string(n) +
+                  " and ran no file line past it (it ended in its preamble): continuing there again";
+  } else if (n < 0) {
     std::optional<gcode::LastSeen> seen;
     if (in.status_work_pos) seen = gcode::LastSeen{*in.status_work_pos, static_cast<std::size_t>(in.status_line)};
-    const auto choice = gcode::choose_resume_line(trace, static_cast<std::size_t>(in.last_line), seen);
+    const std::size_t blocks = in.planner_blocks > 0 ? static_cast<std::size_t>(in.planner_blocks) : kDeepestPlanner;
+    const std::size_t window = blocks + 1 + 3 * in.error_lines.size();
+    const auto choice = gcode::choose_resume_line(trace, static_cast<std::size_t>(in.last_line), seen, window);
     n = static_cast<long>(choice.after_line);
     plan.reason = choice.reason;
+    // A line that failed near the end never ran, though the machine may have
+    // gone on past it. (One further back was passed over on purpose: the
+    // job went on after it.)
+    for (const std::int64_t e : in.error_lines) {
+      if (e > n || in.last_line - e >= static_cast<std::int64_t>(window)) continue;  // runs again anyway, or long passed
+      n = static_cast<long>(e) - 1;
+      plan.reason += "; line " + std::to_string(e) + " was answered with an error and never ran: it runs again";
+    }
   }
   if (n >= plan.total_lines)
     throw std::invalid_argument("--from-line " + std::to_string(n) + ": " + in.file.string() + " has only " +
@@ -56,9 +76,15 @@ ResumePlan plan_resume(const ResumeInput& in, const JobControl& control) {
     plan.lines.push_back(l);
     plan.source_lines.push_back(n);
   }
+  const std::size_t first = plan.lines.size();
   for (long k = n; k < plan.total_lines; ++k) {
     plan.lines.push_back(in.lines[static_cast<std::size_t>(k)]);
     plan.source_lines.push_back(k + 1);
+  }
+  // An arc mode the preamble could not restore: the first line moving in it names it.
+  if (plan.state.modal.motion == gcode::MotionMode::ArcCW || plan.state.modal.motion == gcode::MotionMode::ArcCCW) {
+    const std::span<const std::string> after(plan.lines.data() + first, plan.lines.size() - first);
+    if (const auto fix = gcode::with_modal_arc(after, plan.state.modal.motion)) plan.lines[first + fix->index] = fix->line;
   }
   run.finish();
   return plan;

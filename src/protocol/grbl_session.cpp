@@ -3,6 +3,8 @@
 #include "cncstream/protocol/pattern.hpp"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 
@@ -12,6 +14,9 @@ namespace {
 
 constexpr double kResetTimeout = 3.0;  // banner expected within this after 0x18
 constexpr double kDrainPollInterval = 0.2;  // status requests while the last moves run out
+// An idle controller answers a line at once; after this long (plus the
+// line's own dwell) its silence means the line, or its answer, was lost.
+constexpr double kSilenceLimit = 10.0;
 
 std::string describe(const CodeInfo& c, const char* kind) {
   return std::string(kind) + std::to_string(c.code) + " (" + c.name + "): " + c.text + " What to do: " + c.action;
@@ -120,6 +125,8 @@ void GrblSession::on_line(std::string_view line, double now) {
 }
 
 void GrblSession::on_answer(bool ok, int code, double) {
+  waiting_since_ = now_;
+  silence_reported_ = false;
   auto line = counter_.answer();
   if (!line) {
     emit({EventKind::Warning, std::string("'") + (ok ? "ok" : "error:" + std::to_string(code)) +
@@ -290,6 +297,8 @@ void GrblSession::on_status(const StatusReport& raw) {
   const bool hold_unmoved = r.state == MachineState::Hold && r.substate < 0 && r.mpos && last_mpos_ &&
                             *r.mpos == *last_mpos_;
   last_mpos_ = r.mpos;
+  idle_in_row_ = r.state == MachineState::Idle ? idle_in_row_ + 1 : 0;
+  check_silence();
   if (draining_ && progress_.state == JobState::Running) {
     idle_reports_ = r.state == MachineState::Idle ? idle_reports_ + 1 : 0;
     if (idle_reports_ >= 2) {
@@ -310,6 +319,30 @@ void GrblSession::on_status(const StatusReport& raw) {
   }
 }
 
+void GrblSession::check_silence() {
+  if (silence_reported_ || !is_active(progress_.state) || expect_reset_ || idle_in_row_ < 2 ||
+      in_flight_of(Origin::File) == 0)
+    return;
+  const PreparedLine& oldest = counter_.in_flight().front();
+  // A dwell keeps GRBL idle and silent for its P seconds.
+  double limit = kSilenceLimit;
+  if (const auto g4 = oldest.text.find("G4"); g4 != std::string::npos) {
+    if (const auto p = oldest.text.find('P', g4); p != std::string::npos) limit += std::atof(oldest.text.c_str() + p + 1);
+  }
+  if (now_ - waiting_since_ < limit) return;
+  silence_reported_ = true;
+  char secs[32];
+  std::snprintf(secs, sizeof secs, "%.0f", now_ - waiting_since_);
+  Event e{EventKind::Warning, "no answer to line " + std::to_string(oldest.source_line) + " '" + oldest.text +
+                                  "' for " + secs +
+                                  " s although the controller is idle: the line or its answer was lost on the wire "
+                                  "(a dropped end of line never completes). The job cannot go on by itself: stop it "
+                                  "and resume it from the journal."};
+  e.source_line = oldest.source_line;
+  e.line_text = oldest.text;
+  emit(std::move(e));
+}
+
 void GrblSession::soft_reset() {
   write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::SoftReset).value_or(0x18))));
   expect_reset_ = true;
@@ -328,6 +361,7 @@ void GrblSession::pump() {
                        (progress_.state != JobState::Running && progress_.state != JobState::Stopping);
       if (may) {
         if (!counter_.can_send(line)) return;
+        if (counter_.in_flight_count() == 0) waiting_since_ = now_;
         write(counter_.send(line));
         in_flight_origin_.push_back(origin);
         commands_.pop_front();
@@ -345,6 +379,7 @@ void GrblSession::pump() {
         continue;
       }
       if (!counter_.can_send(line)) return;
+      if (counter_.in_flight_count() == 0) waiting_since_ = now_;
       write(counter_.send(line));
       in_flight_origin_.push_back(Origin::File);
       ++next_index_;

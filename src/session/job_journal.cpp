@@ -26,7 +26,7 @@ JobJournal::JobJournal(MachineSession& session, const std::filesystem::path& db,
   sub_ = session_.subscribe([this](const SessionEvent& e) { on_event(e); });
 }
 
-void JobJournal::record(const std::string& reason) {
+void JobJournal::record(const std::string& reason, long line) {
   const auto* engine = session_.engine();
   if (!open_ || !engine) return;
   transport::ProgressRecord p;
@@ -34,7 +34,7 @@ void JobJournal::record(const std::string& reason) {
   // A check pass moves nothing: its lines are not progress a resume could skip.
   const bool checking = engine->progress().mode == protocol::JobMode::Check;
   p.lines_ok = checking ? 0 : static_cast<std::int64_t>(engine->progress().lines_answered);
-  p.last_line = checking ? 0 : engine->progress().last_answered_line;
+  p.last_line = checking ? 0 : line > 0 ? line : engine->progress().last_answered_line;
   p.reason = reason;
   p.modal = engine->modal();
   if (const auto st = session_.status(); st && st->wco)
@@ -47,13 +47,20 @@ void JobJournal::record(const std::string& reason) {
   dirty_ = false;
 }
 
+void JobJournal::end_now(const std::string& outcome, const std::string& message) {
+  if (!open_) return;
+  record("end");
+  journal_.end_job(job_id_, outcome, message);
+  open_ = false;
+}
+
 void JobJournal::on_event(const SessionEvent& e) {
   switch (e.kind) {
     case SessionEventKind::JobStarted: {
       const auto* engine = session_.engine();
       job_id_ = journal_.begin_job(std::filesystem::absolute(e.job->file).string(), e.job->file_sha256,
                                    engine ? engine->profile().id : "", port_label_, e.text, e.job->total_lines,
-                                   e.job->resumed_from, e.job->from_line);
+                                   e.job->resumed_from, e.job->from_line, engine ? engine->profile().planner_blocks : 0);
       open_ = true;
       dirty_ = false;
       status_work_pos_.reset();
@@ -85,6 +92,10 @@ void JobJournal::on_event(const SessionEvent& e) {
     }
   } else if (ev.kind == EventKind::JobFinished) {
     return;  // the end row comes with JobEnded
+  } else if (ev.kind == EventKind::LineError) {
+    // The line that failed: by the time the event is delivered the engine
+    // may have taken more answers from the same read.
+    record(reason_for(ev.kind), ev.source_line);
   } else if (ev.kind != EventKind::Info && ev.kind != EventKind::Warning && ev.kind != EventKind::CommandAnswered) {
     record(reason_for(ev.kind));
   }

@@ -78,7 +78,7 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
   if (let_motion_finish && fatal_.empty()) machine_->run_until_idle();
   std::ostringstream o;
   o << "sim: " << machine_->lines_received() << " lines received, " << machine_->lines_answered() << " answered, "
-    << machine_->rx_bytes_dropped() << " RX bytes dropped";
+    << machine_->lines_executed() << " executed, " << machine_->rx_bytes_dropped() << " RX bytes dropped";
   if (vanished_) o << "; vanished (fault injection)";
   o << "\n";
   const auto mpos = machine_->machine_position();

@@ -109,7 +109,13 @@ RunResult StreamRunner::run(const JobInput& job) {
     ticker.cancel();
     deadline.cancel();
     signals.cancel();
-    if (session.job_active()) return;  // gave up: the port closes below without a job end
+    if (session.job_active()) {
+      // Gave up with the job running: report how far it got (the port closes below without a job end).
+      const MachineSnapshot snap = session.snapshot();
+      result.lines_answered = snap.progress.lines_answered;
+      result.last_answered_line = snap.progress.last_answered_line;
+      return;
+    }
     if (started) final_snapshot = session.snapshot();
     session.close();                   // the loop ends when the last byte is out
   };
@@ -215,9 +221,9 @@ RunResult StreamRunner::run(const JobInput& job) {
   result.bytes_written = session.bytes_written();
   result.seconds = session.now();
   if (journal && result.job_id && session.job_active()) {
-    // Gave up or failed with the job still running: its record ends here.
-    journal->journal().end_job(result.job_id, failure ? "error" : to_string(result.outcome),
-                               failure ? "runner failure" : result.message);
+    // Gave up or failed with the job still running: its record ends here,
+    // with an end row that says how far it got.
+    journal->end_now(failure ? "error" : to_string(result.outcome), failure ? "runner failure" : result.message);
   }
   stop_before_start_ = false;  // a stop asked for this run does not carry over to the next
   if (failure) std::rethrow_exception(failure);

@@ -80,12 +80,13 @@ JobRecord read_job(const Stmt& s) {
   j.message = s.text(10);
   j.resumed_from = s.is_null(11) ? 0 : s.i64(11);
   j.from_line = s.is_null(12) ? 0 : s.i64(12);
+  j.planner_blocks = s.is_null(13) ? 0 : s.i64(13);
   return j;
 }
 
 constexpr const char* kJobColumns =
     "id, file, file_sha256, profile, port, mode, total_lines, started_at, ended_at, outcome, message,"
-    " resumed_from, from_line";
+    " resumed_from, from_line, planner_blocks";
 
 }  // namespace
 
@@ -112,7 +113,8 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " started_at TEXT NOT NULL, ended_at TEXT, outcome TEXT, message TEXT NOT NULL DEFAULT '')");
     // Columns added later: a journal from an older version gains them here.
     for (const char* add : {"ALTER TABLE jobs ADD COLUMN resumed_from INTEGER",
-                            "ALTER TABLE jobs ADD COLUMN from_line INTEGER"}) {
+                            "ALTER TABLE jobs ADD COLUMN from_line INTEGER",
+                            "ALTER TABLE jobs ADD COLUMN planner_blocks INTEGER"}) {
       if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
           std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
         throw JournalError(path.string() + ": cannot upgrade the jobs table: " + sqlite3_errmsg(db_));
@@ -180,13 +182,15 @@ std::string Journal::now_iso8601() {
 
 std::int64_t Journal::begin_job(const std::string& file, const std::string& sha256, const std::string& profile,
                                 const std::string& port, const std::string& mode, std::int64_t total_lines,
-                                std::int64_t resumed_from, std::int64_t from_line) {
+                                std::int64_t resumed_from, std::int64_t from_line, std::int64_t planner_blocks) {
   Stmt s(db_, path_,
-         "INSERT INTO jobs(file, file_sha256, profile, port, mode, total_lines, started_at, resumed_from, from_line)"
-         " VALUES(?,?,?,?,?,?,?,?,?)");
+         "INSERT INTO jobs(file, file_sha256, profile, port, mode, total_lines, started_at, resumed_from, from_line,"
+         " planner_blocks) VALUES(?,?,?,?,?,?,?,?,?,?)");
   s.bind(1, file).bind(2, sha256).bind(3, profile).bind(4, port).bind(5, mode).bind(6, total_lines).bind(7, now_iso8601());
   if (resumed_from > 0) s.bind(8, resumed_from).bind(9, from_line);
   else s.bind_null(8).bind_null(9);
+  if (planner_blocks > 0) s.bind(10, planner_blocks);
+  else s.bind_null(10);
   s.step();
   return sqlite3_last_insert_rowid(db_);
 }
@@ -265,6 +269,14 @@ std::optional<ProgressRecord> Journal::last_progress(std::int64_t job_id) const 
   if (!s.is_null(21)) p.status_line = s.i64(21);
   if (!s.is_null(22)) p.machine_state = s.text(22);
   return p;
+}
+
+std::vector<std::int64_t> Journal::progress_lines(std::int64_t job_id, const std::string& reason) const {
+  Stmt s(db_, path_, "SELECT last_line FROM progress WHERE job_id=? AND reason=? ORDER BY id");
+  s.bind(1, job_id).bind(2, reason);
+  std::vector<std::int64_t> out;
+  while (s.step()) out.push_back(s.i64(0));
+  return out;
 }
 
 std::int64_t Journal::progress_count(std::int64_t job_id) const {

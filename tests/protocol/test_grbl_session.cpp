@@ -495,3 +495,46 @@ TEST(GrblSession, LeavingCheckModeIsAnExpectedResetAndAFailedStartupLineWarns) {
   EXPECT_TRUE(reset_seen);
   EXPECT_TRUE(startup_warned);
 }
+
+// A dropped end of line: the controller never completes the line, so no
+// answer ever comes while it reports Idle. The job used to wait without a
+// word until a --timeout (found by the soak); now the silence is reported
+// once, naming the line, and a dwell's own seconds are allowed for.
+TEST(GrblSession, AnIdleControllerThatNeverAnswersALineIsReported) {
+  auto silent = [](const std::vector<std::string>& lines, double quiet_s) {
+    GrblSession s(grbl(), no_poll());
+    s.start_job(program(lines), JobMode::Run, 0);
+    s.take_output();
+    s.on_bytes("ok\n", 0.1);  // line 1 answered; line 2 never is
+    s.take_events();
+    std::vector<Event> warnings;
+    for (double t = 0.2; t < 0.1 + quiet_s; t += 0.2) {
+      s.on_bytes("<Idle|MPos:1,0,0|FS:0,0>\n", t);
+      for (auto& e : s.take_events())
+        if (e.kind == EventKind::Warning) warnings.push_back(e);
+    }
+    return warnings;
+  };
+  EXPECT_TRUE(silent({"G1 X1 F500", "G1 X2"}, 9.5).empty()) << "not before 10 s";
+  const auto w = silent({"G1 X1 F500", "G1 X2"}, 30);
+  ASSERT_EQ(w.size(), 1u) << "once per silence";
+  EXPECT_EQ(w[0].source_line, 2);
+  EXPECT_NE(w[0].text.find("no answer to line 2 'G1X2'"), std::string::npos) << w[0].text;
+  EXPECT_NE(w[0].text.find("resume it from the journal"), std::string::npos) << w[0].text;
+  // A 20 s dwell is silent and idle for 20 s by design.
+  EXPECT_TRUE(silent({"G1 X1 F500", "G4 P20"}, 29).empty());
+  EXPECT_EQ(silent({"G1 X1 F500", "G4 P20"}, 31).size(), 1u);
+}
+
+TEST(GrblSession, AMovingControllerIsNeverSilentOnALine) {
+  GrblSession s(grbl(), no_poll());
+  s.start_job(program({"G1 X100 F10", "G1 X0"}), JobMode::Run, 0);
+  s.take_output();
+  std::size_t warnings = 0;
+  // The planner is full of long moves: no answer for a minute, but the machine runs.
+  for (double t = 0.2; t < 60; t += 0.2) {
+    s.on_bytes("<Run|MPos:1,0,0|FS:10,0>\n", t);
+    warnings += count(s.take_events(), EventKind::Warning);
+  }
+  EXPECT_EQ(warnings, 0u);
+}

@@ -9,6 +9,7 @@
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "cncstream/transport/serial_transport.hpp"
+#include "cncstream/session/simulator_port.hpp"
 #include "cncstream/session/stream_runner.hpp"
 #include "fake_grbl.hpp"
 #include "fake_marlin.hpp"
@@ -218,4 +219,71 @@ TEST(StreamRunner, OverridesReachTheControllerDuringAJob) {
   EXPECT_EQ(fake.realtime_seen(), "\x91\x9b");
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("tool_change_ack"), std::string::npos);
+}
+
+// A runner that gives up (--timeout) with the job still running used to
+// report "0 lines answered, last answered file line 0" and end the journaled
+// job without an end row. Here the last line's end of line is lost on the
+// wire, so the job can never end by itself.
+TEST(StreamRunner, GivingUpSaysHowFarTheJobGotAndJournalsItsEnd) {
+  const auto prog = temp_dir() / "lost_eol.nc";
+  std::ofstream(prog) << "G21 G90\nG1 X1 F500\nG1 X2\nG1 X3\n";
+  SimulatorOptions so;
+  so.faults.drop_byte_at[2 + 4] = cncsim::ByteOfLine::end_of_line();  // after $I and $$: the 4th file line
+  const auto sim = std::make_shared<SimulatorPort>(so);
+  RunnerOptions o;
+  o.machine_port = sim;
+  o.profiles_dir = CNCSTREAM_SOURCE_DIR "/firmware-profiles";
+  const auto journal = temp_dir() / "gave_up.sqlite";
+  o.journal_path = journal;
+  o.max_run_s = 1.5;
+  StreamRunner runner(o);
+  const RunResult r = runner.run(prog);
+  EXPECT_EQ(r.outcome, JobOutcome::Error);
+  EXPECT_EQ(r.message, "gave up after 1.5 s");
+  EXPECT_EQ(r.lines_answered, 3u);
+  EXPECT_EQ(r.last_answered_line, 3);
+  Journal j(journal);
+  const auto job = j.job(r.job_id);
+  ASSERT_TRUE(job);
+  EXPECT_EQ(job->outcome.value_or(""), "error");
+  const auto last = j.last_progress(r.job_id);
+  ASSERT_TRUE(last);
+  EXPECT_EQ(last->reason, "end");
+  EXPECT_EQ(last->last_line, 3);
+  sim->finish(false);
+}
+
+// An error row names the line that failed. It used to take the last answered
+// line when the event was delivered, which could already be lines further
+// on when more answers came in the same read (found by the soak: a resume
+// then skipped the failed line).
+TEST(StreamRunner, AnErrorRowNamesTheLineThatFailed) {
+  const auto prog = temp_dir() / "error_row.nc";
+  {
+    std::ofstream f(prog);
+    f << "G21 G90 F3000\n";
+    for (int i = 1; i <= 30; ++i) f << "G1 X" << i % 7 << " Y" << i % 5 << "\n";
+  }
+  SimulatorOptions so;
+  so.faults.error_at[2 + 4] = 20;  // after $I and $$: file line 4
+  const auto sim = std::make_shared<SimulatorPort>(so);
+  RunnerOptions o;
+  o.machine_port = sim;
+  o.profiles_dir = CNCSTREAM_SOURCE_DIR "/firmware-profiles";
+  const auto journal = temp_dir() / "error_row.sqlite";
+  o.journal_path = journal;
+  o.max_run_s = 20;
+  StreamRunner* self = nullptr;
+  o.on_event = [&self](const cncstream::protocol::Event& e) {
+    if (e.kind == cncstream::protocol::EventKind::LineError && self) self->request_stop();
+  };
+  StreamRunner runner(o);
+  self = &runner;
+  const RunResult r = runner.run(prog);
+  EXPECT_EQ(r.outcome, JobOutcome::Error);
+  Journal j(journal);
+  EXPECT_EQ(j.progress_lines(r.job_id, "error"), (std::vector<std::int64_t>{4}));
+  EXPECT_GE(j.last_progress(r.job_id)->last_line, 4);
+  sim->finish(false);
 }

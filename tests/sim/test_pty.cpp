@@ -2,6 +2,8 @@
 // slave side and streams with (or without) GRBL character counting.
 #include <gtest/gtest.h>
 
+#include <sys/ioctl.h>
+
 #include <cmath>
 #include <deque>
 #include <filesystem>
@@ -77,8 +79,10 @@ std::string wait_idle_status(Port& port) {
 }
 
 std::size_t dropped_from_stderr(const std::string& err) {
-  const auto p = err.find(" answered, ");
-  return p == std::string::npos ? 0 : std::stoul(err.substr(p + 11));
+  const auto end = err.find(" RX bytes dropped");
+  if (end == std::string::npos) return 0;
+  const auto start = err.rfind(' ', end - 1);
+  return std::stoul(err.substr(start + 1, end - start - 1));
 }
 
 }  // namespace
@@ -247,4 +251,32 @@ TEST(Pty, DesignVerifiedAtExitWithAToolTable) {
   const auto solid = cncstream::summarize(cncstream::load_stl(base + "-cut.stl").mesh);
   EXPECT_TRUE(solid.closed()) << solid.to_string();
   for (const char* ext : {".stl", "-cut.f32", "-cut.f32.txt", "-cut.stl", "-map.png"}) std::filesystem::remove(base + ext);
+}
+
+// kill -9 of a host that holds the port exclusively (TIOCEXCL, as cncstream's
+// transport does) must not lock the next host out: a real serial port forgets
+// exclusive mode at its last close, and the simulator keeps its pty open.
+TEST(Pty, AHostKilledHoldingThePortExclusivelyDoesNotLockOutTheNext) {
+  SimProcess sim({"--speed", "max"});
+  const pid_t host = fork();
+  if (host == 0) {
+    const int fd = open(sim.slave().c_str(), O_RDWR | O_NOCTTY);
+    if (fd < 0 || ioctl(fd, TIOCEXCL) != 0) _exit(1);
+    raise(SIGKILL);
+  }
+  int st = 0;
+  waitpid(host, &st, 0);
+  ASSERT_TRUE(WIFSIGNALED(st)) << "the host could not take the port";
+  // A user without CAP_SYS_ADMIN gets EBUSY while the flag stands; root
+  // opens anyway, so read the flag itself (TIOCGEXCL).
+  int excl = 1;
+  for (int i = 0; i < 500 && excl != 0; ++i) {
+    const int fd = open(sim.slave().c_str(), O_RDWR | O_NOCTTY);
+    if (fd >= 0) {
+      if (ioctl(fd, TIOCGEXCL, &excl) != 0) excl = -1;
+      close(fd);
+    }
+    if (excl != 0) usleep(10000);  // the simulator has not seen the close yet
+  }
+  EXPECT_EQ(excl, 0) << "the pty is still exclusive to a host that no longer exists";
 }

@@ -199,3 +199,22 @@ TEST(Journal, SurvivesSigkillAtAnyMoment) {
   sqlite3_finalize(st);
   sqlite3_close(db);
 }
+
+TEST(Journal, KeepsThePlannerDepthAndCountsRowsByReason) {
+  const auto path = temp_db("planner.sqlite");
+  Journal j(path);
+  const auto id = j.begin_job("p.nc", sha256_hex("p"), "grblhal", "pty", "run", 10, 0, 0, 35);
+  const auto old = j.begin_job("q.nc", sha256_hex("q"), "grbl-1.1", "pty", "run", 10);
+  EXPECT_EQ(j.job(id)->planner_blocks, 35);
+  EXPECT_EQ(j.job(old)->planner_blocks, 0) << "not journaled: unknown";
+  ProgressRecord p;
+  p.job_id = id;
+  for (const char* reason : {"periodic", "error", "periodic", "error", "end"}) {
+    p.reason = reason;
+    ++p.last_line;
+    j.record_progress(p);
+  }
+  EXPECT_EQ(j.progress_lines(id, "error"), (std::vector<std::int64_t>{2, 4}));
+  EXPECT_EQ(j.progress_lines(id, "end"), (std::vector<std::int64_t>{5}));
+  EXPECT_EQ(j.progress_count(id), 5);
+}

@@ -6,11 +6,13 @@
 // (including an active G92), start spindle and coolant with a dwell, plunge
 // at the plunge feed, then restore the program's own units, modes and feed.
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "cncstream/gcode/interpreter.hpp"
 #include "cncstream/gcode/program.hpp"
+#include "cncstream/gcode/line_lexer.hpp"
 
 namespace cncstream::gcode {
 
@@ -25,7 +27,20 @@ struct ResumeOptions {
 // program's own trace computed it. Every preamble line is plain G-code that
 // GRBL 1.1 accepts; coordinates are work coordinates in mm (G21) until the
 // last lines restore the program's units.
+// An arc mode (G2/G3) is left out: GRBL cannot enter it without an arc (a
+// bare "G2" is error:26); see with_modal_arc for the line that needs it.
 std::vector<std::string> resume_preamble(const ParserState& at, const ResumeOptions& options);
+
+// When the program was in an arc mode after line N, the first line after it
+// that moves in the modal mode without naming it must name it itself. Given
+// the lines after N and that mode, returns the index of such a line and the
+// line with the G word written in front (nullopt: a line names its motion
+// before any line relies on the mode, or the mode is no arc).
+struct ModalArcFix {
+  std::size_t index = 0;
+  std::string line;
+};
+std::optional<ModalArcFix> with_modal_arc(std::span<const std::string> lines_after, MotionMode mode);
 
 // Which line to continue after when the operator does not say. An `ok` only
 // means the controller planned a line: GRBL's planner holds up to 15 moves

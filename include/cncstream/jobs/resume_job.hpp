@@ -28,6 +28,23 @@ struct ResumeInput {
   std::int64_t last_line = 0;
   std::optional<Vec3> status_work_pos;
   std::int64_t status_line = 0;
+  // When the job was itself a resume: the line it continued after. If it
+  // answered no file line past it (killed in its preamble, before its first
+  // progress row), the same line is where to continue again.
+  std::int64_t resumed_after = 0;
+  // The controller's planner depth (0: unknown, taken as the deepest of the
+  // shipped profiles, grblHAL's 35) and the job's lines answered with an
+  // error (the journal's error rows). An error answer stands for up to three
+  // motion lines of the program that took no planner block: the line itself,
+  // a second one merged into it by a lost end of line, and the next, which
+  // may move nowhere on the machine once the failed one did not move (a
+  // failed G0 Z2 makes the following G1 Z-1 a zero-length move): the lines
+  // the controller may not have run reach that much further back. And a
+  // failed line among them never ran although the machine went on past it
+  // (the planner ran the lines behind it until the hold stopped it): the
+  // resume starts before it.
+  int planner_blocks = 0;
+  std::vector<std::int64_t> error_lines;
   // The operator's choice: continue after this 1-based line; < 0: chosen from
   // the status report (see gcode::choose_resume_line).
   long from_line = -1;

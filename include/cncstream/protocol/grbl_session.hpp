@@ -66,6 +66,7 @@ class GrblSession final : public ProtocolEngine {
   void soft_reset();
   void maybe_complete();
   std::size_t in_flight_of(Origin o) const;
+  void check_silence();
 
   FirmwareProfile profile_;
   GrblSessionOptions opt_;
@@ -98,6 +99,12 @@ class GrblSession final : public ProtocolEngine {
   double drain_poll_at_ = 0;
   bool mpg_owned_ = false;
   std::optional<Axes> last_mpos_;
+  // A line whose end of line was lost on the wire never completes in the
+  // controller, and no answer ever comes: an idle machine that leaves the
+  // oldest line unanswered this long is reported (once per silence).
+  double waiting_since_ = 0;  // the oldest line in flight has waited since then
+  int idle_in_row_ = 0;       // status reports in a row saying Idle
+  bool silence_reported_ = false;
 };
 
 }  // namespace cncstream::protocol

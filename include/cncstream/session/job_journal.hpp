@@ -23,10 +23,15 @@ class JobJournal {
   // The journal id of the current or last job (0: none yet).
   std::int64_t job_id() const { return job_id_; }
   transport::Journal& journal() { return journal_; }
+  // Ends the current job's record now, with its end row, when the job did
+  // not end by itself (its runner gave up or failed with it still running).
+  void end_now(const std::string& outcome, const std::string& message);
 
  private:
   void on_event(const SessionEvent& e);
-  void record(const std::string& reason);
+  // `line`: the row's last_line when it is about one line (the one that
+  // failed); else the last answered line now.
+  void record(const std::string& reason, long line = 0);
 
   MachineSession& session_;
   transport::Journal journal_;

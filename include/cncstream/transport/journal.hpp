@@ -36,13 +36,16 @@ struct JobRecord {
   std::string message;
   std::int64_t resumed_from = 0;  // the job this one resumes (0: a fresh job)
   std::int64_t from_line = 0;     // the file line the resumed job continued after
+  // The controller's planner depth when the job ran (0: not journaled, an
+  // older journal): how many answered lines it may not have run yet.
+  std::int64_t planner_blocks = 0;
 };
 
 struct ProgressRecord {
   std::int64_t job_id = 0;
   std::string at;
   std::int64_t lines_ok = 0;   // file lines answered ok (blank lines count once passed)
-  std::int64_t last_line = 0;  // 1-based file line of the last answer
+  std::int64_t last_line = 0;  // 1-based file line of the last answer; an "error" row: the line that failed
   std::string reason;          // "periodic", "error", "alarm", "stop", "end", ...
   gcode::ParserState modal;  // modal groups, feed, spindle speed and tool (the rest is not kept)
   std::optional<std::array<double, 3>> wco;  // work offset the controller reported (MPos - WPos), mm
@@ -89,7 +92,7 @@ class Journal {
 
   std::int64_t begin_job(const std::string& file, const std::string& sha256, const std::string& profile,
                          const std::string& port, const std::string& mode, std::int64_t total_lines,
-                         std::int64_t resumed_from = 0, std::int64_t from_line = 0);
+                         std::int64_t resumed_from = 0, std::int64_t from_line = 0, std::int64_t planner_blocks = 0);
   void record_progress(const ProgressRecord& p);
   void end_job(std::int64_t job_id, const std::string& outcome, const std::string& message);
 
@@ -97,6 +100,9 @@ class Journal {
   std::optional<JobRecord> job(std::int64_t id) const;
   std::optional<ProgressRecord> last_progress(std::int64_t job_id) const;
   std::int64_t progress_count(std::int64_t job_id) const;
+  // The last answered line of each of the job's rows with this reason, oldest first
+  // ("error": the lines answered with an error).
+  std::vector<std::int64_t> progress_lines(std::int64_t job_id, const std::string& reason) const;
 
   static std::string now_iso8601();
 

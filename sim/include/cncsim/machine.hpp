@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -32,11 +33,27 @@ inline constexpr const char* kBanner = "Grbl 1.1h ['$' for help]";
 
 enum class MachineState { Idle, Run, Hold, Jog, Alarm, Door, Check, Home, Sleep };
 
+// Which byte of a line a wire fault hits: by its offset (0-based, real-time
+// bytes not counted), the first byte equal to a letter, or the end of line
+// (the line then merges with the next and keeps this line's number).
+struct ByteOfLine {
+  std::size_t offset = 0;
+  char letter = 0;   // instead of the offset
+  bool eol = false;  // instead of the offset
+  static ByteOfLine at(std::size_t o) { return {o, 0, false}; }
+  static ByteOfLine first(char c) { return {0, c, false}; }
+  static ByteOfLine end_of_line() { return {0, 0, true}; }
+};
+
 // Faults on demand. Line numbers count the lines the firmware has received
 // (1-based, every line including empty ones).
 struct Faults {
   std::size_t drop_every = 0;     // drop every Nth received byte (0 = never)
   std::size_t corrupt_every = 0;  // flip a bit in every Nth received byte
+  // Wire damage at one point: line -> the byte it hits. Each applies once
+  // (a line without the letter is left alone).
+  std::map<std::size_t, ByteOfLine> drop_byte_at;
+  std::map<std::size_t, ByteOfLine> corrupt_byte_at;
   std::map<std::size_t, int> error_at;     // line -> answer error:E instead of running it
   std::map<std::size_t, int> alarm_at;     // line -> raise ALARM:A when it arrives
   std::map<std::size_t, double> stall_at;  // line -> stop answering for S seconds
@@ -44,9 +61,29 @@ struct Faults {
   int homing_failure = 0;         // $H fails with this ALARM (6..9), 0 = homing works
 };
 
+// Faults that took effect so far.
+struct FaultsApplied {
+  std::size_t dropped_bytes = 0, corrupted_bytes = 0;  // periodic and at a point
+  std::size_t errors = 0, alarms = 0, stalls = 0;
+  bool vanished = false;
+};
+
+// A received line carried out in full: answered ok and every planner block
+// it queued run to its end. A line whose blocks an alarm, a reset or a jog
+// cancel dropped did not run; an error answer or check mode runs nothing.
+// `n` is the line's N word (0: none), the line number a program gives it.
+struct ExecutedLine {
+  std::size_t received = 0;  // 1-based, as lines_received() counts
+  long n = 0;
+};
+using LineObserver = std::function<void(const ExecutedLine&)>;
+
 struct MachineOptions {
   std::optional<std::filesystem::path> store_path;  // settings file ($$, G10, $N ...)
   Faults faults;
+  // Where the tool is at power-on (machine coordinates): a simulator
+  // restarted from a saved state, the tool left where the last one stopped.
+  std::optional<cncstream::Vec3> start_position;
   bool strict = false;  // an RX overflow throws RxOverflowError
   // --speed max: whenever the firmware waits for planner room, a buffer sync
   // or a dwell, the virtual clock jumps ahead instead of waiting for advance().
@@ -94,12 +131,20 @@ class Machine {
   std::size_t planner_blocks() const { return queue_.size(); }
   std::size_t lines_received() const { return lines_received_; }
   std::size_t lines_answered() const { return lines_answered_; }
+  // Lines carried out in full (see ExecutedLine): what a program's line
+  // count must equal when nothing was lost or repeated.
+  std::size_t lines_executed() const { return lines_executed_; }
+  const FaultsApplied& faults_applied() const { return applied_; }
+  // The faults still to come, to schedule more between calls (never while
+  // another thread serves the machine).
+  Faults& faults() { return options_.faults; }
   bool vanished() const { return vanished_; }
   bool busy() const;  // motion, a pending line or unread RX bytes
   bool stalled() const;  // inside a --stall-at fault (time must pass for real)
 
   void set_motion_observer(MotionObserver observer) { observer_ = std::move(observer); }
   void set_tool_observer(ToolObserver observer) { tool_observer_ = std::move(observer); }
+  void set_line_observer(LineObserver observer) { line_observer_ = std::move(observer); }
   // A limit switch closes: ALARM:1, motion stops dead, locked until reset.
   void inject_hard_limit();
 
@@ -144,6 +189,22 @@ class Machine {
   void start_homing();
   void feed_hold();
   void cycle_start();
+  // Execution accounting (lines_executed): the lines between arrival and
+  // their end, oldest first.
+  struct PendingLine {
+    std::size_t received = 0;
+    long n = 0;
+    std::size_t blocks_left = 0;  // planner blocks queued and not yet run
+    bool answered = false;
+    bool runs = true;  // false in check mode: nothing is carried out
+  };
+  PendingLine* pending_line(std::size_t received);
+  void line_answered(bool ok);
+  void blocks_completed(std::size_t n);
+  void clear_planner();         // drops the planner's blocks: their lines did not run
+  void forget_unanswered();     // lines that will never be answered (steps dropped)
+  void complete_lines();
+  bool wire_fault(std::map<std::size_t, ByteOfLine>& at, unsigned char c, bool eol);
 
   MachineOptions options_;
   PersistentStore store_;
@@ -155,6 +216,13 @@ class Machine {
   std::string out_;
   MotionObserver observer_;
   ToolObserver tool_observer_;
+  LineObserver line_observer_;
+  std::deque<PendingLine> pending_lines_;
+  std::deque<std::size_t> planned_lines_;  // the received line of each planner block, oldest first
+  std::size_t lines_executed_ = 0;
+  FaultsApplied applied_;
+  std::size_t arriving_line_ = 1;    // the line the next byte from the wire belongs to
+  std::size_t arriving_offset_ = 0;  // and its offset in that line
 
   MachineState state_ = MachineState::Idle;
   double now_ = 0;

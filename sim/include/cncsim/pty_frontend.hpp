@@ -40,11 +40,19 @@ class PtyFrontEnd {
  private:
   void flush_output();
   void close_all();
+  void watch_host();
 
   Machine& machine_;
   PtyOptions options_;
   int master_ = -1;
   int slave_keepalive_ = -1;  // keeps the master readable while no host is attached
+  // A host's exclusive mode (TIOCEXCL) would outlive it here, since this end
+  // keeps the pty open: a host killed mid-job could never clear it and the
+  // next one would get EBUSY. A real serial port forgets it at its last
+  // close, so the front end watches the slave's opens and closes (inotify)
+  // and clears it when the last host has gone.
+  int host_watch_ = -1;
+  int host_opens_ = 0;
   std::string slave_path_;
   std::string pending_out_;
 };

@@ -34,6 +34,8 @@ ToolTable parse_tool_table(const std::string& text);
 class MaterialRemoval {
  public:
   MaterialRemoval(const StockBox& box, const cncstream::Cutter& cutter);
+  // Goes on cutting a stock an earlier run left (stock_from_heights of its result).
+  MaterialRemoval(cncstream::HeightFieldStock stock, const cncstream::Cutter& cutter);
 
   // Routes the machine's motion into the stock (replaces its observers); a
   // T word then switches to that tool of the table, once the motion queued

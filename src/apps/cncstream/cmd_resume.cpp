@@ -49,11 +49,13 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     if (!std::filesystem::exists(jpath)) throw std::invalid_argument("no journal at " + jpath.string());
     std::optional<transport::JobRecord> rec;
     std::optional<transport::ProgressRecord> last;
+    std::vector<std::int64_t> error_lines;
     {
       transport::Journal j(jpath);
       rec = j.job(o->job);
       if (!rec) throw std::invalid_argument("no job " + std::to_string(o->job) + " in " + jpath.string());
       last = j.last_progress(o->job);
+      error_lines = j.progress_lines(o->job, "error");
     }
     const std::filesystem::path file = rec->file;
     if (!std::filesystem::exists(file))
@@ -74,6 +76,9 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
         in.status_work_pos = Vec3{(*last->status_work_pos)[0], (*last->status_work_pos)[1], (*last->status_work_pos)[2]};
       in.status_line = last->status_line;
     }
+    if (rec->resumed_from > 0) in.resumed_after = rec->from_line;
+    in.planner_blocks = static_cast<int>(rec->planner_blocks);
+    in.error_lines = std::move(error_lines);
     in.from_line = o->from_line;
     in.machine_safe_z = o->machine_safe_z;
     in.safe_z = o->safe_z;

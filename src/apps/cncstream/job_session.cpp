@@ -237,6 +237,16 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
           if (runner_ptr) runner_ptr->request_stop();
         }
         return;
+      case EventKind::Warning:
+        // A warning about one line (an idle controller that never answered
+        // it): the job cannot go on by itself, and nobody at a terminal decides.
+        if (e.source_line > 0 && !interactive) {
+          panel.message("warning: " + e.text + "\n  (no terminal to decide: stopping the job)");
+          if (runner_ptr) runner_ptr->request_stop();
+          return;
+        }
+        panel.message(std::string("warning: ") + e.text);
+        return;
       case EventKind::CheckError: panel.message("check: " + e.text); return;
       case EventKind::Alarm: panel.message("ALARM: " + e.text); return;
       default: panel.message(std::string(to_string(e.kind)) + ": " + e.text); return;
