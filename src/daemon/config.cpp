@@ -6,6 +6,7 @@
 
 #include <arpa/inet.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <set>
@@ -87,11 +88,100 @@ struct Reader {
   }
 };
 
+std::string cat_line(const std::string& source, std::size_t line) {
+  std::string s = source;
+  s.append(":").append(std::to_string(line));
+  return s;
+}
+
 bool valid_name(const std::string& n) {
   if (n.empty() || n.size() > 32) return false;
   for (char c : n)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) return false;
   return true;
+}
+
+// toml++ 3.3 misbehaves on two kinds of text it should refuse with a parse
+// error, both found by tests/fuzz and both undefined behaviour in a release
+// build: a table header whose key does not start with a key character
+// ("[[)achine]]": an assertion), and a character beyond ASCII outside a
+// string or comment ("name = \xC3\xA9": an unreachable branch in its
+// whitespace test). The text is checked for them first, naming the line.
+// (The firmware profile loader checks table headers for the same reason.)
+void check_toml_text(std::string_view text, const std::string& source) {
+  enum class In { Code, Comment, Basic, Literal, MultiBasic, MultiLiteral } in = In::Code;
+  std::size_t line = 1;
+  int depth = 0;           // open arrays of a value
+  bool line_start = true;  // only blanks so far on this line
+  bool header = false;     // this line is a table header
+  auto refuse = [&](const char* why) { throw std::invalid_argument(cat_line(source, line) + ": " + why); };
+  auto starts = [&](std::size_t i, std::string_view s) { return text.substr(i, s.size()) == s; };
+  // After a multi-line string's closing quotes: up to two more belong to the string.
+  auto close_multi = [&](std::size_t& i, char q) {
+    i += 2;
+    for (int extra = 0; extra < 2 && i + 1 < text.size() && text[i + 1] == q; ++extra) ++i;
+    in = In::Code;
+  };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      line_start = true;
+      header = false;
+      if (in == In::Comment || in == In::Basic || in == In::Literal) in = In::Code;
+      continue;
+    }
+    switch (in) {
+      case In::Comment: break;
+      case In::Basic:
+      case In::MultiBasic:
+        if (c == '\\') {
+          if (i + 1 < text.size() && text[i + 1] == '\n') ++line;
+          ++i;
+        } else if (in == In::Basic && c == '"') {
+          in = In::Code;
+        } else if (in == In::MultiBasic && starts(i, "\"\"\"")) {
+          close_multi(i, '"');
+        }
+        break;
+      case In::Literal:
+        if (c == '\'') in = In::Code;
+        break;
+      case In::MultiLiteral:
+        if (starts(i, "'''")) close_multi(i, '\'');
+        break;
+      case In::Code:
+        if (static_cast<unsigned char>(c) >= 0x80) refuse("a character beyond ASCII outside a string or comment (quote the value)");
+        if (c == '#') {
+          in = In::Comment;
+        } else if (starts(i, "\"\"\"")) {
+          in = In::MultiBasic;
+          i += 2;
+        } else if (starts(i, "'''")) {
+          in = In::MultiLiteral;
+          i += 2;
+        } else if (c == '"') {
+          in = In::Basic;
+        } else if (c == '\'') {
+          in = In::Literal;
+        } else if (c == '[' && line_start && depth == 0) {
+          header = true;
+          std::size_t k = i + 1;
+          if (k < text.size() && text[k] == '[') ++k;
+          while (k < text.size() && (text[k] == ' ' || text[k] == '\t')) ++k;
+          const char h = k < text.size() ? text[k] : '\0';
+          const bool key = (h >= 'A' && h <= 'Z') || (h >= 'a' && h <= 'z') || (h >= '0' && h <= '9') || h == '_' ||
+                           h == '-' || h == '"' || h == '\'';
+          if (!key && h != ']') refuse("a table header must start with a key (a letter, digit, _, - or a quote)");
+        } else if (c == '[' && !header) {
+          ++depth;
+        } else if (c == ']' && !header && depth > 0) {
+          --depth;
+        }
+        if (c != ' ' && c != '\t') line_start = false;
+        break;
+    }
+  }
 }
 
 }  // namespace
@@ -188,6 +278,7 @@ void validate(const DaemonConfig& c) {
 
 DaemonConfig parse_config(std::string_view text, const std::string& source) {
   toml::table root;
+  check_toml_text(text, source);
   try {
     root = toml::parse(text, source);
   } catch (const toml::parse_error& e) {
