@@ -101,32 +101,38 @@ bool valid_name(const std::string& n) {
   return true;
 }
 
-// toml++ 3.3 misbehaves on two kinds of text it should refuse with a parse
-// error, both found by tests/fuzz and both undefined behaviour in a release
-// build: a table header whose key does not start with a key character
-// ("[[)achine]]": an assertion), and a character beyond ASCII outside a
-// string or comment ("name = \xC3\xA9": an unreachable branch in its
-// whitespace test). The text is checked for them first, naming the line.
-// (The firmware profile loader checks table headers for the same reason.)
+// toml++ 3.3 misbehaves on text it should refuse with a parse error, found
+// by tests/fuzz, all undefined behaviour in a release build: a table header
+// whose key does not start with a key character ("[[)achine]]": an
+// assertion), and a character beyond ASCII where TOML allows none ("name =
+// \xC3\xA9", "a = 1\"\xC3\xA9\"", an escape "\\\xC3\xA9"): its whitespace test
+// reaches an unreachable branch. TOML allows such characters only in
+// strings and comments, so the text is checked first, naming the line. A
+// quote starts a string only where TOML allows one (at the start of a line,
+// after '=', '[', ',', '{' or '.'); elsewhere it is garbage toml++ scans
+// through. (The firmware profile loader checks table headers for the same
+// reason.)
 void check_toml_text(std::string_view text, const std::string& source) {
   enum class In { Code, Comment, Basic, Literal, MultiBasic, MultiLiteral } in = In::Code;
   std::size_t line = 1;
-  int depth = 0;           // open arrays of a value
-  bool line_start = true;  // only blanks so far on this line
-  bool header = false;     // this line is a table header
+  int depth = 0;        // open arrays of a value
+  char prev = '\0';     // the last character of code on this line, blanks aside ('\0': none yet)
+  bool header = false;  // this line is a table header
   auto refuse = [&](const char* why) { throw std::invalid_argument(cat_line(source, line) + ": " + why); };
   auto starts = [&](std::size_t i, std::string_view s) { return text.substr(i, s.size()) == s; };
+  auto beyond_ascii = [](char c) { return static_cast<unsigned char>(c) >= 0x80; };
   // After a multi-line string's closing quotes: up to two more belong to the string.
   auto close_multi = [&](std::size_t& i, char q) {
     i += 2;
     for (int extra = 0; extra < 2 && i + 1 < text.size() && text[i + 1] == q; ++extra) ++i;
     in = In::Code;
+    prev = q;
   };
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     if (c == '\n') {
       ++line;
-      line_start = true;
+      prev = '\0';
       header = false;
       if (in == In::Comment || in == In::Basic || in == In::Literal) in = In::Code;
       continue;
@@ -136,35 +142,38 @@ void check_toml_text(std::string_view text, const std::string& source) {
       case In::Basic:
       case In::MultiBasic:
         if (c == '\\') {
+          std::size_t k = i + 1;
+          while (k < text.size() && (text[k] == ' ' || text[k] == '\t')) ++k;
+          if (k < text.size() && beyond_ascii(text[k])) refuse("a character beyond ASCII after a backslash");
           if (i + 1 < text.size() && text[i + 1] == '\n') ++line;
           ++i;
         } else if (in == In::Basic && c == '"') {
           in = In::Code;
+          prev = c;
         } else if (in == In::MultiBasic && starts(i, "\"\"\"")) {
           close_multi(i, '"');
         }
         break;
       case In::Literal:
-        if (c == '\'') in = In::Code;
+        if (c == '\'') {
+          in = In::Code;
+          prev = c;
+        }
         break;
       case In::MultiLiteral:
         if (starts(i, "'''")) close_multi(i, '\'');
         break;
-      case In::Code:
-        if (static_cast<unsigned char>(c) >= 0x80) refuse("a character beyond ASCII outside a string or comment (quote the value)");
+      case In::Code: {
+        if (beyond_ascii(c)) refuse("a character beyond ASCII outside a string or comment (quote the value)");
+        if (c == ' ' || c == '\t') break;
+        const bool string_may_start = prev == '\0' || prev == '=' || prev == '[' || prev == ',' || prev == '{' || prev == '.';
         if (c == '#') {
           in = In::Comment;
-        } else if (starts(i, "\"\"\"")) {
-          in = In::MultiBasic;
-          i += 2;
-        } else if (starts(i, "'''")) {
-          in = In::MultiLiteral;
-          i += 2;
-        } else if (c == '"') {
-          in = In::Basic;
-        } else if (c == '\'') {
-          in = In::Literal;
-        } else if (c == '[' && line_start && depth == 0) {
+        } else if ((c == '"' || c == '\'') && string_may_start) {
+          const bool multi = starts(i, c == '"' ? "\"\"\"" : "'''");
+          in = c == '"' ? (multi ? In::MultiBasic : In::Basic) : (multi ? In::MultiLiteral : In::Literal);
+          if (multi) i += 2;
+        } else if (c == '[' && prev == '\0' && depth == 0) {
           header = true;
           std::size_t k = i + 1;
           if (k < text.size() && text[k] == '[') ++k;
@@ -178,8 +187,9 @@ void check_toml_text(std::string_view text, const std::string& source) {
         } else if (c == ']' && !header && depth > 0) {
           --depth;
         }
-        if (c != ' ' && c != '\t') line_start = false;
+        prev = c;
         break;
+      }
     }
   }
 }

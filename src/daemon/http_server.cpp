@@ -242,6 +242,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     }
     body_.emplace(std::move(*header_));
     body_->body_limit(server_->config.limits.max_json_bytes);
+    if (declared_beyond(body_->content_length(), server_->config.limits.max_json_bytes)) {
+      disarm();
+      keep_alive_ = false;  // the body is not read
+      write(Response::error(413, "too_large", "the body exceeds the limit"), version_);
+      return;
+    }
     http::async_read(stream_, buffer_, *body_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
       if (ec) return self->body_failed(ec);
       self->req_.body = std::move(self->body_->get().body());

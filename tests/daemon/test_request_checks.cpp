@@ -140,6 +140,10 @@ TEST(Config, ACharacterBeyondAsciiOutsideAStringIsRefusedNamingTheLine) {
             "d.toml:2: a character beyond ASCII outside a string or comment (quote the value)");
   EXPECT_EQ(error("[security]\nallowed_hosts = [\"a\", \xC3\xA9]\n"),
             "d.toml:2: a character beyond ASCII outside a string or comment (quote the value)");
+  // A quote inside a bare value starts no string (toml++ scans through it), nor does an escape take one.
+  EXPECT_EQ(error("[security]\nrequire_token = 1\"\xC3\xA9\"\n"),
+            "d.toml:2: a character beyond ASCII outside a string or comment (quote the value)");
+  EXPECT_EQ(error("[web]\nroot = \"\"\"\\\xC3\xA9\"\"\"\n"), "d.toml:2: a character beyond ASCII after a backslash");
   // In strings and comments they are text like any other.
   const auto c = parse_config(
       "# l'\xC3\xA9tabli\n[security]\nallowed_hosts = [\"caf\xC3\xA9.local\", '\xC3\xA9', \"\"\"\n\xC3\xA9\"\"\"\"]  # \xC3\xA9\n",
