@@ -116,7 +116,8 @@ void check_toml_text(std::string_view text, const std::string& source) {
   enum class In { Code, Comment, Basic, Literal, MultiBasic, MultiLiteral } in = In::Code;
   std::size_t line = 1;
   int depth = 0;        // open arrays of a value
-  char prev = '\0';     // the last character of code on this line, blanks aside ('\0': none yet)
+  bool blank = true;    // no code yet on this line
+  char prev = 0;        // the last character of code on this line, blanks aside
   bool header = false;  // this line is a table header
   auto refuse = [&](const char* why) { throw std::invalid_argument(cat_line(source, line) + ": " + why); };
   auto starts = [&](std::size_t i, std::string_view s) { return text.substr(i, s.size()) == s; };
@@ -127,12 +128,13 @@ void check_toml_text(std::string_view text, const std::string& source) {
     for (int extra = 0; extra < 2 && i + 1 < text.size() && text[i + 1] == q; ++extra) ++i;
     in = In::Code;
     prev = q;
+    blank = false;
   };
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     if (c == '\n') {
       ++line;
-      prev = '\0';
+      blank = true;
       header = false;
       if (in == In::Comment || in == In::Basic || in == In::Literal) in = In::Code;
       continue;
@@ -166,14 +168,14 @@ void check_toml_text(std::string_view text, const std::string& source) {
       case In::Code: {
         if (beyond_ascii(c)) refuse("a character beyond ASCII outside a string or comment (quote the value)");
         if (c == ' ' || c == '\t') break;
-        const bool string_may_start = prev == '\0' || prev == '=' || prev == '[' || prev == ',' || prev == '{' || prev == '.';
+        const bool string_may_start = blank || prev == '=' || prev == '[' || prev == ',' || prev == '{' || prev == '.';
         if (c == '#') {
           in = In::Comment;
         } else if ((c == '"' || c == '\'') && string_may_start) {
           const bool multi = starts(i, c == '"' ? "\"\"\"" : "'''");
           in = c == '"' ? (multi ? In::MultiBasic : In::Basic) : (multi ? In::MultiLiteral : In::Literal);
           if (multi) i += 2;
-        } else if (c == '[' && prev == '\0' && depth == 0) {
+        } else if (c == '[' && blank && depth == 0) {
           header = true;
           std::size_t k = i + 1;
           if (k < text.size() && text[k] == '[') ++k;
@@ -188,6 +190,7 @@ void check_toml_text(std::string_view text, const std::string& source) {
           --depth;
         }
         prev = c;
+        blank = false;
         break;
       }
     }

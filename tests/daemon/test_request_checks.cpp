@@ -144,6 +144,8 @@ TEST(Config, ACharacterBeyondAsciiOutsideAStringIsRefusedNamingTheLine) {
   EXPECT_EQ(error("[security]\nrequire_token = 1\"\xC3\xA9\"\n"),
             "d.toml:2: a character beyond ASCII outside a string or comment (quote the value)");
   EXPECT_EQ(error("[web]\nroot = \"\"\"\\\xC3\xA9\"\"\"\n"), "d.toml:2: a character beyond ASCII after a backslash");
+  EXPECT_EQ(error(std::string("[web]\nroot = x") + '\0' + "\"\xC3\xA9\"\n"),
+            "d.toml:2: a character beyond ASCII outside a string or comment (quote the value)");
   // In strings and comments they are text like any other.
   const auto c = parse_config(
       "# l'\xC3\xA9tabli\n[security]\nallowed_hosts = [\"caf\xC3\xA9.local\", '\xC3\xA9', \"\"\"\n\xC3\xA9\"\"\"\"]  # \xC3\xA9\n",
