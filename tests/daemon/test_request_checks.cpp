@@ -4,6 +4,8 @@
 // headers. Each case here is one the fuzz targets found or guard.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -143,9 +145,18 @@ TEST(Config, ACharacterBeyondAsciiOutsideAStringIsRefusedNamingTheLine) {
   // A quote inside a bare value starts no string (toml++ scans through it), nor does an escape take one.
   EXPECT_EQ(error("[security]\nrequire_token = 1\"\xC3\xA9\"\n"),
             "d.toml:2: a character beyond ASCII outside a string or comment (quote the value)");
-  EXPECT_EQ(error("[web]\nroot = \"\"\"\\\xC3\xA9\"\"\"\n"), "d.toml:2: a character beyond ASCII after a backslash");
+  EXPECT_EQ(error("[web]\nroot = \"\"\"\\\xC3\xA9\"\"\"\n"), "d.toml:2: a character beyond ASCII right after a backslash (toml++ 3.3 cannot read it)");
+  // Valid TOML, but toml++ skips the blanks after a line-ending backslash with its faulty whitespace test.
+  EXPECT_EQ(error("[web]\nroot = \"\"\"x \\\n  \xC3\xA9\"\"\"\n"),
+            "d.toml:2: a character beyond ASCII right after a backslash (toml++ 3.3 cannot read it)");
   EXPECT_EQ(error(std::string("[web]\nroot = x") + '\0' + "\"\xC3\xA9\"\n"),
             "d.toml:2: a character beyond ASCII outside a string or comment (quote the value)");
+  // Found by fuzz_daemon_config: toml++ 3.3 asserts on an array element starting with '}'.
+  EXPECT_EQ(error("[security]\nallowed_hosts = [ # hosts\n}]\n"), "d.toml:3: '}' where an array's element belongs");
+  // Found by fuzz_daemon_config: toml++ 3.3 asserts on a date, a space and one digit; a real time passes.
+  EXPECT_EQ(error("[limits]\nmax_connections = 2051-06-01 0 \n"),
+            "d.toml:2: a date followed by a lone digit (write the time as HH:MM:SS)");
+  EXPECT_EQ(error("x = 1979-05-27 07:32:00 # a date-time\n"), "d.toml:1: unknown key 'x'");
   // In strings and comments they are text like any other.
   const auto c = parse_config(
       "# l'\xC3\xA9tabli\n[security]\nallowed_hosts = [\"caf\xC3\xA9.local\", '\xC3\xA9', \"\"\"\n\xC3\xA9\"\"\"\"]  # \xC3\xA9\n",
@@ -153,4 +164,30 @@ TEST(Config, ACharacterBeyondAsciiOutsideAStringIsRefusedNamingTheLine) {
   ASSERT_EQ(c.security.allowed_hosts.size(), 3u);
   EXPECT_EQ(c.security.allowed_hosts[0], "caf\xC3\xA9.local");
   EXPECT_EQ(c.security.allowed_hosts[2], "\xC3\xA9\"");
+}
+
+TEST(Config, TheDocumentedExamplesPassTheTextCheck) {
+  // The fuzz seeds: api-v1.md's configuration and a pendant's section, with
+  // strings, comments, arrays, an IPv6 listen address.
+  auto read = [](const char* name) {
+    std::ifstream in(std::string(CNCSTREAM_SOURCE_DIR) + "/tests/fuzz/corpus/fuzz_daemon_config/" + name);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  const auto doc = parse_config(read("api_v1_example.toml"), "api_v1_example.toml");
+  EXPECT_EQ(doc.machines.size(), 2u);
+  EXPECT_EQ(doc.limits.max_grid_nodes, 50e6);
+  const auto pendant = parse_config(read("pendant.toml"), "pendant.toml");
+  ASSERT_EQ(pendant.pendants.size(), 1u);
+  EXPECT_EQ(pendant.pendants[0].macros.size(), 2u);
+  EXPECT_EQ(pendant.listen_address, "::1");
+  // Inline tables and arrays nest; keys in them may be quoted.
+  EXPECT_THROW((void)parse_config("[web]\nroot = { \"a\" = [1, [2, \"\xC3\xA9\"]], b.\"c\" = 'd' }\n", "d.toml"),
+               std::invalid_argument);  // a table is no path: the reader says so, not the text check
+  try {
+    (void)parse_config("[web]\nroot = { \"a\" = [1, [2, \"\xC3\xA9\"]], b.\"c\" = 'd' }\n", "d.toml");
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "d.toml:2: web.root: expected a string");
+  }
 }
