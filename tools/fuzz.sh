@@ -1,25 +1,54 @@
 #!/usr/bin/env bash
 # Fuzzes every parser of outside input with libFuzzer (clang, ASan + UBSan).
-#   tools/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]
-# Builds tests/fuzz into build/fuzz, replays every saved regression input
+#   tools/fuzz.sh [--ci] [SECONDS_PER_TARGET] [TARGET...]
+# Builds tests/fuzz into build/fuzz (only the targets asked for, all cores,
+# ccache when there is one), replays every saved regression input
 # (tests/fuzz/regressions/<target>/), then runs each target for SECONDS (60
-# by default) from its seeds: tests/fuzz/corpus/<target>/ plus the inputs the
-# project already has (examples/, ../shared/meshes, firmware-profiles/, a
-# journal written for the purpose). A crash, hang, leak or sanitizer report
-# fails the run and leaves the input in build/fuzz/findings/<target>/: fix the
-# bug, then save the input under tests/fuzz/regressions/<target>/.
+# by default, or $FUZZ_SECONDS) from its seeds: tests/fuzz/corpus/<target>/
+# plus the inputs the project already has (examples/, ../shared/meshes,
+# firmware-profiles/, tests/pendant/fixtures/, a journal written for the
+# purpose) and what earlier runs added in build/fuzz/corpus/<target>/. A
+# crash, hang, leak or sanitizer report fails the run and leaves the input in
+# build/fuzz/findings/<target>/: fix the bug, then save the input under
+# tests/fuzz/regressions/<target>/.
+#
+# --ci: the bounded run for the test command: 10 s per target unless
+# SECONDS or $FUZZ_SECONDS says otherwise, and the build's and the runs' times
+# printed at the end. Exits 1 on any finding, 2 when it cannot build.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
-secs=${1:-60}
-shift || true
+ci=0
+if [[ ${1:-} == --ci ]]; then
+  ci=1
+  shift
+fi
+secs=${FUZZ_SECONDS:-$((ci ? 10 : 60))}
+if [[ ${1:-} =~ ^[0-9]+$ ]]; then
+  secs=$1
+  shift
+fi
 build=build/fuzz
-cmake -S tests/fuzz -B "$build" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None >/dev/null
-cmake --build "$build" -j"$(nproc)"
-
-all=(fuzz_stl fuzz_gcode fuzz_grbl_answers fuzz_marlin_answers fuzz_profile fuzz_journal)
+all=(fuzz_stl fuzz_gcode fuzz_grbl_answers fuzz_marlin_answers fuzz_profile fuzz_journal
+     fuzz_http_request fuzz_ws_message fuzz_job_params fuzz_daemon_config fuzz_pendant_report)
 targets=("${@:-${all[@]}}")
+for t in "${targets[@]}"; do
+  [[ " ${all[*]} " == *" $t "* ]] || { echo "fuzz: no target $t (targets: ${all[*]})"; exit 2; }
+done
 shared=${CNCSTREAM_SHARED_MESHES_DIR:-$root/../shared/meshes}
+
+command -v clang++ >/dev/null || { echo "fuzz: needs clang++ (Debian: clang, libclang-rt-14-dev)"; exit 2; }
+t0=$(date +%s)
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+build_targets=("${targets[@]}")
+[[ " ${targets[*]} " == *" fuzz_journal "* ]] && build_targets+=(make_journal_seed)
+if ! { cmake -S tests/fuzz -B "$build" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None "${launcher[@]}" >/dev/null &&
+       cmake --build "$build" -j"$(nproc)" --target "${build_targets[@]}"; }; then
+  echo "fuzz: the build failed"
+  exit 2
+fi
+t1=$(date +%s)
 
 seed() {  # seed TARGET DIR: the seeds the project already has
   local t=$1 d=$2
@@ -32,6 +61,7 @@ seed() {  # seed TARGET DIR: the seeds the project already has
       done ;;
     fuzz_profile) cp -f firmware-profiles/*.toml "$d"/ ;;
     fuzz_journal) "$build"/make_journal_seed "$d"/seed.sqlite ;;
+    fuzz_pendant_report) cp -f tests/pendant/fixtures/*.txt "$d"/ ;;
   esac
 }
 
@@ -40,7 +70,6 @@ report=$build/report.txt
 : >"$report"
 for t in "${targets[@]}"; do
   bin=$build/$t
-  [[ -x $bin ]] || { echo "fuzz: no target $t"; exit 2; }
   findings=$build/findings/$t
   mkdir -p "$findings"
   regressions=(tests/fuzz/regressions/"$t"/*)
@@ -66,5 +95,9 @@ for t in "${targets[@]}"; do
     status=1
   fi
 done
+t2=$(date +%s)
 echo "fuzz: report in $report"
+if ((ci)); then
+  echo "fuzz: build $((t1 - t0)) s, ${#targets[@]} targets run in $((t2 - t1)) s ($secs s each)" | tee -a "$report"
+fi
 exit $status

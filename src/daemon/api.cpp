@@ -2,30 +2,13 @@
 
 #include <spdlog/spdlog.h>
 
-#include <algorithm>
-#include <cctype>
+#include "cncstream/daemon/body_fields.hpp"
+#include "cncstream/daemon/precheck.hpp"
+#include "cncstream/daemon/ws_message.hpp"
 
 namespace cncstream::daemon {
 
 using nlohmann::json;
-
-namespace {
-
-bool valid_client_id(const std::string& s) {
-  return !s.empty() && s.size() <= 64 &&
-         std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'; });
-}
-
-}  // namespace
-
-json parse_body(const Request& r) {
-  if (r.body.empty()) return json::object();
-  try {
-    return json::parse(r.body);
-  } catch (const json::parse_error& e) {
-    throw ApiError{400, "bad_request", "malformed JSON at byte " + std::to_string(e.byte) + " of the body"};
-  }
-}
 
 Api::Api(boost::asio::io_context& io, boost::asio::thread_pool& pool, const DaemonConfig& config, Auth& auth,
          FileStore& files, Machines& machines, JobManager& jobs, WsHub& hub, std::filesystem::path web_root)
@@ -47,41 +30,9 @@ Machine& Api::machine(const Request& r, std::size_t param) {
   return *m;
 }
 
-std::int64_t Api::job_id(const Request& r) const {
-  const std::string& s = r.params.at(0);
-  if (s.empty() || s.size() > 18 || !std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; }))
-    throw ApiError{404, "not_found", "no job '" + s.substr(0, 64) + "'"};
-  return std::stoll(s);
-}
+std::int64_t Api::job_id(const Request& r) const { return job_id_param(r.params.at(0)); }
 
-std::optional<Response> Api::precheck(Request& r, bool ws) {
-  int status = 0;
-  const Route* route = router_.match(r, status);
-  if (!route) {
-    if (status == 405) return Response::error(405, "method_not_allowed", r.method + " is not allowed on " + r.path);
-    // Unknown paths get a 404 only after the auth check (a 404 vs 401 would map the API for strangers).
-    if (auto e = auth_.check(r, ws)) return e;
-    return Response::error(404, "not_found", "no route " + r.path.substr(0, 200));
-  }
-  if (!route->public_route)
-    if (auto e = auth_.check(r, ws)) return e;
-  r.client_id = r.header("x-client-id");
-  if (ws && r.client_id.empty()) r.client_id = r.query_value("client_id").value_or("");
-  if (!r.client_id.empty() && !valid_client_id(r.client_id))
-    return Response::error(400, "bad_request", "X-Client-Id: use 1-64 letters, digits, '_' or '-'");
-  if (is_upload(r)) {
-    const std::string len = r.header("content-length");
-    if (len.empty())
-      return Response::error(411, "length_required", "an upload needs Content-Length (at most " +
-                                                         std::to_string(config_.limits.max_upload_bytes) + " bytes)");
-    char* end = nullptr;
-    const unsigned long long n = std::strtoull(len.c_str(), &end, 10);
-    if (*end || n > config_.limits.max_upload_bytes)
-      return Response::error(413, "too_large", "the upload's " + len.substr(0, 24) + " bytes exceed the limit of " +
-                                                   std::to_string(config_.limits.max_upload_bytes));
-  }
-  return std::nullopt;
-}
+std::optional<Response> Api::precheck(Request& r, bool ws) { return precheck_request(router_, auth_, config_.limits, r, ws); }
 
 void Api::handle(Request r, Respond respond) {
   int status = 0;
@@ -130,8 +81,8 @@ void Api::add_routes() {
 std::shared_ptr<WsClient> Api::ws_open(const Request& upgrade, std::weak_ptr<WsPeer> peer) {
   auto c = hub_.add(upgrade.client_id, std::move(peer));
   if (!c) return nullptr;
-  hub_.send(*c, WsHub::frame(json{{"type", "hello"}, {"client_id", upgrade.client_id}, {"machines", machines_.names()},
-                                  {"version", "0.1.0"}}.dump()));
+  hub_.send(*c, WsHub::frame(dump_json(json{{"type", "hello"}, {"client_id", upgrade.client_id},
+                                            {"machines", machines_.names()}, {"version", "0.1.0"}})));
   return c;
 }
 
@@ -143,37 +94,32 @@ void Api::ws_close(WsClient& c) {
 }
 
 void Api::ws_message(WsClient& c, const std::string& text) {
-  json msg;
   json id = nullptr;
-  auto reply_error = [&](const std::string& code, const std::string& message) {
-    hub_.send(c, WsHub::frame(json{{"type", "error"}, {"id", id}, {"code", code}, {"message", message}}.dump()));
+  auto send = [&](const json& j) { hub_.send(c, WsHub::frame(dump_json(j))); };
+  auto reply_error = [&](const ApiError& e) {
+    send(json{{"type", "error"}, {"id", id}, {"code", e.code}, {"message", e.message}});
   };
+  WsMessage msg;
   try {
-    msg = json::parse(text);
-  } catch (const json::parse_error& e) {
-    reply_error("bad_request", "malformed JSON at byte " + std::to_string(e.byte));
+    msg = parse_ws_message(text);
+  } catch (const WsMessageError& e) {
+    id = e.id;
+    reply_error(e.error);
     return;
   }
-  if (!msg.is_object() || !msg.contains("type") || !msg["type"].is_string()) {
-    reply_error("bad_request", "expected an object with a string 'type'");
-    return;
-  }
-  if (msg.contains("id")) id = msg["id"];
+  id = msg.id;
   machines_.touch(c.client_id);
-  const std::string type = msg["type"].get<std::string>();
-  auto ack = [&] { hub_.send(c, WsHub::frame(json{{"type", "ack"}, {"id", id}}.dump())); };
+  const std::string& type = msg.type;
+  auto ack = [&] { send(json{{"type", "ack"}, {"id", id}}); };
   try {
     if (type == "ping") {
-      hub_.send(c, WsHub::frame(json{{"type", "pong"}, {"id", id}}.dump()));
+      send(json{{"type", "pong"}, {"id", id}});
       return;
     }
     if (type == "subscribe") {
-      if (!msg.contains("machines") || !msg["machines"].is_array()) throw ApiError{400, "bad_request", "machines: expected an array"};
       std::set<std::string> set;
       bool all = false;
-      for (const auto& m : msg["machines"]) {
-        if (!m.is_string()) throw ApiError{400, "bad_request", "machines: expected names"};
-        const auto n = m.get<std::string>();
+      for (const auto& n : msg.machines) {
         if (n == "*") all = true;
         else if (!machines_.find(n)) throw ApiError{404, "not_found", "no machine '" + n.substr(0, 64) + "'"};
         else set.insert(n);
@@ -187,51 +133,33 @@ void Api::ws_message(WsClient& c, const std::string& text) {
       if (auto p = c.peer.lock()) p->kick();
       return;
     }
-    if (type == "jog_start" || type == "jog_renew" || type == "jog_release") {
-      if (!msg.contains("machine") || !msg["machine"].is_string()) throw ApiError{400, "bad_request", "machine: required"};
-      Machine* m = machines_.find(msg["machine"].get<std::string>());
-      if (!m) throw ApiError{404, "not_found", "no machine '" + msg["machine"].get<std::string>().substr(0, 64) + "'"};
-      auto& s = *m->session;
-      if (type == "jog_release") {
-        s.jog_release();  // never refused: stopping is always allowed
-        if (m->jog_ws_client == c.id) m->jog_ws_client = 0;
-        ack();
-        return;
-      }
-      if (type == "jog_renew") {
-        if (m->jog_ws_client != c.id) throw ApiError{409, "bad_state", "no jog of yours runs on " + m->config.name};
-        if (auto r = s.jog_renew(); !r) {
-          m->jog_ws_client = 0;
-          throw ApiError{409, "refused", r.reason};
-        }
-        ack();
-        return;
-      }
-      machines_.require_control(*m, c.client_id);
-      if (!msg.contains("dir") || !msg["dir"].is_array() || msg["dir"].size() != 3)
-        throw ApiError{400, "bad_request", "dir: expected [x, y, z]"};
-      protocol::JogDirection dir;
-      double norm = 0;
-      for (int i = 0; i < 3; ++i) {
-        if (!msg["dir"][i].is_number()) throw ApiError{400, "bad_request", "dir: expected 3 numbers"};
-        dir.v[static_cast<std::size_t>(i)] = msg["dir"][i].get<double>();
-        if (!std::isfinite(dir.v[static_cast<std::size_t>(i)])) throw ApiError{400, "bad_request", "dir: not finite"};
-        norm += std::abs(dir.v[static_cast<std::size_t>(i)]);
-      }
-      if (norm == 0) throw ApiError{400, "bad_request", "dir: all zero"};
-      if (!msg.contains("feed") || !msg["feed"].is_number()) throw ApiError{400, "bad_request", "feed: required, mm/min"};
-      const double feed = msg["feed"].get<double>();
-      if (!(feed > 0 && feed <= 100000)) throw ApiError{400, "bad_request", "feed: must be > 0 and <= 100000 mm/min"};
-      if (auto r = s.jog_start(dir, feed, 0.3); !r) throw ApiError{409, "refused", r.reason};
-      m->jog_ws_client = c.id;
+    // jog_start, jog_renew, jog_release
+    Machine* m = machines_.find(msg.machine);
+    if (!m) throw ApiError{404, "not_found", "no machine '" + msg.machine.substr(0, 64) + "'"};
+    auto& s = *m->session;
+    if (type == "jog_release") {
+      s.jog_release();  // never refused: stopping is always allowed
+      if (m->jog_ws_client == c.id) m->jog_ws_client = 0;
       ack();
       return;
     }
-    throw ApiError{400, "bad_request", "unknown message type '" + type.substr(0, 40) + "'"};
+    if (type == "jog_renew") {
+      if (m->jog_ws_client != c.id) throw ApiError{409, "bad_state", "no jog of yours runs on " + m->config.name};
+      if (auto r = s.jog_renew(); !r) {
+        m->jog_ws_client = 0;
+        throw ApiError{409, "refused", r.reason};
+      }
+      ack();
+      return;
+    }
+    machines_.require_control(*m, c.client_id);
+    if (auto r = s.jog_start(msg.dir, msg.feed, 0.3); !r) throw ApiError{409, "refused", r.reason};
+    m->jog_ws_client = c.id;
+    ack();
   } catch (const ApiError& e) {
-    reply_error(e.code, e.message);
+    reply_error(e);
   } catch (const json::exception& e) {
-    reply_error("bad_request", e.what());
+    reply_error(ApiError{400, "bad_request", e.what()});
   }
 }
 

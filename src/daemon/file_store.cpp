@@ -16,12 +16,42 @@ namespace cncstream::daemon {
 
 namespace fs = std::filesystem;
 
+namespace {
+// The length of the UTF-8 character starting at s[i], or 0 when the bytes
+// there are not one (a stray continuation byte, an overlong form, a
+// surrogate, beyond U+10FFFF, or cut short).
+std::size_t utf8_char_length(const std::string& s, std::size_t i) {
+  const auto b = [&](std::size_t k) { return i + k < s.size() ? static_cast<unsigned char>(s[i + k]) : 0u; };
+  const auto cont = [&](std::size_t k) { return (b(k) & 0xC0) == 0x80; };
+  const unsigned c = b(0);
+  if (c < 0x80) return 1;
+  if (c >= 0xC2 && c <= 0xDF) return cont(1) ? 2 : 0;
+  if (c >= 0xE0 && c <= 0xEF) {
+    const unsigned lo = c == 0xE0 ? 0xA0 : 0x80, hi = c == 0xED ? 0x9F : 0xBF;
+    return b(1) >= lo && b(1) <= hi && cont(2) ? 3 : 0;
+  }
+  if (c >= 0xF0 && c <= 0xF4) {
+    const unsigned lo = c == 0xF0 ? 0x90 : 0x80, hi = c == 0xF4 ? 0x8F : 0xBF;
+    return b(1) >= lo && b(1) <= hi && cont(2) && cont(3) ? 4 : 0;
+  }
+  return 0;
+}
+}  // namespace
+
 std::string sanitize_label(const std::string& name) {
   std::string out;
-  for (char c : name) {
-    const auto u = static_cast<unsigned char>(c);
-    out.push_back(u < 0x20 || u == 0x7f || c == '/' || c == '\\' ? '_' : c);
-    if (out.size() >= 255) break;
+  for (std::size_t i = 0; i < name.size();) {
+    const std::size_t n = utf8_char_length(name, i);
+    const auto u = static_cast<unsigned char>(name[i]);
+    if (n == 0 || u < 0x20 || u == 0x7f || u == '/' || u == '\\') {
+      if (out.size() + 1 > 255) break;
+      out.push_back('_');
+      i += n == 0 ? 1 : n;
+      continue;
+    }
+    if (out.size() + n > 255) break;
+    out.append(name, i, n);
+    i += n;
   }
   if (out.empty() || out == "." || out == "..") out = "unnamed";
   return out;

@@ -12,6 +12,8 @@
 #include <chrono>
 #include <limits>
 
+#include "http_request.hpp"
+
 namespace cncstream::daemon {
 
 namespace net = boost::asio;
@@ -24,19 +26,6 @@ namespace {
 
 std::chrono::steady_clock::duration seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
-}
-
-template <class Fields>
-Request request_from(const http::request_header<Fields>& h, bool& ok) {
-  Request r;
-  r.method = std::string(h.method_string());
-  ok = split_target(std::string_view(h.target().data(), h.target().size()), r.path, r.query);
-  for (const auto& f : h) {
-    std::string name(f.name_string());
-    for (auto& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    r.headers[name] = std::string(f.value());
-  }
-  return r;
 }
 
 }  // namespace
@@ -175,7 +164,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void read_header() {
     header_.emplace();
-    header_->header_limit(16 * 1024);
+    header_->header_limit(kMaxHeaderBytes);
     // The body's size is checked by the body's own parser (JSON) or the
     // precheck (uploads), each answering 413. (Not boost::none: Beast 1.74
     // compares a Content-Length with the empty optional and always fails.)
@@ -253,6 +242,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     }
     body_.emplace(std::move(*header_));
     body_->body_limit(server_->config.limits.max_json_bytes);
+    if (declared_beyond(body_->content_length(), server_->config.limits.max_json_bytes)) {
+      disarm();
+      keep_alive_ = false;  // the body is not read
+      write(Response::error(413, "too_large", "the body exceeds the limit"), version_);
+      return;
+    }
     http::async_read(stream_, buffer_, *body_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
       if (ec) return self->body_failed(ec);
       self->req_.body = std::move(self->body_->get().body());

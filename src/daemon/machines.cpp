@@ -168,7 +168,7 @@ std::vector<std::string> Machines::names() const {
 
 void Machines::publish(Machine& m, json j) {
   j["machine"] = m.config.name;
-  hub_.publish(m.config.name, WsHub::frame(j.dump()));
+  hub_.publish(m.config.name, WsHub::frame(dump_json(j)));
 }
 
 std::string Machines::status_frame(Machine& m) {
@@ -190,7 +190,7 @@ std::string Machines::status_frame(Machine& m) {
     j["buffer"] = {{"planner_free", opt(st->planner_free)}, {"rx_free", opt(st->rx_free)}};
     j["line"] = opt(st->line_number);
   }
-  return j.dump();
+  return dump_json(j);
 }
 
 // Progress frames at most 10 per second: the status frames carry the pace.

@@ -1,5 +1,7 @@
 // The web page: GET / and /static/<path> from the web root, with content
 // types, and nothing outside the root.
+#include "cncstream/daemon/static_files.hpp"
+
 #include "cncstream/daemon/api.hpp"
 
 namespace cncstream::daemon {

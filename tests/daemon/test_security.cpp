@@ -156,6 +156,24 @@ TEST(DaemonSecurity, UploadLimitsAnswerBeforeTheBodyIsStored) {
   EXPECT_TRUE(s.alive());
 }
 
+// Beast checks a body limit against Content-Length only when the header is
+// complete, and the header is read without one: a JSON body's declared length
+// was not checked at all (found by fuzz_http_request), so an absurd one threw
+// bad_alloc out of the event loop and a large one was read whole.
+TEST(DaemonSecurity, JsonBodiesDeclaredBeyondTheLimitAre413BeforeAByteIsRead) {
+  SecureDaemon s;
+  for (const char* length : {"4230881649935282631", "2097152"}) {
+    const int fd = connect_to(s.d.port());
+    ASSERT_GE(fd, 0);
+    send_all(fd, "POST /api/v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: Bearer " + s.d_token() +
+                     "\r\nContent-Type: application/json\r\nContent-Length: " + length + "\r\n\r\n{");
+    const auto r = parse_response(read_all(fd, 5));
+    ::close(fd);
+    EXPECT_EQ(r.status, 413) << length;
+  }
+  EXPECT_TRUE(s.alive());
+}
+
 TEST(DaemonSecurity, MalformedJsonAndAbsurdParametersAre400) {
   SecureDaemon s;
   const Http h = s.authed();
@@ -186,6 +204,40 @@ TEST(DaemonSecurity, MalformedJsonAndAbsurdParametersAre400) {
   EXPECT_EQ(h.post("/api/v1/machines/sim1/actions/format_disk").status, 400);
   EXPECT_EQ(h.request("POST", "/api/v1/machines/sim1/control", "{}", {{"X-Client-Id", "bad id!"}}).status, 400);
   EXPECT_EQ(h.request("PUT", "/api/v1/machines").status, 405);
+  EXPECT_TRUE(s.alive());
+}
+
+// Each of these once took the daemon down from its event loop: an answer
+// quoting bytes that are not UTF-8 (nlohmann's dump() threw), a WebSocket
+// number beyond a double (out_of_range escaped the handler), an id nested
+// deep enough to overflow the stack when echoed (tests/fuzz).
+TEST(DaemonSecurity, BytesThatAreNotUtf8AndOddJsonNeverTakeTheDaemonDown) {
+  SecureDaemon s;
+  const Http h = s.authed();
+  EXPECT_EQ(h.get("/%ff%fe").status, 404);
+  const auto machine = h.get("/api/v1/machines/%ff");
+  EXPECT_EQ(machine.status, 404);
+  EXPECT_EQ(machine.j()["error"]["message"], "no machine '\xEF\xBF\xBD'");
+  EXPECT_EQ(h.request("POST", "/api/v1/machines/sim1/control", "{}", {{"Origin", "http://\xff.example"}}).status, 403);
+  EXPECT_EQ(s.d.http.request("GET", "/api/v1/machines", "", {{"Authorization", "Bearer \xff"}}).status, 401);
+  const auto up = h.request("POST", "/api/v1/files?name=%ff%C3%A9.nc", "G0 X1\n", {{"Content-Type", "text/plain"}});
+  ASSERT_EQ(up.status, 201) << up.body;
+  EXPECT_EQ(up.j()["name"], "_\xC3\xA9.nc");
+  EXPECT_EQ(h.get("/api/v1/files").j()["files"].size(), 1u);
+  const auto t = h.post("/api/v1/ws-token").j()["token"].get<std::string>();
+  WsClient ws;
+  ASSERT_EQ(ws.connect(s.d.port(), "/api/v1/ws?client_id=odd&token=" + t), 101);
+  auto answer = [&](const std::string& text) -> json {
+    EXPECT_TRUE(ws.send(text));
+    const auto m = ws.wait_message([](const json& j) { return j["type"] != "hello" && j["type"] != "status"; }, 5);
+    return m ? *m : json();
+  };
+  EXPECT_EQ(answer(R"({"type": "ping", "id": 1e500})")["message"], "a JSON number is out of range");
+  const std::string deep(30000, '[');
+  EXPECT_EQ(answer(R"({"type": "ping", "id": )" + deep + std::string(30000, ']') + "}")["message"],
+            "JSON nested deeper than 32 levels");
+  EXPECT_EQ(answer(R"({"type": "ping", "id": "\u00e9"})"), json({{"type", "pong"}, {"id", "\xC3\xA9"}}));
+  EXPECT_EQ(h.request("POST", "/api/v1/jobs", R"({"machine": "sim1", "file": "x", "params": {"feed": -1e999}})").status, 400);
   EXPECT_TRUE(s.alive());
 }
 

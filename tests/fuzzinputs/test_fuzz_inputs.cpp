@@ -1,15 +1,9 @@
 // Every fuzz target (tests/fuzz/targets) run in the ordinary test builds —
 // the ASan+UBSan one included — over its saved regression inputs and seeds,
 // so a fixed crash stays fixed without clang or libFuzzer. The fuzzing itself
-// is tools/fuzz.sh.
-#include <gtest/gtest.h>
-
-#include <cstdint>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
-#include <string>
-#include <vector>
+// is tools/fuzz.sh. The daemon's targets need the daemon's library: they are
+// run by tests/daemon/test_fuzz_inputs_daemon.cpp.
+#include "fuzz/replay_inputs.hpp"
 
 #define LLVMFuzzerTestOneInput fuzz_stl_one
 #include "fuzz/targets/fuzz_stl.cpp"
@@ -29,31 +23,11 @@
 #define LLVMFuzzerTestOneInput fuzz_journal_one
 #include "fuzz/targets/fuzz_journal.cpp"
 #undef LLVMFuzzerTestOneInput
+#define LLVMFuzzerTestOneInput fuzz_pendant_report_one
+#include "fuzz/targets/fuzz_pendant_report.cpp"
+#undef LLVMFuzzerTestOneInput
 
-namespace fs = std::filesystem;
-
-namespace {
-
-using Target = int (*)(const std::uint8_t*, std::size_t);
-
-// The saved regressions and the checked-in seeds of one target.
-std::size_t run_inputs(const std::string& name, Target target) {
-  std::size_t n = 0;
-  for (const char* kind : {"regressions", "corpus"}) {
-    const fs::path dir = fs::path(CNCSTREAM_SOURCE_DIR) / "tests/fuzz" / kind / name;
-    if (!fs::is_directory(dir)) continue;
-    for (const auto& e : fs::directory_iterator(dir)) {
-      std::ifstream in(e.path(), std::ios::binary);
-      const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      SCOPED_TRACE(e.path().string());
-      EXPECT_EQ(target(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()), 0);
-      ++n;
-    }
-  }
-  return n;
-}
-
-}  // namespace
+using fuzz_replay::run_inputs;
 
 TEST(FuzzInputs, Stl) { run_inputs("fuzz_stl", fuzz_stl_one); }
 TEST(FuzzInputs, Gcode) { EXPECT_GE(run_inputs("fuzz_gcode", fuzz_gcode_one), 4u); }
@@ -65,3 +39,4 @@ TEST(FuzzInputs, Journal) {
   const std::string empty;
   EXPECT_EQ(fuzz_journal_one(reinterpret_cast<const std::uint8_t*>(empty.data()), 0), 0);
 }
+TEST(FuzzInputs, PendantReport) { EXPECT_GE(run_inputs("fuzz_pendant_report", fuzz_pendant_report_one), 2u); }

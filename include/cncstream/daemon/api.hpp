@@ -15,8 +15,11 @@
 #include "cncstream/daemon/file_store.hpp"
 #include "cncstream/daemon/http_types.hpp"
 #include "cncstream/daemon/job_manager.hpp"
+#include "cncstream/daemon/json_body.hpp"
 #include "cncstream/daemon/machines.hpp"
+#include "cncstream/daemon/precheck.hpp"
 #include "cncstream/daemon/router.hpp"
+#include "cncstream/daemon/static_files.hpp"
 #include "cncstream/daemon/ws_hub.hpp"
 
 namespace cncstream::daemon {
@@ -32,7 +35,7 @@ class Api {
   // Before the body is read: route exists, token, Origin/Host, client id,
   // and for an upload its declared size. nullopt: go on.
   std::optional<Response> precheck(Request& r, bool websocket_upgrade);
-  bool is_upload(const Request& r) const { return r.method == "POST" && r.path == "/api/v1/files"; }
+  bool is_upload(const Request& r) const { return daemon::is_upload(r); }
   void handle(Request r, Respond respond);
 
   // WebSocket clients.
@@ -63,14 +66,5 @@ class Api {
   std::filesystem::path web_root_;
   Router router_;
 };
-
-// Parses a JSON request body; ApiError 400 naming the byte of a syntax error.
-nlohmann::json parse_body(const Request& r);
-
-// Static files: the content type for a file name's extension.
-std::string content_type_for(const std::filesystem::path& p);
-// A request's path below the web root, or nullopt for anything that could
-// leave it ("..", "\\", NUL, an absolute path, a hidden file).
-std::optional<std::filesystem::path> safe_static_path(const std::filesystem::path& root, const std::string& rel);
 
 }  // namespace cncstream::daemon

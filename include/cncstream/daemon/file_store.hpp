@@ -32,7 +32,9 @@ class FileStoreError : public std::runtime_error {
   std::string code;
 };
 
-// Control characters, '/' and '\' become '_'; at most 255 bytes; "" -> "unnamed".
+// Control characters, '/', '\' and bytes that are not UTF-8 become '_'; at
+// most 255 bytes, never cutting a character; "" -> "unnamed". (The label is
+// stored and sent as JSON, which must be UTF-8.)
 std::string sanitize_label(const std::string& name);
 bool is_file_id(const std::string& s);  // 64 lowercase hex digits
 

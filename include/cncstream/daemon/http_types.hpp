@@ -22,6 +22,14 @@ inline std::string cat(std::initializer_list<std::string_view> parts) {
   return s;
 }
 
+// JSON text for a response or a WebSocket frame. Bytes that are not UTF-8 (a
+// percent-decoded path, a header, a controller's message) become U+FFFD
+// instead of throwing: an answer quoting a client's bytes must not be able
+// to take the daemon down (nlohmann's dump() throws on them by default).
+inline std::string dump_json(const nlohmann::json& j) {
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 struct Request {
   std::string method;  // "GET", "POST", ...
   std::string path;    // decoded path without the query
@@ -54,7 +62,7 @@ struct Response {
   static Response json(int status, const nlohmann::json& j) {
     Response r;
     r.status = status;
-    r.body = j.dump();
+    r.body = dump_json(j);
     return r;
   }
   static Response error(int status, const std::string& code, const std::string& message) {
