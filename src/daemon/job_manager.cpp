@@ -240,7 +240,7 @@ void JobManager::publish_job(const DaemonJob& j) {
   json m = {{"type", "job"},     {"job", j.row.id},         {"machine", j.row.machine}, {"state", j.row.state},
             {"progress", f["progress"]}, {"eta_s", f["progress"]["eta_s"]}, {"message", j.row.message},
             {"generation", f["generation"]}, {"verify", f["verify"]}};
-  hub_.publish(j.row.machine, WsHub::frame(m.dump()));
+  hub_.publish(j.row.machine, WsHub::frame(dump_json(m)));
 }
 
 std::vector<DaemonJob*> JobManager::unfinished(const std::string& machine) {
@@ -258,7 +258,7 @@ void JobManager::publish_queue(const std::string& machine) {
   for (auto* j : unfinished(machine))
     list.push_back({{"id", j->row.id}, {"state", j->row.state}, {"position", j->row.position},
                     {"file_name", j->row.file_name}});
-  hub_.publish(machine, WsHub::frame(json{{"type", "queue"}, {"machine", machine}, {"jobs", list}}.dump()));
+  hub_.publish(machine, WsHub::frame(dump_json(json{{"type", "queue"}, {"machine", machine}, {"jobs", list}})));
 }
 
 void JobManager::set_state(DaemonJob& j, const std::string& state, const std::string& message) {
