@@ -55,8 +55,6 @@ void ExecutionEstimate::update() {
     // still in the planner); with fewer moves known, the oldest of them.
     const std::size_t back = std::min<std::size_t>(static_cast<std::size_t>(queued_), moves_.size());
     line = moves_[moves_.size() - back];
-    // The lines between the previous move and the running one (modal words,
-    // M codes) have run: what runs is this move.
   }
   // Never backwards: a report taken before an answer can say more blocks
   // are queued than the answers since.
