@@ -52,8 +52,34 @@ void FirmwareIdentifier::send_query(const std::string& query, double now) {
   deadline_ = now + opt_.query_timeout_s;
 }
 
+void FirmwareIdentifier::poll_status(double now) {
+  output_ += "?";
+  next_poll_ = now + opt_.status_poll_s;
+}
+
 void FirmwareIdentifier::on_line(std::string_view line, double now) {
   if (phase_ == Phase::Idle || phase_ == Phase::Done) return;
+  if (phase_ == Phase::WaitQuiet && !match_banner(profiles_, line)) {
+    const auto r = parse_response(line);
+    if (r.kind == ResponseKind::Status && r.status) {
+      status_seen_ = true;
+      const auto st = r.status->state;
+      if (st == MachineState::Idle || st == MachineState::Alarm) {
+        if (++calm_reports_ >= 2) send_query("$I", now);
+      } else {
+        calm_reports_ = 0;
+        if (!busy_noted_) {
+          busy_noted_ = true;
+          notes_.push_back("the controller is busy (" + r.status->state_text +
+                           ") with lines sent before this connection (a program that died mid-job?): waiting for it "
+                           "to finish before identifying it; a held machine waits for cycle start or a reset");
+        }
+      }
+    } else if (r.kind == ResponseKind::Ok || r.kind == ResponseKind::Error) {
+      calm_reports_ = 0;  // an answer to an earlier host's line: not ours, and it was not quiet
+    }
+    return;
+  }
   if (const auto* p = match_banner(profiles_, line)) {
     // A banner during the query means the board was still booting: ask again.
     candidate_ = p;
@@ -63,7 +89,14 @@ void FirmwareIdentifier::on_line(std::string_view line, double now) {
   }
   if (phase_ != Phase::Query) return;  // boot noise before the banner
   const auto r = parse_response(line);
+  if (r.kind == ResponseKind::Status) return;  // a late answer to a '?' of the wait
   if (r.kind == ResponseKind::Ok) {
+    // Every query's answer has lines before its ok: a lone ok answers
+    // something else (an earlier host's line).
+    if (lines_.empty()) {
+      lone_ok_ = true;
+      return;
+    }
     finish(nullptr);
   } else if (r.kind == ResponseKind::Error || r.kind == ResponseKind::Alarm) {
     // Some controllers refuse $I in alarm or answer ALARM first; keep what we have.
@@ -75,6 +108,7 @@ void FirmwareIdentifier::on_line(std::string_view line, double now) {
 }
 
 double FirmwareIdentifier::next_deadline() const {
+  if (phase_ == Phase::WaitQuiet) return status_seen_ ? next_poll_ : std::min(next_poll_, deadline_);
   if (phase_ == Phase::WaitBanner || phase_ == Phase::Query) return deadline_;
   return std::numeric_limits<double>::infinity();
 }
@@ -84,10 +118,18 @@ void FirmwareIdentifier::tick(double now) {
     char secs[32];
     std::snprintf(secs, sizeof secs, "%.1f", opt_.banner_timeout_s);
     warnings_.push_back(std::string("no banner within ") + secs +
-                        " s after opening the port (board without DTR reset?); asking with $I");
-    send_query("$I", now);
+                        " s after opening the port (board without DTR reset?); asking with $I once it is idle");
+    phase_ = Phase::WaitQuiet;
+    deadline_ = now + opt_.query_timeout_s;
+    poll_status(now);
+  } else if (phase_ == Phase::WaitQuiet) {
+    if (!status_seen_ && now >= deadline_) {
+      send_query("$I", now);  // no answer to '?': ask as before
+    } else if (now >= next_poll_) {
+      poll_status(now);
+    }
   } else if (phase_ == Phase::Query && now >= deadline_) {
-    finish("no answer to the identification query");
+    finish(lone_ok_ ? "the identification query got a bare 'ok' and no version" : "no answer to the identification query");
   }
 }
 

@@ -238,6 +238,7 @@ void MachineSession::on_data(std::string_view bytes) {
     else if (settings_phase_ == SettingsPhase::Reading) on_settings_line(line);
     else pending_after_id_.append(line).push_back('\n');
   });
+  for (const auto& n : identifier_->take_notes()) log("warning: " + n);
   transport_->write(identifier_->take_output());
   after_identification();
   arm_timer();
@@ -271,6 +272,8 @@ void MachineSession::after_identification() {
 
 void MachineSession::on_settings_line(std::string_view line) {
   while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
+  // `$$` prints its settings before its ok: an ok before any is not its answer.
+  if (line == "ok" && settings_.empty()) return;
   if (line == "ok") settings_done("");
   else if (line.rfind("error:", 0) == 0) settings_done("the controller answered " + std::string(line));
   else if (const auto kv = parse_setting_line(line)) settings_[kv->first] = kv->second;
@@ -367,6 +370,7 @@ void MachineSession::on_timer() {
   } else if (identifier_) {
     if (!identifier_->done()) {
       identifier_->tick(t);
+      for (const auto& n : identifier_->take_notes()) log("warning: " + n);
       if (transport_) transport_->write(identifier_->take_output());
     }
     after_identification();

@@ -109,8 +109,9 @@ Identification identify(const std::vector<std::string>& before, const std::vecto
   const auto q = id.take_output();
   if (sent) *sent = q;
   for (const auto& l : answer) id.on_line(l, 0.2);
-  id.tick(10);  // timeouts if the answer did not finish it
+  id.tick(10);  // timeouts if the answer did not finish it (banner, status, query)
   id.tick(20);
+  id.tick(30);
   return id.result();
 }
 }  // namespace
@@ -164,16 +165,75 @@ TEST(Identify, UnknownFallsBackToConservativeSubsetWithWarning) {
   EXPECT_FALSE(r.warnings.empty());
 }
 
-TEST(Identify, NoBannerAsksWithDollarIAfterTimeout) {
+TEST(Identify, NoBannerAsksWithDollarIOnceTheControllerIsIdle) {
   FirmwareIdentifier id(profiles());
   id.start(0);
   id.tick(1.0);
   EXPECT_EQ(id.take_output(), "");
   id.tick(3.5);
+  EXPECT_EQ(id.take_output(), "?") << "no banner: is it busy?";
+  id.on_line("<Idle|MPos:0.000,0.000,0.000|FS:0,0>", 3.55);
+  id.tick(3.7);
+  EXPECT_EQ(id.take_output(), "?");
+  id.on_line("<Idle|MPos:0.000,0.000,0.000|FS:0,0>", 3.75);
   EXPECT_EQ(id.take_output(), "$I\n");
-  id.on_line("[VER:1.1h.20190830:]", 3.6);
-  id.on_line("ok", 3.7);
+  id.on_line("<Idle|MPos:0.000,0.000,0.000|FS:0,0>", 3.76);  // a late answer to a '?'
+  id.on_line("[VER:1.1h.20190830:]", 3.8);
+  id.on_line("ok", 3.9);
   ASSERT_TRUE(id.done());
   EXPECT_EQ(id.result().profile.id, "grbl-1.1");
+  EXPECT_EQ(id.result().query_lines, std::vector<std::string>{"[VER:1.1h.20190830:]"});
   EXPECT_FALSE(id.result().warnings.empty());
+}
+
+// A board that did not reset when the port opened may still be running the
+// lines of a host that died: their answers are not answers to $I (taken for
+// them, the next job's character count went wrong and the controller's
+// buffer overflowed: found by the crash runs at real speed).
+TEST(Identify, ABusyControllerIsLeftToFinishAndItsAnswersAreIgnored) {
+  FirmwareIdentifier id(profiles());
+  id.start(0);
+  id.tick(3.5);
+  EXPECT_EQ(id.take_output(), "?");
+  id.on_line("<Run|MPos:10.000,0.000,0.000|FS:500,0>", 3.55);
+  const auto notes = id.take_notes();
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("busy (Run)"), std::string::npos) << notes[0];
+  double t = 3.55;
+  for (int i = 0; i < 20; ++i) {  // four seconds of an earlier host's lines
+    t += 0.2;
+    id.tick(t);
+    EXPECT_EQ(id.take_output(), "?");
+    id.on_line("ok", t + 0.01);
+    id.on_line(i == 10 ? "<Idle|MPos:20.000,0.000,0.000|FS:0,0>" : "<Run|MPos:20.000,0.000,0.000|FS:500,0>", t + 0.02);
+  }
+  EXPECT_FALSE(id.done());
+  EXPECT_TRUE(id.take_notes().empty()) << "said once";
+  id.tick(t + 0.2);
+  id.on_line("<Idle|MPos:30.000,0.000,0.000|FS:0,0>", t + 0.21);
+  id.on_line("ok", t + 0.25);  // the last of them: the calm starts again
+  id.tick(t + 0.4);
+  id.on_line("<Idle|MPos:30.000,0.000,0.000|FS:0,0>", t + 0.41);
+  id.tick(t + 0.6);
+  EXPECT_EQ(id.take_output(), "???");
+  id.on_line("<Idle|MPos:30.000,0.000,0.000|FS:0,0>", t + 0.61);
+  EXPECT_EQ(id.take_output(), "$I\n");
+  id.on_line("ok", t + 0.62);  // one more stale answer: no version lines before it
+  EXPECT_FALSE(id.done());
+  id.on_line("[VER:1.1h.20190830:]", t + 0.7);
+  id.on_line("[OPT:V,15,128]", t + 0.7);
+  id.on_line("ok", t + 0.8);
+  ASSERT_TRUE(id.done());
+  EXPECT_EQ(id.result().profile.id, "grbl-1.1");
+}
+
+TEST(Identify, AControllerThatAnswersNoStatusIsAskedAfterTheQueryTimeout) {
+  FirmwareIdentifier id(profiles());
+  id.start(0);
+  id.tick(3.5);
+  EXPECT_EQ(id.take_output(), "?");
+  id.tick(3.7);
+  EXPECT_EQ(id.take_output(), "?");
+  id.tick(5.6);  // the query timeout after the first '?'
+  EXPECT_EQ(id.take_output(), "$I\n");
 }

@@ -30,9 +30,10 @@ const char* kResolution = "0.5";
 
 std::string cncstream_exe() { return kBin + "/cncstream"; }
 
+// Strict: an RX buffer overflow (a streamer that miscounts) ends the simulator and fails the run.
 std::vector<std::string> sim_args(const std::string& speed, const fs::path& result) {
-  return {"--speed", speed, "--design", kDesign, "--tool", kTool, "--resolution", kResolution, "--result",
-          result.string()};
+  return {"--strict", "--speed", speed, "--design", kDesign, "--tool", kTool, "--resolution", kResolution,
+          "--result", result.string()};
 }
 
 std::size_t count_lines(const fs::path& p) {

@@ -10,8 +10,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
+#include "child.hpp"
+#include "cncstream/transport/journal.hpp"
 #include "crash_run.hpp"
+#include "sim/pty_process.hpp"
 
 namespace {
 
@@ -93,4 +97,51 @@ TEST(CrashResume, SimulatorKilledMidJobResumesOnAFreshOne) {
   const auto r = reliability::run_crash_resume(o);
   print("the simulator killed", r);
   expect_sound(r, o.kills);
+}
+
+// At real speed the controller is still running the dead streamer's queued
+// moves when the resume connects (a board that does not reset on open): the
+// resume must wait for it, not take the old answers for its own. It used to,
+// and the character count overflowed the controller's buffer.
+TEST(CrashResume, AResumeWaitsForTheMovesTheDeadStreamerQueued) {
+  namespace fs = std::filesystem;
+  const fs::path dir = work_dir() / "busy";
+  fs::create_directories(dir);
+  const std::string bin = CNCSTREAM_BINARY_DIR;
+  const fs::path prog = dir / "long_moves.nc";
+  {
+    std::ofstream f(prog);
+    f << "G21 G90 G94\nG1 F500\n";
+    for (int i = 0; i < 400; ++i) f << "X" << (i % 2 ? 0 : 40) << " Y" << i * 0.1 << "\n";  // 40 mm rows: 5 s each
+  }
+  const std::vector<std::string> env{"XDG_STATE_HOME=" + (dir / "state").string()};
+  const std::string db = (dir / "busy.sqlite").string();
+  simtest::SimProcess sim({"--strict", "--speed", "30"});
+  {
+    reliability::Child first(bin + "/cncstream", {prog.string(), sim.slave(), "--journal", db, "--yes"}, env,
+                             dir / "first.log");
+    // Killed once it has queued moves: with a full planner of 40 mm rows the controller runs for a while.
+    cncstream::transport::Journal j(db);
+    for (int i = 0; i < 3000; ++i) {
+      const auto jobs = j.jobs(1);
+      if (!jobs.empty())
+        if (const auto p = j.last_progress(jobs[0].id); p && p->last_line >= 12) break;
+      if (first.exited()) break;
+      usleep(10000);  // polling the journal
+    }
+    ASSERT_FALSE(first.exited()) << first.output();
+    first.kill9();
+  }
+  reliability::Child resume(bin + "/cncstream",
+                            {"resume", "1", sim.slave(), "--journal", db, "--yes", "--dwell", "0", "--timeout", "12"}, env,
+                            dir / "resume.log");
+  ASSERT_TRUE(resume.wait(60));
+  const std::string out = resume.output();
+  EXPECT_NE(out.find("the controller is busy (Run)"), std::string::npos) << out;
+  EXPECT_NE(out.find("controller: grbl-1.1,"), std::string::npos) << "identified, not the fallback subset\n" << out;
+  EXPECT_EQ(out.find("ERROR at line"), std::string::npos) << out;
+  EXPECT_NE(out.find("job started"), std::string::npos) << out;
+  const int code = sim.stop();
+  EXPECT_EQ(code, 0) << "the strict simulator saw its buffer overflow:\n" << sim.stderr_text();
+  EXPECT_NE(sim.stderr_text().find(" 0 RX bytes dropped"), std::string::npos) << sim.stderr_text();
 }

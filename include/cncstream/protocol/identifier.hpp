@@ -3,6 +3,15 @@
 // profile, then the profile's query ($I or M115) -> version lines that refine
 // it ([FIRMWARE:grblHAL], [VER:... FluidNC ...]) and [OPT:..] sizes. Only
 // plain ASCII lines are sent here: never an extended real-time byte.
+//
+// No banner means the board did not reset when the port opened, so it may
+// still be running lines an earlier host sent (a host that died mid-job):
+// their answers would be taken for answers to ours, and a character count
+// that believes them overflows the controller's buffer. So before asking,
+// it polls the status ('?', answered even with a full buffer) until the
+// controller reports Idle (or Alarm) twice in a row with no answer between,
+// ignoring every ok/error meanwhile; a controller that answers no '?' is
+// asked after query_timeout_s as before.
 #include <optional>
 #include <utility>
 #include <string>
@@ -16,6 +25,7 @@ namespace cncstream::protocol {
 struct IdentifyOptions {
   double banner_timeout_s = 3.0;  // boards without DTR reset print no banner
   double query_timeout_s = 2.0;
+  double status_poll_s = 0.2;     // while waiting for a busy controller to finish
 };
 
 struct Identification {
@@ -35,6 +45,8 @@ class FirmwareIdentifier {
   void on_line(std::string_view line, double now);
   void tick(double now);
   std::string take_output() { return std::exchange(output_, {}); }
+  // What the operator should hear now (a busy controller), not at the end.
+  std::vector<std::string> take_notes() { return std::exchange(notes_, {}); }
   bool done() const { return result_.has_value(); }
   // When tick() must next run (a banner or query time-out); +infinity when none is pending.
   double next_deadline() const;
@@ -44,8 +56,9 @@ class FirmwareIdentifier {
   static const FirmwareProfile* match_banner(const std::vector<FirmwareProfile>& profiles, std::string_view line);
 
  private:
-  enum class Phase { Idle, WaitBanner, Query, Done };
+  enum class Phase { Idle, WaitBanner, WaitQuiet, Query, Done };
   void send_query(const std::string& query, double now);
+  void poll_status(double now);
   void finish(const char* why);
 
   std::vector<FirmwareProfile> profiles_;
@@ -56,7 +69,12 @@ class FirmwareIdentifier {
   std::string banner_;
   std::vector<std::string> lines_;
   std::vector<std::string> warnings_;
+  std::vector<std::string> notes_;
   std::string output_;
+  // WaitQuiet: status reports seen, Idle/Alarm ones in a row, the next poll.
+  bool status_seen_ = false, busy_noted_ = false, lone_ok_ = false;
+  int calm_reports_ = 0;
+  double next_poll_ = 0;
   std::optional<Identification> result_;
 };
 
