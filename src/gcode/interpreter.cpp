@@ -328,8 +328,9 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
       // Like the firmware: only a block with neither P nor L is "missing" a word;
       // a missing L then fails as an unsupported L, a missing P means P0.
       if (!(value_words & (bit(kP) | bit(kL)))) return fail(state, kValueWordMissing);
-      int p = static_cast<int>(std::trunc(b.p));
-      if (p > 6) return fail(state, kUnsupportedCoordSys);
+      // Compared as read: a P beyond int (P888888888880) must not reach the conversion (found by tests/fuzz).
+      if (std::trunc(b.p) > 6) return fail(state, kUnsupportedCoordSys);
+      const int p = static_cast<int>(std::trunc(b.p));
       const int l = static_cast<int>(b.l);
       if (l != 20) {
         if (l == 2) {

@@ -48,3 +48,10 @@ TEST(InterpreterFuzzRegressions, AnArcOfKilometresIsCutInAtMostGrblsNumberOfChor
   arc.radius = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(segment_arc(arc, 0.002).size(), 1u);  // straight to the target
 }
+
+TEST(InterpreterFuzzRegressions, AG10PBeyondIntIsAnUnsupportedCoordinateSystem) {
+  // Found by fuzz_gcode: P888888888880 overflowed the int it was converted to.
+  EXPECT_EQ(execute_block(ParserState{}, "G10L20P888888888880X0Y0").status, 29);
+  EXPECT_EQ(execute_block(ParserState{}, "G10L20P7X0").status, 29);
+  EXPECT_TRUE(execute_block(ParserState{}, "G10L20P6X0").ok());
+}
