@@ -1,5 +1,6 @@
 #include "cncstream/gcode/arc_segments.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -7,6 +8,7 @@ namespace cncstream::gcode {
 namespace {
 
 constexpr double kAngularTravelEpsilon = 5e-7;  // GRBL ARC_ANGULAR_TRAVEL_EPSILON
+constexpr double kMaxArcSegments = 65535;       // GRBL's segment counter is a uint16_t
 
 struct PlaneAxes { int a0, a1, linear; };
 PlaneAxes axes_of(Plane p) {
@@ -42,8 +44,11 @@ std::vector<Vec3> segment_arc(const ArcMove& arc, double tolerance) {
   const double r = arc.radius;
   std::size_t segments = 0;
   if (r > 0 && tolerance > 0 && tolerance < 2 * r) {
-    segments = static_cast<std::size_t>(
-        std::floor(std::fabs(0.5 * travel * r) / std::sqrt(tolerance * (2 * r - tolerance))));
+    // GRBL counts an arc's segments in a uint16_t; a count beyond it (a radius
+    // of kilometres) or not a number must not become a size_t (undefined
+    // behaviour) nor an allocation of that many points.
+    const double n = std::floor(std::fabs(0.5 * travel * r) / std::sqrt(tolerance * (2 * r - tolerance)));
+    if (n >= 0) segments = static_cast<std::size_t>(std::min(n, kMaxArcSegments));
   }
   std::vector<Vec3> points;
   points.reserve(segments + 1);

@@ -328,8 +328,9 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
       // Like the firmware: only a block with neither P nor L is "missing" a word;
       // a missing L then fails as an unsupported L, a missing P means P0.
       if (!(value_words & (bit(kP) | bit(kL)))) return fail(state, kValueWordMissing);
-      int p = static_cast<int>(std::trunc(b.p));
-      if (p > 6) return fail(state, kUnsupportedCoordSys);
+      // Compared as read: a P beyond int (P888888888880) must not reach the conversion (found by tests/fuzz).
+      if (std::trunc(b.p) > 6) return fail(state, kUnsupportedCoordSys);
+      const int p = static_cast<int>(std::trunc(b.p));
       const int l = static_cast<int>(b.l);
       if (l != 20) {
         if (l == 2) {
@@ -426,7 +427,10 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
           double y = axis(b.xyz, axis1) - axis(state.position, axis1);
           if (value_words & bit(kR)) {
             value_words &= ~bit(kR);
-            if (b.xyz == state.position) return fail(state, kInvalidTarget);
+            // GRBL refuses a target equal to the position; one that differs
+            // only off the plane (a helix with no turn) would divide by zero
+            // below and give the arc a NaN centre (found by tests/fuzz).
+            if (x == 0 && y == 0) return fail(state, kInvalidTarget);
             if (b.modal.inches) b.r *= kMmPerInch;
             double h = 4.0 * b.r * b.r - x * x - y * y;
             if (h < 0) return fail(state, kArcRadiusError);
@@ -457,6 +461,9 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
               if (delta_r > 0.001 * arc_radius) return fail(state, kInvalidTarget);
             }
           }
+          // Coordinates so large that the arithmetic overflows leave no arc to cut.
+          if (!std::isfinite(arc_radius) || !std::isfinite(axis(b.ijk, axis0)) || !std::isfinite(axis(b.ijk, axis1)))
+            return fail(state, kInvalidTarget);
           break;
         }
         default:  // probes
