@@ -746,6 +746,15 @@ void JobManager::resume_plan(std::int64_t id, long from_line, const std::string&
       if (p->status_work_pos) in.status_work_pos = Vec3{(*p->status_work_pos)[0], (*p->status_work_pos)[1], (*p->status_work_pos)[2]};
       in.status_line = p->status_line;
     }
+  if (j.row.journal_id) {
+    // As `cncstream resume` reads it: the planner depth the job streamed
+    // with, the resume it continued, and the lines the controller refused.
+    if (const auto rec = journal_.job(j.row.journal_id)) {
+      in.planner_blocks = static_cast<int>(rec->planner_blocks);
+      if (rec->resumed_from > 0) in.resumed_after = rec->from_line;
+    }
+    in.error_lines = journal_.progress_lines(j.row.journal_id, "error");
+  }
   if (from_line > j.program->total_lines)
     throw ApiError{400, "bad_request", "from_line " + std::to_string(from_line) + " is past the program's " +
                                            std::to_string(j.program->total_lines) + " lines"};
