@@ -3,7 +3,7 @@
 #   tools/fuzz.sh [--ci] [SECONDS_PER_TARGET] [TARGET...]
 # Builds tests/fuzz into build/fuzz (only the targets asked for, all cores,
 # ccache when there is one), replays every saved regression input
-# (tests/fuzz/regressions/<target>/), then runs each target for SECONDS (60
+# (tests/fuzz/regressions/<target>/), then runs each target for SECONDS, one per core at a time, (60
 # by default, or $FUZZ_SECONDS) from its seeds: tests/fuzz/corpus/<target>/
 # plus the inputs the project already has (examples/, ../shared/meshes,
 # firmware-profiles/, tests/pendant/fixtures/, a journal written for the
@@ -65,36 +65,47 @@ seed() {  # seed TARGET DIR: the seeds the project already has
   esac
 }
 
-status=0
 report=$build/report.txt
 : >"$report"
-for t in "${targets[@]}"; do
-  bin=$build/$t
-  findings=$build/findings/$t
+run_target() {  # run_target TARGET: its regression inputs, then SECONDS of fuzzing; 1 on a finding
+  local t=$1 bin=$build/$1 findings=$build/findings/$1 corpus=$build/corpus/$1 status=0 runs cov max_len=8192
   mkdir -p "$findings"
-  regressions=(tests/fuzz/regressions/"$t"/*)
+  local regressions=(tests/fuzz/regressions/"$t"/*)
   if [[ -e ${regressions[0]} ]]; then
     echo "== $t: ${#regressions[@]} regression input(s)"
     if ! ASAN_OPTIONS=detect_leaks=1 "$bin" -timeout=10 "${regressions[@]}" >"$findings/regressions.log" 2>&1; then
       echo "fuzz: $t fails on a saved regression input:"; tail -30 "$findings/regressions.log"; status=1
     fi
   fi
-  corpus=$build/corpus/$t
   seed "$t" "$corpus"
-  max_len=8192
   [[ $t == fuzz_stl || $t == fuzz_journal ]] && max_len=70000
   echo "== $t: fuzzing for ${secs} s"
   if ASAN_OPTIONS=detect_leaks=1 "$bin" "$corpus" -max_total_time="$secs" -max_len="$max_len" -timeout=10 \
        -rss_limit_mb=2048 -artifact_prefix="$findings/" -print_final_stats=1 >"$findings/run.log" 2>&1; then
     runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$findings/run.log" | grep -o '[0-9]*$' || echo "?")
     cov=$(grep -o 'cov: [0-9]*' "$findings/run.log" | tail -1 | grep -o '[0-9]*' || echo "?")
-    printf '%-22s %6s s  %10s runs  coverage %6s  no finding\n' "$t" "$secs" "$runs" "$cov" | tee -a "$report"
+    printf '%-22s %6s s  %10s runs  coverage %6s  no finding\n' "$t" "$secs" "$runs" "$cov" >>"$report"
   else
     echo "fuzz: $t found a problem (input in $findings/):"; grep -E "ERROR|SUMMARY|runtime error|Test unit written" "$findings/run.log" | head -10
     printf '%-22s FOUND A PROBLEM: see %s\n' "$t" "$findings/run.log" >>"$report"
     status=1
   fi
+  echo "$status" >"$findings/status"
+}
+
+# One target per core at a time (each libFuzzer process is single-threaded).
+for t in "${targets[@]}"; do
+  while (($(jobs -rp | wc -l) >= $(nproc))); do wait -n || true; done
+  rm -f "$build/findings/$t/status"
+  run_target "$t" &
 done
+wait
+status=0
+for t in "${targets[@]}"; do
+  [[ $(cat "$build/findings/$t/status" 2>/dev/null) == 0 ]] || status=1
+done
+sort -o "$report" "$report"
+cat "$report"
 t2=$(date +%s)
 echo "fuzz: report in $report"
 if ((ci)); then
