@@ -1,6 +1,7 @@
 #include "cncstream/protocol/firmware_profile.hpp"
 
 #include "cncstream/protocol/pattern.hpp"
+#include "cncstream/protocol/toml_guard.hpp"
 
 #include <algorithm>
 #include <set>
@@ -141,31 +142,6 @@ void read_codes(const std::filesystem::path& path, const toml::node& n, const ch
   }
 }
 
-// toml++ 3.3 assumes a table header's key starts with a key character and
-// misbehaves (an assertion, undefined behaviour without one) when it does not
-// ("[[^x]]", found by tests/fuzz): such a header is refused here first.
-void check_table_headers(const std::filesystem::path& path, const std::string& text) {
-  std::size_t line = 1, pos = 0;
-  while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    std::size_t i = text.find_first_not_of(" \t", pos);
-    if (i < end && text[i] == '[') {
-      ++i;
-      if (i < end && text[i] == '[') ++i;
-      while (i < end && (text[i] == ' ' || text[i] == '\t')) ++i;
-      const char c = i < end ? text[i] : '\0';
-      const bool key = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ||
-                       c == '-' || c == '"' || c == '\'';
-      if (!key && c != ']')
-        throw ProfileError(path.string() + ":" + std::to_string(line) +
-                           ": a table header must start with a key (a letter, digit, _, - or a quote)");
-    }
-    pos = end + 1;
-    ++line;
-  }
-}
-
 FirmwareProfile load_impl(const std::filesystem::path& path, std::set<std::string>& chain) {
   const std::string id = path.stem().string();
   if (!chain.insert(id).second) throw ProfileError(path.string() + ": 'inherits' forms a cycle");
@@ -175,7 +151,11 @@ FirmwareProfile load_impl(const std::filesystem::path& path, std::set<std::strin
     if (!in) throw ProfileError(path.string() + ": cannot read the profile");
     std::ostringstream text;
     text << in.rdbuf();
-    check_table_headers(path, text.str());
+    try {
+      check_toml_text(text.str(), path.string());
+    } catch (const std::invalid_argument& e) {
+      throw ProfileError(e.what());
+    }
     tbl = toml::parse(text.str(), path.string());
   } catch (const toml::parse_error& e) {
     std::ostringstream os;

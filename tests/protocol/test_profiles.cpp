@@ -89,6 +89,18 @@ TEST(Profiles, ErrorsNameFileAndLine) {
       EXPECT_NE(std::string(e.what()).find("bad5.toml:3"), std::string::npos) << e.what();
     }
   }
+  // The rest of what toml++ 3.3 misbehaves on (the daemon's configuration
+  // found them): a character beyond ASCII in a bare value, an array element
+  // starting with '}', a date followed by a lone digit.
+  for (const char* line : {"name = \xC3\xA9", "a = [}]", "d = 2051-06-01 0 "}) {
+    { std::ofstream(dir / "bad6.toml") << "family = \"grbl\"\nbanner_patterns = ['x']\n" << line << "\n"; }
+    try {
+      load_firmware_profile(dir / "bad6.toml");
+      FAIL() << line;
+    } catch (const ProfileError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad6.toml:3"), std::string::npos) << e.what();
+    }
+  }
   std::filesystem::remove_all(dir);
 }
 
