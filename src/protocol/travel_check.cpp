@@ -1,0 +1,60 @@
+#include "cncstream/protocol/travel_check.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace cncstream::protocol {
+
+namespace {
+
+constexpr double kSlackMm = 0.001;  // rounding in the program's numbers
+
+std::string mm(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+std::optional<std::array<double, 3>> max_travel_from(const GrblSettings& settings) {
+  std::array<double, 3> t{};
+  for (int i = 0; i < 3; ++i) {
+    const auto it = settings.find(130 + i);
+    if (it == settings.end() || !std::isfinite(it->second) || !(it->second > 0)) return std::nullopt;
+    t[static_cast<std::size_t>(i)] = it->second;
+  }
+  return t;
+}
+
+std::optional<std::string> travel_refusal(const gcode::ProgramExtent& extent, const std::array<double, 3>& travel_mm) {
+  static const char axis_name[3] = {'X', 'Y', 'Z'};
+  std::string text;
+  bool fits_at_inch = true, fits_at_thousandth = true;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const gcode::AxisExtent& a = extent.axes[i];
+    const double size = a.size(), travel = travel_mm[i];
+    if (!(size > travel + kSlackMm)) continue;
+    if (text.empty()) text = "the program does not fit the machine's travel:";
+    text.append("\n  ").push_back(axis_name[i]);
+    text.append(": the program spans ").append(mm(size)).append(" mm (").append(mm(a.lo)).append(" .. ");
+    text.append(mm(a.hi)).append(" as traced), the machine travels ").append(mm(travel)).append(" mm ($");
+    text.append(std::to_string(130 + i)).append(")");
+    fits_at_inch = fits_at_inch && size / 25.4 <= travel + kSlackMm;
+    fits_at_thousandth = fits_at_thousandth && size / 1000 <= travel + kSlackMm;
+  }
+  if (text.empty()) return std::nullopt;
+  text.append("\n  nothing was sent. ");
+  if (fits_at_inch)
+    text.append("Likely cause: units, 25.4 times too large: a part drawn in mm taken for inches (--units in), or a "
+                "program in mm marked G20 (inches).");
+  else if (fits_at_thousandth)
+    text.append("Likely cause: units, 1000 times too large: a part drawn in mm taken for metres (--units m), or "
+                "drawn in micrometres.");
+  else
+    text.append("The part is larger than the machine (check --units and --scale).");
+  text.append(" If the machine's travel is larger, set $130-$132 to it.");
+  return text;
+}
+
+}  // namespace cncstream::protocol
