@@ -1,5 +1,6 @@
 #include "cncstream/protocol/travel_check.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -31,6 +32,7 @@ std::optional<std::string> travel_refusal(const gcode::ProgramExtent& extent, co
   static const char axis_name[3] = {'X', 'Y', 'Z'};
   std::string text;
   bool fits_at_inch = true, fits_at_thousandth = true;
+  double ratio = 0;  // the largest of extent / travel
   for (std::size_t i = 0; i < 3; ++i) {
     const gcode::AxisExtent& a = extent.axes[i];
     const double size = a.size(), travel = travel_mm[i];
@@ -40,19 +42,23 @@ std::optional<std::string> travel_refusal(const gcode::ProgramExtent& extent, co
     text.append(": the program spans ").append(mm(size)).append(" mm (").append(mm(a.lo)).append(" .. ");
     text.append(mm(a.hi)).append(" as traced), the machine travels ").append(mm(travel)).append(" mm ($");
     text.append(std::to_string(130 + i)).append(")");
+    ratio = std::max(ratio, size / travel);
     fits_at_inch = fits_at_inch && size / 25.4 <= travel + kSlackMm;
     fits_at_thousandth = fits_at_thousandth && size / 1000 <= travel + kSlackMm;
   }
   if (text.empty()) return std::nullopt;
   text.append("\n  nothing was sent. ");
-  if (fits_at_inch)
+  // Less than twice the travel is a part too large, not a unit factor.
+  if (ratio < 2)
+    text.append("The part is larger than the machine can move (check the part, --scale and --bounds).");
+  else if (fits_at_inch)
     text.append("Likely cause: units, 25.4 times too large: a part drawn in mm taken for inches (--units in), or a "
                 "program in mm marked G20 (inches).");
   else if (fits_at_thousandth)
     text.append("Likely cause: units, 1000 times too large: a part drawn in mm taken for metres (--units m), or "
                 "drawn in micrometres.");
   else
-    text.append("The part is larger than the machine (check --units and --scale).");
+    text.append("The part is far larger than the machine (check --units and --scale).");
   text.append(" If the machine's travel is larger, set $130-$132 to it.");
   return text;
 }

@@ -20,7 +20,8 @@ std::optional<std::array<double, 3>> max_travel_from(const GrblSettings& setting
 
 // Nothing when the program fits (within 0.001 mm); otherwise the refusal:
 // each axis that does not fit with the program's extent, its traced range
-// and the travel, then the likely cause.
+// and the travel, then the likely cause: a factor 25.4 or 1000 when the
+// program is at least twice the travel and that factor makes it fit.
 std::optional<std::string> travel_refusal(const gcode::ProgramExtent& extent, const std::array<double, 3>& travel_mm);
 
 }  // namespace cncstream::protocol

@@ -19,21 +19,14 @@ namespace cncstream::app {
 
 namespace {
 
-// The grid's progress and stop, tile by tile (compute_tiles calls its sink in
-// order on this thread): throws jobs::Cancelled on a stop request.
-class TileProgress {
- public:
-  TileProgress(const jobs::JobControl& control, const GridSpec& spec) : control_(control), rows_(spec.ny) {}
-  void operator()(const ClTile& tile) {
-    if (control_.stop.stop_requested()) throw jobs::Cancelled();
-    done_ += tile.grid.spec.ny;
-    if (control_.progress) control_.progress("CL grid", rows_ ? double(done_) / double(rows_) : 1.0);
-  }
-
- private:
-  const jobs::JobControl& control_;
-  std::size_t rows_, done_ = 0;
-};
+// The grid's progress and stop (from the engine's workers): throws
+// jobs::Cancelled on a stop request.
+Checkpoint grid_checkpoint(const jobs::JobControl& control) {
+  return [&control](double fraction) {
+    if (control.stop.stop_requested()) throw jobs::Cancelled();
+    if (control.progress) control.progress("CL grid", fraction);
+  };
+}
 
 // CSV: header x,y,z, one node per line, x varying fastest. Streamed by tile.
 void write_csv(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
@@ -42,16 +35,14 @@ void write_csv(const ClEngine& engine, const GridSpec& spec, const std::filesyst
   if (!f) throw std::runtime_error(out.string() + ": cannot open for writing");
   f << "x,y,z\n";
   char buf[96];
-  TileProgress progress(control, spec);
   engine.compute_tiles(spec, [&](const ClTile& tile) {
-    progress(tile);
     const GridSpec& g = tile.grid.spec;
     for (std::size_t j = 0; j < g.ny; ++j)
       for (std::size_t i = 0; i < g.nx; ++i) {
         const int n = std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f\n", g.x(i), g.y(j), tile.grid.at(i, j));
         f.write(buf, n);
       }
-  });
+  }, grid_checkpoint(control));
   f.close();
   if (!f) throw std::runtime_error(out.string() + ": write failed");
 }
@@ -61,11 +52,7 @@ void write_csv(const ClEngine& engine, const GridSpec& spec, const std::filesyst
 void write_f32(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
                const std::filesystem::path& final_path, const jobs::JobControl& control) {
   HeightFieldWriter w(out, spec);
-  TileProgress progress(control, spec);
-  engine.compute_tiles(spec, [&](const ClTile& tile) {
-    progress(tile);
-    w.append(tile.grid.z);
-  });
+  engine.compute_tiles(spec, [&](const ClTile& tile) { w.append(tile.grid.z); }, grid_checkpoint(control));
   w.finish();
   if (out != final_path) std::filesystem::rename(height_field_sidecar(out), height_field_sidecar(final_path));
 }
@@ -73,10 +60,7 @@ void write_f32(const ClEngine& engine, const GridSpec& spec, const std::filesyst
 // A shaded height map a person can look at (the whole grid in memory).
 void write_png_map(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
                    const std::string& title, const jobs::JobControl& control) {
-  const ClGrid g = engine.compute(spec, [&control](double fraction) {
-    if (control.stop.stop_requested()) throw jobs::Cancelled();
-    if (control.progress) control.progress("CL grid", fraction);
-  });
+  const ClGrid g = engine.compute(spec, grid_checkpoint(control));
   MapGrid mg{spec.nx, spec.ny, spec.dx, spec.dy, spec.x0, spec.y0};
   HeightMapOptions ho;
   ho.title = title;
