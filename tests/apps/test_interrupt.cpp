@@ -234,3 +234,27 @@ TEST(Interrupt, AGridRunToTheEndWritesDataAndSidecarOnly) {
   std::sort(files.begin(), files.end());
   EXPECT_EQ(files, (std::vector<std::string>{"gear.f32", "gear.f32.txt"}));
 }
+
+TEST(Interrupt, CtrlCDuringASelectionWritesNoReport) {
+  const fs::path dir = fresh_dir("interrupt_select") / "report";
+  PipedRun run({"select", mesh("lion_head_relief.stl"), "--scale", "100", "--tools", "ball:3,bull:3:0.5", "--stepover",
+                "0.1", "--progress", "always", "-o", dir.string()});
+  ASSERT_TRUE(run.wait_for(" elapsed")) << run.output();
+  run.signal(SIGINT);
+  EXPECT_EQ(run.finish(), 130) << run.output();
+  EXPECT_NE(run.output().find("cncstream: interrupted: no report written in " + dir.string()), std::string::npos)
+      << run.output();
+  EXPECT_TRUE(!fs::exists(dir) || fs::is_empty(dir));
+}
+
+TEST(Interrupt, CtrlCDuringAPlanWritesNoProgram) {
+  const fs::path dir = fresh_dir("interrupt_plan") / "plan";
+  PipedRun run({"plan", mesh("lion_head_relief.stl"), "--scale", "100", "--tools", "ball:3,bull:3:0.5", "--stepover",
+                "0.1", "--progress", "always", "-o", dir.string()});
+  ASSERT_TRUE(run.wait_for(" elapsed")) << run.output();
+  run.signal(SIGINT);
+  EXPECT_EQ(run.finish(), 130) << run.output();
+  EXPECT_NE(run.output().find("cncstream: interrupted: no plan written in " + dir.string()), std::string::npos)
+      << run.output();
+  EXPECT_TRUE(!fs::exists(dir) || fs::is_empty(dir));
+}
