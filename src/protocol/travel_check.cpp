@@ -19,6 +19,10 @@ std::string mm(double v) {
 }  // namespace
 
 std::optional<std::array<double, 3>> max_travel_from(const GrblSettings& settings) {
+  // Homing off: GRBL uses $130-$132 for nothing, and a machine that never set
+  // them reports the default 200 mm whatever its size.
+  const auto homing = settings.find(22);
+  if (homing == settings.end() || homing->second == 0) return std::nullopt;
   std::array<double, 3> t{};
   for (int i = 0; i < 3; ++i) {
     const auto it = settings.find(130 + i);

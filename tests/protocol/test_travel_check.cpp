@@ -6,11 +6,14 @@ using cncstream::gcode::program_extent;
 using cncstream::protocol::max_travel_from;
 using cncstream::protocol::travel_refusal;
 
-TEST(TravelCheck, TravelNeedsAllOfDollar130To132) {
+TEST(TravelCheck, TravelNeedsAllOfDollar130To132AndHoming) {
   EXPECT_FALSE(max_travel_from({}));
-  EXPECT_FALSE(max_travel_from({{130, 300}, {131, 200}}));
-  EXPECT_FALSE(max_travel_from({{130, 300}, {131, 200}, {132, 0}}));
-  const auto t = max_travel_from({{110, 500}, {130, 300}, {131, 200}, {132, 80}});
+  EXPECT_FALSE(max_travel_from({{22, 1}, {130, 300}, {131, 200}}));
+  EXPECT_FALSE(max_travel_from({{22, 1}, {130, 300}, {131, 200}, {132, 0}}));
+  // Homing off ($22=0) or unknown: the travel is GRBL's default, not the machine's.
+  EXPECT_FALSE(max_travel_from({{22, 0}, {130, 300}, {131, 200}, {132, 80}}));
+  EXPECT_FALSE(max_travel_from({{130, 300}, {131, 200}, {132, 80}}));
+  const auto t = max_travel_from({{22, 1}, {110, 500}, {130, 300}, {131, 200}, {132, 80}});
   ASSERT_TRUE(t);
   EXPECT_EQ(*t, (std::array<double, 3>{300, 200, 80}));
 }

@@ -1,89 +1,133 @@
 // A program larger than the machine's travel ($130-$132) is refused before
 // its first line is sent; one that fits runs. Against the built-in simulator
-// with a small machine (60 x 50 x 30 mm).
+// with a small machine (60 x 50 x 30 mm). The travel is trusted only where
+// homing is on ($22): GRBL itself uses it only then, and a machine that never
+// set it reports GRBL's default 200 mm whatever its size.
 #include <gtest/gtest.h>
 
+#include <boost/asio/io_context.hpp>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <thread>
 
+#include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/session/machine_session.hpp"
 #include "cncstream/session/simulator_port.hpp"
-#include "cncstream/session/stream_runner.hpp"
 
 using namespace cncstream::session;
+using cncstream::protocol::JobMode;
 using cncstream::protocol::JobOutcome;
+using cncstream::protocol::MachineState;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp_dir() {
+fs::path travel_dir() {
   const auto d = fs::temp_directory_path() / ("cncstream_travel_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
 }
 
-fs::path write_file(const std::string& name, const std::string& text) {
-  const auto p = temp_dir() / name;
-  std::ofstream(p) << text;
-  return p;
-}
-
-struct SmallMachine {
-  std::shared_ptr<SimulatorPort> sim;
-  RunnerOptions options;
-  SmallMachine() {
-    SimulatorOptions so;
-    so.settings_file = write_file("small.settings", "$130=60\n$131=50\n$132=30\n").string();
-    sim = std::make_shared<SimulatorPort>(so);
-    options.machine_port = sim;
-    options.profiles_dir = CNCSTREAM_SOURCE_DIR "/firmware-profiles";
-    options.max_run_s = 30;
+// Runs the loop until `done` holds; false after a generous bound (the
+// condition, not the time, is the test).
+bool run_until_travel(boost::asio::io_context& io, const std::function<bool()>& done) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    io.run_for(std::chrono::milliseconds(20));
+    if (io.stopped()) {
+      io.restart();
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
   }
-};
+  return true;
+}
 
 // The work spans X 0..`x`, Y 0..40, Z -2..5.
-std::string program(const std::string& x) {
-  return "G21 G90\nG0 Z5\nG0 X0 Y0\nG1 Z-2 F600\nG1 X" + x + " Y40\nG0 Z5\nM2\n";
+JobInput travel_program(const std::string& x) {
+  JobInput j;
+  j.file = travel_dir() / ("x" + x + ".nc");
+  j.lines = {"G21 G90", "G0 Z5", "G0 X0 Y0", "G1 Z-2 F600", "G1 X" + x + " Y40", "G0 Z5", "M2"};
+  j.total_lines = static_cast<std::int64_t>(j.lines.size());
+  return j;
 }
+
+// A 60 x 50 x 30 machine, homed when `homing` (it boots in alarm until $H).
+struct SmallMachine {
+  boost::asio::io_context io;
+  std::shared_ptr<SimulatorPort> sim;
+  std::unique_ptr<MachineSession> session;
+  std::optional<JobOutcome> outcome;
+  Subscription watch;
+
+  explicit SmallMachine(bool homing) {
+    const auto settings = travel_dir() / (homing ? "homing.settings" : "no_homing.settings");
+    std::ofstream(settings) << "$130=60\n$131=50\n$132=30\n$22=" << (homing ? 1 : 0) << "\n";
+    SimulatorOptions so;
+    so.settings_file = settings.string();
+    sim = std::make_shared<SimulatorPort>(so);
+    MachineOptions o;
+    o.name = "small";
+    o.port = sim;
+    o.profiles_dir = cncstream::protocol::default_profiles_dir();
+    session = std::make_unique<MachineSession>(io, o);
+    watch = session->subscribe([this](const SessionEvent& e) {
+      if (e.kind == SessionEventKind::JobEnded) outcome = e.outcome;
+    });
+    session->open();
+    EXPECT_TRUE(run_until_travel(io, [&] { return session->ready(); }));
+    if (homing) {
+      EXPECT_TRUE(session->home());
+      EXPECT_TRUE(run_until_travel(io, [&] {
+        const auto st = session->snapshot().status;
+        return st && st->state == MachineState::Idle;
+      })) << "the machine did not home";
+    }
+  }
+  bool run_to_end() { return run_until_travel(io, [&] { return outcome.has_value(); }); }
+};
 
 }  // namespace
 
 TEST(TravelOnSim, AProgramThatFitsRuns) {
-  SmallMachine m;
-  StreamRunner runner(m.options);
-  const RunResult r = runner.run(write_file("fits.nc", program("55")));
-  EXPECT_EQ(r.outcome, JobOutcome::Completed) << r.message;
-  m.sim->finish(true);
-  EXPECT_GE(m.sim->lines_received(), 7u);
+  SmallMachine m(true);
+  const auto before = m.sim->lines_received();
+  ASSERT_TRUE(m.session->start_job(travel_program("55")));
+  ASSERT_TRUE(m.run_to_end());
+  EXPECT_EQ(*m.outcome, JobOutcome::Completed);
+  EXPECT_EQ(m.sim->lines_received() - before, 7u);
 }
 
 TEST(TravelOnSim, AProgramLargerThanTheTravelIsRefusedBeforeItsFirstLine) {
   // 6 inches written as mm would fit; taken as mm it spans 152.4 mm.
-  SmallMachine m;
-  StreamRunner runner(m.options);
-  const auto file = write_file("too_large.nc", program("152.4"));
-  std::string message;
-  try {
-    runner.run(file);
-    ADD_FAILURE() << "the job was not refused";
-  } catch (const std::invalid_argument& e) {
-    message = e.what();
-  }
-  EXPECT_NE(message.find(file.string()), std::string::npos) << message;
-  EXPECT_NE(message.find("X: the program spans 152.4 mm (0 .. 152.4 as traced), the machine travels 60 mm ($130)"),
-            std::string::npos) << message;
-  EXPECT_EQ(message.find("Y:"), std::string::npos) << message;
-  EXPECT_NE(message.find("25.4 times too large"), std::string::npos) << message;
-  const auto report = m.sim->finish(false);
-  // The session's own lines only ($I, $$): none of the program's.
-  EXPECT_LE(m.sim->lines_received(), 2u) << report.text;
+  SmallMachine m(true);
+  const auto before = m.sim->lines_received();
+  const JobInput job = travel_program("152.4");
+  const auto r = m.session->start_job(job);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.reason.find(job.file.string()), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("X: the program spans 152.4 mm (0 .. 152.4 as traced), the machine travels 60 mm ($130)"),
+            std::string::npos) << r.reason;
+  EXPECT_EQ(r.reason.find("Y:"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("25.4 times too large"), std::string::npos) << r.reason;
+  m.io.run_for(std::chrono::milliseconds(200));
+  EXPECT_EQ(m.sim->lines_received(), before) << "a line of the refused program reached the machine";
+  EXPECT_FALSE(m.session->job_active());
 }
 
 TEST(TravelOnSim, CheckModeIsNotRefused) {
   // $C moves nothing: it reports the program's own errors.
-  SmallMachine m;
-  m.options.mode = cncstream::protocol::JobMode::Check;
-  StreamRunner runner(m.options);
-  const RunResult r = runner.run(write_file("check.nc", program("152.4")));
-  EXPECT_EQ(r.outcome, JobOutcome::CheckPassed) << r.message;
-  m.sim->finish(false);
+  SmallMachine m(true);
+  ASSERT_TRUE(m.session->start_job(travel_program("152.4"), JobMode::Check));
+  ASSERT_TRUE(m.run_to_end());
+  EXPECT_EQ(*m.outcome, JobOutcome::CheckPassed);
+}
+
+TEST(TravelOnSim, WithoutHomingTheTravelSettingsAreNotTrustedAndTheProgramRuns) {
+  SmallMachine m(false);
+  ASSERT_TRUE(m.session->start_job(travel_program("152.4")));
+  ASSERT_TRUE(m.run_to_end());
+  EXPECT_EQ(*m.outcome, JobOutcome::Completed);
 }

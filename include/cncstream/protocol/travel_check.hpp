@@ -14,8 +14,10 @@
 
 namespace cncstream::protocol {
 
-// $130, $131, $132 (mm) when all three are known, finite and positive;
-// nullopt otherwise (Marlin, a profile without them): no check.
+// $130, $131, $132 (mm) when all three are known, finite and positive and
+// homing is on ($22 not 0: GRBL's homing searches 1.5 times the travel, so a
+// homing machine's travel is set; soft limits, $20, need homing); nullopt
+// otherwise (homing off, Marlin, a profile without them): no check.
 std::optional<std::array<double, 3>> max_travel_from(const GrblSettings& settings);
 
 // Nothing when the program fits (within 0.001 mm); otherwise the refusal:
