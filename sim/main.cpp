@@ -14,6 +14,7 @@
 #include <memory>
 
 #include "cncsim/machine.hpp"
+#include "cncsim/output_file.hpp"
 #include "cncsim/pty_frontend.hpp"
 #include "cncsim/removal.hpp"
 #include "cncstream/cam/deviation.hpp"
@@ -100,7 +101,10 @@ int run_verify(const std::string& design_path, const std::string& result_path, d
   const auto heights = cncstream::design_heights(design, field.grid);
   const auto result = cncstream::compare_to_design(stock, heights, tolerance);
   std::cout << result.stats.summary() << "\n";
-  if (!png.empty()) cncstream::write_deviation_png(png, result, "cncsim verify", design_path);
+  if (!png.empty())
+    cncsim::write_whole(png, [&](const std::filesystem::path& file) {
+      cncstream::write_deviation_png(file, result, "cncsim verify", design_path);
+    });
   return result.stats.gouged == 0 ? 0 : 3;
 }
 
@@ -223,6 +227,13 @@ int main(int argc, char** argv) {
       std::cerr << "cncsim: fatal (--strict): " << e.what() << "\n";
       code = 2;
     }
+    // Serving has ended (Ctrl-C, SIGTERM, the port vanished): another signal
+    // during the end-of-run work (result, verify) ends the program at once;
+    // its files are written whole or not at all.
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    if (removal && (!result_path.empty() || design))
+      std::cerr << "cncsim: writing the result and verifying (Ctrl-C again to quit without them)\n";
     std::cerr << "cncsim: " << machine.lines_received() << " lines received, " << machine.lines_answered()
               << " answered, " << machine.lines_executed() << " executed, " << machine.rx_bytes_dropped()
               << " RX bytes dropped";
@@ -250,7 +261,9 @@ int main(int argc, char** argv) {
       const auto result = cncstream::compare_to_design(removal->stock(), heights, tolerance);
       std::cerr << "cncsim verify against " << design_path << ":\n" << result.stats.summary() << std::endl;
       if (!png_path.empty()) {
-        cncstream::write_deviation_png(png_path, result, "cncsim verify", design_path);
+        cncsim::write_whole(png_path, [&](const std::filesystem::path& file) {
+          cncstream::write_deviation_png(file, result, "cncsim verify", design_path);
+        });
         std::cerr << "cncsim: deviation map written to " << png_path << "\n";
       }
       if (code == 0 && result.stats.gouged > 0) code = 3;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "cncsim/output_file.hpp"
 #include "cncstream/cam/height_field_io.hpp"
 #include "cncstream/cam/height_field_mesh.hpp"
 
@@ -101,13 +102,19 @@ void MaterialRemoval::cut(const Vec3& from, const Vec3& to) {
 }
 
 std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path& path) const {
-  cncstream::write_height_field(path, stock_.grid(), stock_.heights());
+  // Each file whole or not at all; the sidecar is in place before its data file.
+  write_whole(path, [&](const std::filesystem::path& file) {
+    cncstream::write_height_field(file, stock_.grid(), stock_.heights());
+    std::filesystem::rename(cncstream::height_field_sidecar(file), cncstream::height_field_sidecar(path));
+  });
   auto stl = path;
   stl.replace_extension(".stl");
   // A cut through the stock's bottom still gives a closed solid.
   double bottom = bottom_;
   for (double z : stock_.heights()) bottom = std::min(bottom, z - 1.0);
-  cncstream::write_height_field_stl(stl, stock_.grid(), stock_.heights(), bottom);
+  write_whole(stl, [&](const std::filesystem::path& file) {
+    cncstream::write_height_field_stl(file, stock_.grid(), stock_.heights(), bottom);
+  });
   return stl;
 }
 

@@ -118,7 +118,8 @@ ClGrid ClEngine::compute(const GridSpec& spec, const Checkpoint& checkpoint) con
   return g;
 }
 
-void ClEngine::compute_tiles(const GridSpec& spec, const std::function<void(const ClTile&)>& sink) const {
+void ClEngine::compute_tiles(const GridSpec& spec, const std::function<void(const ClTile&)>& sink,
+                             const Checkpoint& checkpoint) const {
   validate_spec(spec);
   if (!spec.size()) return;
   const std::size_t row_bytes = spec.nx * (sizeof(double) + sizeof(std::uint8_t));
@@ -133,7 +134,10 @@ void ClEngine::compute_tiles(const GridSpec& spec, const std::function<void(cons
     tile.grid.spec.ny = j1 - j0;
     tile.grid.z.resize(tile.grid.spec.size());
     tile.grid.on_floor.resize(tile.grid.spec.size());
-    impl_->rows(spec, j0, j1, tile.grid.z.data(), tile.grid.on_floor.data(), {});
+    Checkpoint within;
+    if (checkpoint)
+      within = [&checkpoint, j0, j1, ny = spec.ny](double f) { checkpoint((double(j0) + f * double(j1 - j0)) / double(ny)); };
+    impl_->rows(spec, j0, j1, tile.grid.z.data(), tile.grid.on_floor.data(), within);
     sink(tile);
   }
 }

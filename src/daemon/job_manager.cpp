@@ -44,6 +44,7 @@ std::shared_ptr<Program> make_program(const std::string& text, const fs::path& p
   }
   if (!p->lines.empty() && p->lines.back().empty()) p->lines.pop_back();
   p->total_lines = static_cast<std::int64_t>(p->lines.size());
+  p->extent = gcode::program_extent(p->lines);
   p->sha256 = transport::sha256_hex(text);
   p->path = programs_dir / (p->sha256 + ".nc");
   if (!fs::exists(p->path)) {
@@ -560,6 +561,7 @@ json JobManager::start(std::int64_t id, const std::string& client) {
   in.file = j.program->path;
   in.file_sha256 = j.program->sha256;
   in.total_lines = j.program->total_lines;
+  in.extent = j.program->extent;
   if (j.resume) {
     in.lines = j.resume->lines;
     in.source_lines = j.resume->source_lines;

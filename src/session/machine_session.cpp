@@ -12,6 +12,7 @@
 #include "cncstream/protocol/machine_actions.hpp"
 #include "cncstream/protocol/marlin_session.hpp"
 #include "cncstream/protocol/response.hpp"
+#include "cncstream/protocol/travel_check.hpp"
 
 namespace cncstream::session {
 
@@ -418,6 +419,14 @@ CommandResult MachineSession::start_job(JobInput job, JobMode mode) {
     for (const auto& e : program.errors) all += "\n  " + e;
     return CommandResult::refused(all);
   }
+  // Larger than the machine can move: refused before its first line (check
+  // mode moves nothing and reports the program's own errors).
+  if (mode != JobMode::Check)
+    if (const auto travel = protocol::max_travel_from(settings_)) {
+      const gcode::ProgramExtent extent = job.extent ? *job.extent : gcode::program_extent(job.lines);
+      if (const auto why = protocol::travel_refusal(extent, *travel))
+        return CommandResult::refused(std::string("start a job: ").append(job.file.string()).append(": ").append(*why));
+    }
   if (!job.source_lines.empty())
     for (std::size_t i = 0; i < program.lines.size(); ++i) program.lines[i].source_line = job.source_lines[i];
   try {

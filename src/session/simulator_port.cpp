@@ -1,5 +1,7 @@
 #include "cncstream/session/simulator_port.hpp"
 
+#include "cncsim/output_file.hpp"
+
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
@@ -108,7 +110,9 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
     r.gouged = result.stats.gouged > 0;
     if (result.stats.has_gouge) r.largest_gouge_mm = -result.stats.largest_gouge.value;
     if (!opt_.png.empty()) {
-      write_deviation_png(opt_.png, result, "cncstream sim verify", removal_->cutter().description());
+      cncsim::write_whole(opt_.png, [&](const std::filesystem::path& file) {
+        write_deviation_png(file, result, "cncstream sim verify", removal_->cutter().description());
+      });
       o << "verify: deviation map written to " << opt_.png << "\n";
     }
   }

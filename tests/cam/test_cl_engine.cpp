@@ -2,7 +2,9 @@
 // floor, and input errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -176,4 +178,35 @@ TEST(ClEngine, StatsCountWhatIsDrawn) {
   // borders a vertical wall, which never lets an edge go.
   EXPECT_EQ(s.edges_drawn, 16u);
   EXPECT_EQ(s.vertices_drawn, 0u);
+}
+
+// Streamed tiles report the fraction of the whole grid inside each tile, and
+// a checkpoint that throws stops the grid there (a cancelled `clgrid`).
+TEST(ClEngine, TilesCheckpointSpansTheWholeGridAndCanStopIt) {
+  const Mesh m = bumpy();
+  const GridSpec spec = GridSpec::covering(-3, -3, 43, 43, 0.17, 0.19);
+  ClOptions o;
+  o.max_tile_bytes = spec.nx * 9 * 37 + 5;  // several tiles
+  const ClEngine e(m, Cutter::ball(6), o);
+  std::mutex mu;
+  double lo = 2, hi = -1;
+  std::size_t tiles = 0;
+  e.compute_tiles(spec, [&](const ClTile&) { ++tiles; }, [&](double f) {
+    std::lock_guard<std::mutex> l(mu);
+    lo = std::min(lo, f);
+    hi = std::max(hi, f);
+  });
+  EXPECT_GT(tiles, 3u);
+  EXPECT_GE(lo, 0.0);
+  EXPECT_LT(lo, 1.0 / double(tiles));  // the first tile reports its own part, not the grid's end
+  EXPECT_DOUBLE_EQ(hi, 1.0);
+
+  struct Stop {};
+  std::size_t tiles_before_stop = 0;
+  EXPECT_THROW(e.compute_tiles(spec, [&](const ClTile&) { ++tiles_before_stop; },
+                               [](double f) {
+                                 if (f > 0.5) throw Stop{};
+                               }),
+               Stop);
+  EXPECT_LT(tiles_before_stop, tiles);
 }

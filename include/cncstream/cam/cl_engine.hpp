@@ -67,8 +67,10 @@ class ClEngine {
   // Grid in row tiles of at most options.max_tile_bytes each, handed to sink
   // in order, so a grid larger than memory can be streamed to a file. Node
   // heights are identical to compute()'s (nodes are placed from the full
-  // spec); a tile's own spec.y0 is spec.y(j0).
-  void compute_tiles(const GridSpec& spec, const std::function<void(const ClTile&)>& sink) const;
+  // spec); a tile's own spec.y0 is spec.y(j0). `checkpoint` gets the
+  // fraction of the whole grid done, inside each tile too.
+  void compute_tiles(const GridSpec& spec, const std::function<void(const ClTile&)>& sink,
+                     const Checkpoint& checkpoint = {}) const;
   // One point (drop-cutter query), same result as a grid node at (x, y);
   // the floor where nothing is touched. Builds a bucket index on first use.
   double height_at(double x, double y) const;

@@ -22,6 +22,7 @@
 #include "cncstream/daemon/http_types.hpp"
 #include "cncstream/daemon/machines.hpp"
 #include "cncstream/daemon/previews.hpp"
+#include "cncstream/gcode/program_extent.hpp"
 #include "cncstream/jobs/height_preview.hpp"
 #include "cncstream/jobs/resume_job.hpp"
 #include "cncstream/transport/journal.hpp"
@@ -38,6 +39,7 @@ struct Program {
   std::optional<Mesh> work_mesh;   // STL jobs: the part in work coordinates (the simulator's verify)
   std::optional<Cutter> cutter;
   double seconds = 0;              // generation time
+  gcode::ProgramExtent extent;     // for the travel check, traced off the event loop
   // The tool-tip heights for the preview (work coordinates): an STL
   // program's from its CL grid, set before the program is shared; a G-code
   // program's traced after `ready`, set on the event loop's thread (the only

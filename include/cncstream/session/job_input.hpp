@@ -3,8 +3,11 @@
 // for (so the journal and a later resume speak in file lines).
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "cncstream/gcode/program_extent.hpp"
 
 namespace cncstream::session {
 
@@ -16,6 +19,11 @@ struct JobInput {
   std::int64_t total_lines = 0;    // lines of the file
   std::int64_t resumed_from = 0;   // journal job this one resumes (0: none)
   std::int64_t from_line = 0;      // file line the resume continues after
+  // The program's extent for the travel check, traced by a caller that has a
+  // worker thread (the daemon: seconds for millions of lines would stall its
+  // event loop); absent, start_job traces `lines` itself. A resume may give
+  // the whole program's: its lines move within it.
+  std::optional<gcode::ProgramExtent> extent;
 };
 
 // Reads a G-code file into a JobInput (hash, lines 1..n).

@@ -11,16 +11,28 @@
 #include "cncstream/cam/height_field_io.hpp"
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/image/height_map.hpp"
+#include "cncstream/jobs/output_file.hpp"
 #include "commands.hpp"
+#include "long_job.hpp"
 
 namespace cncstream::app {
 
 namespace {
 
+// The grid's progress and stop (from the engine's workers): throws
+// jobs::Cancelled on a stop request.
+Checkpoint grid_checkpoint(const jobs::JobControl& control) {
+  return [&control](double fraction) {
+    if (control.stop.stop_requested()) throw jobs::Cancelled();
+    if (control.progress) control.progress("CL grid", fraction);
+  };
+}
+
 // CSV: header x,y,z, one node per line, x varying fastest. Streamed by tile.
-void write_csv(const ClEngine& engine, const GridSpec& spec, const std::string& out) {
+void write_csv(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
+               const jobs::JobControl& control) {
   std::ofstream f(out, std::ios::binary);
-  if (!f) throw std::runtime_error(out + ": cannot open for writing");
+  if (!f) throw std::runtime_error(out.string() + ": cannot open for writing");
   f << "x,y,z\n";
   char buf[96];
   engine.compute_tiles(spec, [&](const ClTile& tile) {
@@ -30,20 +42,25 @@ void write_csv(const ClEngine& engine, const GridSpec& spec, const std::string& 
         const int n = std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f\n", g.x(i), g.y(j), tile.grid.at(i, j));
         f.write(buf, n);
       }
-  });
-  if (!f) throw std::runtime_error(out + ": write failed");
+  }, grid_checkpoint(control));
+  f.close();
+  if (!f) throw std::runtime_error(out.string() + ": write failed");
 }
 
-// Raw float32 + sidecar, streamed by tile.
-void write_f32(const ClEngine& engine, const GridSpec& spec, const std::string& out) {
+// Raw float32 + sidecar, streamed by tile. The sidecar is renamed beside the
+// final name before the data file is (write_file_atomically renames it last).
+void write_f32(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
+               const std::filesystem::path& final_path, const jobs::JobControl& control) {
   HeightFieldWriter w(out, spec);
-  engine.compute_tiles(spec, [&](const ClTile& tile) { w.append(tile.grid.z); });
+  engine.compute_tiles(spec, [&](const ClTile& tile) { w.append(tile.grid.z); }, grid_checkpoint(control));
   w.finish();
+  if (out != final_path) std::filesystem::rename(height_field_sidecar(out), height_field_sidecar(final_path));
 }
 
 // A shaded height map a person can look at (the whole grid in memory).
-void write_png_map(const ClEngine& engine, const GridSpec& spec, const std::string& out, const std::string& title) {
-  const ClGrid g = engine.compute(spec);
+void write_png_map(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
+                   const std::string& title, const jobs::JobControl& control) {
+  const ClGrid g = engine.compute(spec, grid_checkpoint(control));
   MapGrid mg{spec.nx, spec.ny, spec.dx, spec.dy, spec.x0, spec.y0};
   HeightMapOptions ho;
   ho.title = title;
@@ -61,6 +78,7 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
     double grid = 0;
     std::optional<double> floor;
     unsigned threads = 0;
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Opts>();
   auto* sub = app.add_subcommand("clgrid", "Compute the cutter-location (tool tip) height grid of an STL");
@@ -72,6 +90,7 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("--floor", o->floor, "Height where the tool touches nothing (default: the mesh's lowest z)");
   sub->add_option("--threads", o->threads, "Worker threads (0: all cores)");
   sub->add_option("-o,--output", o->out, "Output: .csv, .png or .f32")->required();
+  add_progress_option(sub, o->progress);
   registry.add(sub, [o] {
     const auto t0 = std::chrono::steady_clock::now();
     const Cutter cutter = parse_cutter_spec(o->tool);
@@ -88,13 +107,27 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
     ClOptions clo;
     clo.floor = o->floor;
     clo.threads = o->threads;
-    const ClEngine engine(*mesh, cutter, clo);
-    if (ext == ".csv") write_csv(engine, spec, o->out);
-    else if (ext == ".f32") write_f32(engine, spec, o->out);
-    else write_png_map(engine, spec, o->out, "CL surface (tool tip) of " + std::filesystem::path(o->part.stl).filename().string());
+    LongJob job(o->progress, 0);  // the engine's own --threads
+    const jobs::JobControl control = job.control();
+    const std::string title = "CL surface (tool tip) of " + std::filesystem::path(o->part.stl).filename().string();
+    double floor_z = 0;
+    try {
+      if (control.stop.stop_requested()) throw jobs::Cancelled();
+      const ClEngine engine(*mesh, cutter, clo);
+      floor_z = engine.floor();
+      jobs::write_file_atomically(o->out, [&](const std::filesystem::path& file) {
+        if (ext == ".csv") write_csv(engine, spec, file, control);
+        else if (ext == ".f32") write_f32(engine, spec, file, o->out, control);
+        else write_png_map(engine, spec, file, title, control);
+      });
+      if (control.progress) control.progress("done", 1);
+    } catch (const jobs::Cancelled&) {
+      return job.interrupted_exit(o->out + " not written");
+    }
+    job.clear_progress();
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::cout << "grid " << spec.nx << " x " << spec.ny << " = " << spec.size() << " nodes, step " << o->grid
-              << " mm, floor " << engine.floor() << "; wrote " << o->out << " in " << s << " s\n";
+              << " mm, floor " << floor_z << "; wrote " << o->out << " in " << s << " s\n";
     return 0;
   });
 }

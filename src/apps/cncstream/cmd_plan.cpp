@@ -11,6 +11,7 @@
 #include "cncstream/jobs/plan_job.hpp"
 #include "commands.hpp"
 #include "job_display.hpp"
+#include "long_job.hpp"
 #include "selection_options.hpp"
 
 namespace cncstream::app {
@@ -19,6 +20,7 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
   struct Opts {
     SelectionOptions sel;
     std::string out = "plan";
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Opts>();
   auto* sub = app.add_subcommand(
@@ -32,9 +34,18 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("--accel", o->sel.accel, "Machine's acceleration per axis for the time estimate, mm/s^2 ($120-$122)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("-o,--output", o->out, "Folder for the G-code files and plan.json")->capture_default_str();
+  add_progress_option(sub, o->progress);
   registry.add(sub, [o] {
     const jobs::PlanParams params = plan_params(o->sel);
-    const jobs::PlanResult plan = jobs::run_plan(params, thread_limited(o->sel.threads));
+    LongJob job(o->progress, o->sel.threads);
+    std::optional<jobs::PlanResult> result;
+    try {
+      result = jobs::run_plan(params, job.control());
+    } catch (const jobs::Cancelled&) {
+      return job.interrupted_exit("no plan written in " + o->out);
+    }
+    job.clear_progress();
+    const jobs::PlanResult& plan = *result;
     const jobs::SelectionResult& r = plan.selection;
     std::cout << r.table();
     const jobs::PlanFiles files = jobs::write_plan(plan, o->out);

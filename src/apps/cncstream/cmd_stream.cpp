@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "daemon_handoff.hpp"
 #include "job_session.hpp"
+#include "long_job.hpp"
 #include "toolpath_options.hpp"
 
 namespace cncstream::app {
@@ -48,6 +49,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
     ToolpathOptions tp;
     ConnectionOptions conn;
     SimCliOptions sim;
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Opts>();
   auto* sub = app.add_subcommand(
@@ -68,6 +70,8 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       opt->group("Tool path (STL input)");
   sub->add_option("-o,--output", o->output, "STL input: write the generated G-code here (default: next to the journal)")
       ->group("Tool path (STL input)");
+  add_progress_option(sub, o->progress);
+  sub->get_option("--progress")->group("Tool path (STL input)");
   registry.add(sub, [o] {
     const auto& c = o->conn;
     // A running daemon owns the port: it runs the job, this command follows it.
@@ -90,10 +94,30 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       if (o->tp.tool.empty())
         throw std::invalid_argument(o->file + " is a part: say which cutter machines it with --tool (e.g. ball:3.175)");
       o->tp.part.stl = o->file;
-      const jobs::ToolpathProgram r = jobs::generate_toolpath(toolpath_params(o->tp), thread_limited(o->tp.threads));
-      const std::string sha = transport::sha256_hex(r.gcode);
-      const std::filesystem::path out = o->output.empty() ? program_path(c, o->file, sha) : std::filesystem::path(o->output);
-      jobs::write_text_file_atomically(out, r.gcode);
+      // Generation runs under its own Ctrl-C handling (stop the job, write
+      // nothing, exit 130); the guard is gone before streaming, whose Ctrl-C
+      // holds and stops the machine instead.
+      std::optional<jobs::ToolpathProgram> program;
+      std::filesystem::path out;
+      {
+        LongJob generation(o->progress, o->tp.threads);
+        std::string not_written = "no program written, nothing streamed";
+        if (!o->output.empty()) not_written = o->output + " not written, nothing streamed";
+        try {
+          program = jobs::generate_toolpath(toolpath_params(o->tp), generation.control());
+        } catch (const jobs::Cancelled&) {
+          return generation.interrupted_exit(not_written);
+        }
+        generation.clear_progress();
+        const std::string sha = transport::sha256_hex(program->gcode);
+        out = o->output.empty() ? program_path(c, o->file, sha) : std::filesystem::path(o->output);
+        jobs::write_text_file_atomically(out, program->gcode);
+        // A stop that came after the job's last checkpoint: the program is
+        // whole, but the operator asked not to go on.
+        if (generation.interrupted())
+          return generation.interrupted_exit(std::string("wrote ").append(out.string()).append(", nothing streamed"));
+      }
+      const jobs::ToolpathProgram& r = *program;
       job = session::job_from_file(out);
       EtaEstimator eta = estimate_job(job, limits);
       std::cout << "plan for " << o->file << ":\n"

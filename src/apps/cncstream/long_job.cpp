@@ -1,0 +1,26 @@
+#include "long_job.hpp"
+
+#include <cstdio>
+
+namespace cncstream::app {
+
+LongJob::LongJob(ProgressMode mode, unsigned threads) : progress_(stderr, mode), threads_(threads) {}
+
+jobs::JobControl LongJob::control() {
+  jobs::JobControl c;
+  c.stop = guard_.token();
+  c.threads = threads_;
+  if (progress_.enabled()) c.progress = [this](std::string_view stage, double f) { progress_.report(stage, f); };
+  return c;
+}
+
+int LongJob::interrupted_exit(const std::string& what) {
+  progress_.clear();
+  std::string msg = "cncstream: interrupted: ";
+  msg.append(what).append("\n");
+  std::fputs(msg.c_str(), stderr);
+  std::fflush(stderr);
+  return guard_.exit_status();
+}
+
+}  // namespace cncstream::app
