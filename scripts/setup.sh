@@ -11,6 +11,8 @@ packages=(
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   tmux  # the terminal jog tests drive `cncstream jog` in a tmux session
   chromium chromium-driver python3-selenium libjs-three
+  clang libclang-rt-14-dev clang-tidy  # libFuzzer targets (tools/fuzz.sh) and tools/tidy.sh
+  gcovr  # tools/coverage.sh
 )
 missing=()
 for p in "${packages[@]}"; do
