@@ -66,9 +66,12 @@ for e in json.load(open(db_path)):
             batches[batch] = (batch_entry, members)
     elif path.startswith(ours):
         entries.append(dict(e, file=path))
+# A source of a batch that a test program also compiles on its own is
+# checked once, with its batch.
+in_batches = {m for _, members in batches.values() for m in members}
 seen, db = set(), []
 for e in entries:
-    if e['file'] not in seen:
+    if e['file'] not in seen and e['file'] not in in_batches:
         seen.add(e['file'])
         db.append(e)
 members_of = {}
@@ -102,10 +105,13 @@ export tidy work root
 # -Wno-unknown-warning-option: a GCC build's command may name warnings clang
 # does not know (-Wno-maybe-uninitialized). The command's own warnings
 # (-Wall -Wextra) are findings too, as clang sees them (clang-diagnostic-*).
+# --config-file: the batches lie outside the repository, where clang-tidy
+# would not find .clang-tidy.
 check_one() {
   local file=$1 out rc=0 TIMEFORMAT="%R %U %S"
   out=$work/out/$(printf '%s' "$file" | tr '/' '_')
-  { time "$tidy" -p "$work" --quiet --extra-arg=-Wno-unknown-warning-option "$file" >"$out" 2>&1 || rc=$?; } 2>"$out.time"
+  { time "$tidy" -p "$work" --config-file="$root/.clang-tidy" --quiet \
+    --extra-arg=-Wno-unknown-warning-option "$file" >"$out" 2>&1 || rc=$?; } 2>"$out.time"
   echo "$rc" >"$out.rc"
   echo "${file#"$root"/}" >>"$out.time"
 }
