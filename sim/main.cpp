@@ -8,12 +8,14 @@
 #include <atomic>
 #include <cctype>
 #include <csignal>
-#include <cstring>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <stdexcept>
 
 #include "cncsim/machine.hpp"
+#include "cncsim/number_text.hpp"
 #include "cncsim/output_file.hpp"
 #include "cncsim/pty_frontend.hpp"
 #include "cncsim/removal.hpp"
@@ -31,13 +33,11 @@ template <typename T>
 void parse_line_faults(const std::vector<std::string>& specs, const char* flag, std::map<std::size_t, T>& out) {
   for (const std::string& s : specs) {
     const auto colon = s.find(':');
-    std::size_t line = 0;
-    double value = 0;
-    char tail = 0;
-    if (colon == std::string::npos ||
-        std::sscanf(s.c_str(), "%zu:%lf%c", &line, &value, &tail) != 2 || line == 0)
+    const auto line = colon == std::string::npos ? std::nullopt : cncsim::number_from<std::size_t>(s.substr(0, colon));
+    const auto value = colon == std::string::npos ? std::nullopt : cncsim::number_from<double>(s.substr(colon + 1));
+    if (!line || !value || *line == 0)
       throw std::invalid_argument(std::string(flag) + " '" + s + "': expected LINE:VALUE with LINE >= 1");
-    out[line] = static_cast<T>(value);
+    out[*line] = static_cast<T>(*value);
   }
 }
 
@@ -45,16 +45,16 @@ void parse_line_faults(const std::vector<std::string>& specs, const char* flag, 
 void parse_byte_faults(const std::vector<std::string>& specs, const char* flag,
                        std::map<std::size_t, cncsim::ByteOfLine>& out) {
   for (const std::string& s : specs) {
-    std::size_t line = 0, offset = 0;
-    char tail = 0;
-    char word[8] = {};
-    if (std::sscanf(s.c_str(), "%zu:%zu%c", &line, &offset, &tail) == 2 && line > 0) {
-      out[line] = cncsim::ByteOfLine::at(offset);
-    } else if (std::sscanf(s.c_str(), "%zu:%4s%c", &line, word, &tail) == 2 && line > 0 && std::string(word) == "eol") {
-      out[line] = cncsim::ByteOfLine::end_of_line();
-    } else if (std::sscanf(s.c_str(), "%zu:%4s%c", &line, word, &tail) == 2 && line > 0 && std::strlen(word) == 1 &&
-               std::isalpha(static_cast<unsigned char>(word[0]))) {
-      out[line] = cncsim::ByteOfLine::first(static_cast<char>(std::toupper(static_cast<unsigned char>(word[0]))));
+    const auto colon = s.find(':');
+    const auto line = colon == std::string::npos ? std::nullopt : cncsim::number_from<std::size_t>(s.substr(0, colon));
+    const std::string word = colon == std::string::npos ? std::string() : s.substr(colon + 1);
+    const auto offset = cncsim::number_from<std::size_t>(word);
+    if (line && *line > 0 && offset) {
+      out[*line] = cncsim::ByteOfLine::at(*offset);
+    } else if (line && *line > 0 && word == "eol") {
+      out[*line] = cncsim::ByteOfLine::end_of_line();
+    } else if (line && *line > 0 && word.size() == 1 && std::isalpha(static_cast<unsigned char>(word[0]))) {
+      out[*line] = cncsim::ByteOfLine::first(static_cast<char>(std::toupper(static_cast<unsigned char>(word[0]))));
     } else {
       throw std::invalid_argument(std::string(flag) + " '" + s +
                                   "': expected LINE:OFFSET (0-based byte of that line), LINE:eol or LINE:LETTER, "
@@ -64,11 +64,9 @@ void parse_byte_faults(const std::vector<std::string>& specs, const char* flag,
 }
 
 cncstream::Vec3 parse_position(const std::string& text) {
-  cncstream::Vec3 p;
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &p.x, &p.y, &p.z, &tail) != 3)
-    throw std::invalid_argument("--position '" + text + "': expected X,Y,Z (mm, machine coordinates)");
-  return p;
+  const auto p = cncsim::vec3_from(text);
+  if (!p) throw std::invalid_argument("--position '" + text + "': expected X,Y,Z (mm, machine coordinates)");
+  return *p;
 }
 
 // How often each N word ran: a program numbered N1..Nk streamed once and
@@ -108,9 +106,7 @@ int run_verify(const std::string& design_path, const std::string& result_path, d
   return result.stats.gouged == 0 ? 0 : 3;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"cncsim: a simulated GRBL 1.1h 3-axis router on a pseudo-terminal"};
   std::string link, speed_text = "1", settings_path, stock_text, design_path, tool_spec = "flat:6", result_path;
   bool strict = false;
@@ -214,8 +210,8 @@ int main(int argc, char** argv) {
     NumberedTally tally;
     machine.set_line_observer([&tally](const cncsim::ExecutedLine& l) { tally.add(l.n); });
 
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
+    if (std::signal(SIGINT, on_signal) == SIG_ERR || std::signal(SIGTERM, on_signal) == SIG_ERR)
+      throw std::runtime_error("cannot install the SIGINT/SIGTERM handlers");
     cncsim::PtyFrontEnd front(machine, pty);
     std::cout << front.slave_path() << std::endl;
 
@@ -273,4 +269,19 @@ int main(int argc, char** argv) {
     std::cerr << "cncsim: error: " << e.what() << "\n";
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // What escapes run() (setting up the options, or an exception that is not
+  // an std::exception) ends the program with a message, not std::terminate.
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "cncsim: error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "cncsim: error: an unknown exception\n";
+  }
+  return 1;
 }

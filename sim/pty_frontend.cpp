@@ -11,11 +11,14 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <system_error>
 
 namespace cncsim {
 namespace {
 
-std::string errno_text(const char* what) { return std::string(what) + ": " + std::strerror(errno); }
+std::string errno_text(const char* what) {
+  return std::string(what).append(": ").append(std::generic_category().message(errno));
+}
 
 }  // namespace
 
@@ -24,8 +27,11 @@ PtyFrontEnd::PtyFrontEnd(Machine& machine, PtyOptions options)
   master_ = posix_openpt(O_RDWR | O_NOCTTY);
   if (master_ < 0) throw PtyError(errno_text("posix_openpt"));
   if (grantpt(master_) != 0 || unlockpt(master_) != 0) throw PtyError(errno_text("grantpt/unlockpt"));
-  const char* name = ptsname(master_);
-  if (!name) throw PtyError(errno_text("ptsname"));
+  char name[128];  // "/dev/pts/N"
+  if (const int e = ptsname_r(master_, name, sizeof name); e != 0) {
+    errno = e;
+    throw PtyError(errno_text("ptsname_r"));
+  }
   slave_path_ = name;
   slave_keepalive_ = open(name, O_RDWR | O_NOCTTY);
   if (slave_keepalive_ < 0) throw PtyError(errno_text(("open " + slave_path_).c_str()));

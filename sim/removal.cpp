@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
+#include <string_view>
 
+#include "cncsim/number_text.hpp"
 #include "cncsim/output_file.hpp"
 #include "cncstream/cam/height_field_io.hpp"
 #include "cncstream/cam/height_field_mesh.hpp"
@@ -15,11 +17,12 @@ namespace cncsim {
 using cncstream::Vec3;
 
 StockBox parse_stock_box(const std::string& text, double resolution) {
-  Vec3 a, b;
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%lf,%lf,%lf:%lf,%lf,%lf%c", &a.x, &a.y, &a.z, &b.x, &b.y, &b.z, &tail) != 6)
+  const auto colon = text.find(':');
+  const auto a = colon == std::string::npos ? std::nullopt : vec3_from(std::string_view(text).substr(0, colon));
+  const auto b = colon == std::string::npos ? std::nullopt : vec3_from(std::string_view(text).substr(colon + 1));
+  if (!a || !b)
     throw std::invalid_argument("--stock '" + text + "': expected X0,Y0,Z0:X1,Y1,Z1 (mm, machine coordinates)");
-  StockBox box{min(a, b), max(a, b), resolution};
+  StockBox box{min(*a, *b), max(*a, *b), resolution};
   const Vec3 size = box.hi - box.lo;
   if (size.x <= 0 || size.y <= 0 || size.z <= 0)
     throw std::invalid_argument("--stock '" + text + "': the box has no volume");
@@ -56,11 +59,10 @@ ToolTable parse_tool_table(const std::string& text) {
     entry = trim(entry);
     if (entry.empty()) return;
     const auto eq = entry.find('=');
-    int tool = -1;
-    char tail = 0;
-    if (eq == std::string::npos || std::sscanf(trim(entry.substr(0, eq)).c_str(), "%d%c", &tool, &tail) != 1 ||
-        tool < 0)
+    const auto number = eq == std::string::npos ? std::nullopt : number_from<int>(entry.substr(0, eq));
+    if (!number || *number < 0)
       throw std::invalid_argument(where + "'" + entry + "': expected N=SPEC, e.g. 1=ball:3.175");
+    const int tool = *number;
     try {
       table[tool] = cncstream::parse_cutter_spec(trim(entry.substr(eq + 1)));
     } catch (const std::exception& e) {

@@ -1,21 +1,27 @@
 #include "cncsim/settings.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <set>
 #include <sstream>
+
+#include "cncsim/number_text.hpp"
 
 namespace cncsim {
 namespace {
 
 // Settings the firmware prints as integers.
-const std::set<int> kIntegerSettings{0, 1, 2, 3, 4, 5, 6, 10, 13, 20, 21, 22, 23, 26, 30, 31, 32};
+constexpr std::array kIntegerSettings{0, 1, 2, 3, 4, 5, 6, 10, 13, 20, 21, 22, 23, 26, 30, 31, 32};
+bool is_integer_setting(int n) {
+  return std::find(kIntegerSettings.begin(), kIntegerSettings.end(), n) != kIntegerSettings.end();
+}
 constexpr double kMaxStepRateHz = 30000;
 
 std::string format_value(int n, double v) {
   char buf[64];
-  if (kIntegerSettings.count(n)) {
+  if (is_integer_setting(n)) {
     std::snprintf(buf, sizeof buf, "%.0f", v);
   } else {
     std::snprintf(buf, sizeof buf, "%.3f", v);
@@ -47,7 +53,7 @@ int Settings::set(int n, double value) {
   if (n == 20 && value != 0 && !homing()) return 10;
   if (n >= 100 && n <= 102 && value * get(n + 10) > kMaxStepRateHz * 60) return 12;
   if (n >= 110 && n <= 112 && value * get(n - 10) > kMaxStepRateHz * 60) return 12;
-  if (kIntegerSettings.count(n)) value = std::trunc(value);
+  if (is_integer_setting(n)) value = std::trunc(value);
   values_[n] = value;
   if (n == 22 && value == 0) values_[20] = 0;  // soft limits need homing
   return 0;
@@ -83,9 +89,9 @@ PersistentStore load_store(const std::filesystem::path& path) {
     throw StoreFileError(path.string() + ":" + std::to_string(lineno) + ": " + why + ": '" + line + "'");
   };
   auto parse_vec = [&](const std::string& text) {
-    cncstream::Vec3 v;
-    if (std::sscanf(text.c_str(), "%lf,%lf,%lf", &v.x, &v.y, &v.z) != 3) fail("expected x,y,z");
-    return v;
+    const auto v = vec3_from(text);
+    if (!v) fail("expected x,y,z");
+    return *v;
   };
   while (std::getline(in, line)) {
     ++lineno;

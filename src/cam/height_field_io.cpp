@@ -12,6 +12,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <system_error>
 
 namespace cncstream {
 
@@ -40,7 +41,7 @@ std::filesystem::path height_field_sidecar(const std::filesystem::path& data_pat
 
 HeightFieldWriter::HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid)
     : path_(data_path), grid_(grid), out_(data_path, std::ios::binary) {
-  if (!out_) throw HeightFieldError(data_path.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+  if (!out_) throw HeightFieldError(data_path.string() + ": cannot open for writing (" + std::generic_category().message(errno) + ")");
 }
 
 void HeightFieldWriter::append(std::span<const double> z) {
@@ -62,7 +63,7 @@ void HeightFieldWriter::finish() {
   if (!out_) throw HeightFieldError(path_.string() + ": write error");
   const auto side = height_field_sidecar(path_);
   std::ofstream t(side);
-  if (!t) throw HeightFieldError(side.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+  if (!t) throw HeightFieldError(side.string() + ": cannot open for writing (" + std::generic_category().message(errno) + ")");
   t << kMagic << "\n"
     << "nx " << grid_.nx << "\nny " << grid_.ny << "\nx0 " << num(grid_.x0) << "\ny0 " << num(grid_.y0) << "\ndx "
     << num(grid_.dx) << "\ndy " << num(grid_.dy) << "\nnodata nan\n";
@@ -81,7 +82,7 @@ void write_height_field(const std::filesystem::path& data_path, const GridSpec& 
 HeightFieldData read_height_field(const std::filesystem::path& data_path) {
   const auto side = height_field_sidecar(data_path);
   std::ifstream t(side);
-  if (!t) throw HeightFieldError(side.string() + ": cannot open (" + std::strerror(errno) + ")");
+  if (!t) throw HeightFieldError(side.string() + ": cannot open (" + std::generic_category().message(errno) + ")");
   std::string line;
   int line_no = 0;
   auto err = [&](const std::string& why) { return HeightFieldError(side.string() + ":" + std::to_string(line_no) + ": " + why); };
@@ -126,7 +127,7 @@ HeightFieldData read_height_field(const std::filesystem::path& data_path) {
   if (out.grid.size() > (std::size_t{1} << 32)) throw err("grid is too large");
 
   std::ifstream f(data_path, std::ios::binary);
-  if (!f) throw HeightFieldError(data_path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  if (!f) throw HeightFieldError(data_path.string() + ": cannot open (" + std::generic_category().message(errno) + ")");
   const std::uintmax_t want = out.grid.size() * 4;
   std::error_code ec;
   const std::uintmax_t have = std::filesystem::file_size(data_path, ec);

@@ -55,19 +55,19 @@ void Api::handle(Request r, Respond respond) {
 }
 
 void Api::add_routes() {
-  router_.add("GET", "/api/v1/health", [](Request&, Respond res) {
+  router_.add("GET", "/api/v1/health", [](Request&, const Respond& res) {
     res(Response::json(200, {{"ok", true}, {"version", "0.1.0"}}));
   }, true);
-  router_.add("GET", "/api/v1/openapi.json", [](Request&, Respond res) {
+  router_.add("GET", "/api/v1/openapi.json", [](Request&, const Respond& res) {
     Response r;
     r.body = openapi_json();
     res(std::move(r));
   });
-  router_.add("POST", "/api/v1/ws-token", [this](Request&, Respond res) {
+  router_.add("POST", "/api/v1/ws-token", [this](Request&, const Respond& res) {
     res(Response::json(200, {{"token", auth_.issue_ws_token()}, {"expires_in_s", 30}}));
   });
   // The upgrade itself is taken by the server; a plain GET gets told so.
-  router_.add("GET", "/api/v1/ws", [](Request&, Respond res) {
+  router_.add("GET", "/api/v1/ws", [](Request&, const Respond& res) {
     res(Response::error(400, "bad_request", "/api/v1/ws is a WebSocket: send an Upgrade request"));
   });
   machine_routes();

@@ -18,7 +18,7 @@ json file_json(const FileInfo& f) {
 }  // namespace
 
 void Api::file_routes() {
-  router_.add("POST", "/api/v1/files", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/files", [this](Request& r, const Respond& res) {
     if (r.body_file.empty()) throw ApiError{400, "bad_request", "empty upload"};
     const std::string label = r.query_value("name").value_or("unnamed");
     boost::asio::post(pool_, [this, temp = r.body_file, label, res] {
@@ -34,17 +34,17 @@ void Api::file_routes() {
       }
     });
   });
-  router_.add("GET", "/api/v1/files", [this](Request&, Respond res) {
+  router_.add("GET", "/api/v1/files", [this](Request&, const Respond& res) {
     json list = json::array();
     for (const auto& f : files_.list()) list.push_back(file_json(f));
     res(Response::json(200, {{"files", list}}));
   });
-  router_.add("GET", "/api/v1/files/{id}", [this](Request& r, Respond res) {
+  router_.add("GET", "/api/v1/files/{id}", [this](Request& r, const Respond& res) {
     const auto f = files_.get(r.params.at(0));
     if (!f) throw ApiError{404, "not_found", "no file '" + r.params.at(0).substr(0, 64) + "'"};
     res(Response::json(200, file_json(*f)));
   });
-  router_.add("DELETE", "/api/v1/files/{id}", [this](Request& r, Respond res) {
+  router_.add("DELETE", "/api/v1/files/{id}", [this](Request& r, const Respond& res) {
     const std::string& id = r.params.at(0);
     if (!files_.get(id)) throw ApiError{404, "not_found", "no file '" + id.substr(0, 64) + "'"};
     if (jobs_.file_in_use(id)) throw ApiError{409, "bad_state", "a queued or running job uses this file"};

@@ -26,16 +26,16 @@ long long bounded_query(const Request& r, const std::string& name, long long fal
 }  // namespace
 
 void Api::job_routes() {
-  router_.add("POST", "/api/v1/jobs", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs", [this](Request& r, const Respond& res) {
     res(Response::json(201, jobs_.create(parse_body(r))));
   });
-  router_.add("GET", "/api/v1/jobs", [this](Request& r, Respond res) {
+  router_.add("GET", "/api/v1/jobs", [this](Request& r, const Respond& res) {
     res(Response::json(200, jobs_.list(r.query_value("machine"), r.query_value("state"))));
   });
-  router_.add("GET", "/api/v1/jobs/{id}", [this](Request& r, Respond res) {
+  router_.add("GET", "/api/v1/jobs/{id}", [this](Request& r, const Respond& res) {
     res(Response::json(200, jobs_.to_json(jobs_.get(job_id(r)))));
   });
-  router_.add("GET", "/api/v1/jobs/{id}/gcode", [this](Request& r, Respond res) {
+  router_.add("GET", "/api/v1/jobs/{id}/gcode", [this](Request& r, const Respond& res) {
     auto& j = jobs_.get(job_id(r));
     const auto p = jobs_.program(j);
     if (!p) throw ApiError{409, "bad_state", "job " + std::to_string(j.row.id) + " has no program yet (" + j.row.state + ")"};
@@ -56,34 +56,34 @@ void Api::job_routes() {
     const auto n = bounded_query(r, "max_points", Previews::kDefaultPoints, Previews::kMinPoints, Previews::kMaxPoints);
     jobs_.preview_path(id, static_cast<std::size_t>(n), std::move(res));
   });
-  router_.add("POST", "/api/v1/jobs/{id}/start", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/start", [this](Request& r, const Respond& res) {
     res(Response::json(202, jobs_.start(job_id(r), r.client_id)));
   });
-  router_.add("POST", "/api/v1/jobs/{id}/generate", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/generate", [this](Request& r, const Respond& res) {
     res(Response::json(202, jobs_.generate(job_id(r))));
   });
-  router_.add("POST", "/api/v1/jobs/{id}/hold", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/hold", [this](Request& r, const Respond& res) {
     jobs_.hold(job_id(r));
     res(Response::json(202, {{"accepted", true}}));
   });
-  router_.add("POST", "/api/v1/jobs/{id}/resume", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/resume", [this](Request& r, const Respond& res) {
     jobs_.resume(job_id(r), r.client_id);
     res(Response::json(202, {{"accepted", true}}));
   });
-  router_.add("POST", "/api/v1/jobs/{id}/stop", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/stop", [this](Request& r, const Respond& res) {
     jobs_.stop(job_id(r));
     res(Response::json(202, {{"accepted", true}}));
   });
-  router_.add("POST", "/api/v1/jobs/{id}/cancel", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/cancel", [this](Request& r, const Respond& res) {
     res(Response::json(200, jobs_.cancel(job_id(r), r.client_id)));
   });
-  router_.add("POST", "/api/v1/jobs/{id}/move", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/move", [this](Request& r, const Respond& res) {
     const json b = parse_body(r);
     if (!b.contains("position") || !b["position"].is_number_integer())
       throw ApiError{400, "bad_request", "position: required, an integer"};
     res(Response::json(200, jobs_.move(job_id(r), b["position"].get<std::int64_t>())));
   });
-  router_.add("POST", "/api/v1/jobs/{id}/resume-plan", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/resume-plan", [this](Request& r, const Respond& res) {
     const json b = parse_body(r);
     long from = -1;
     if (b.contains("from_line") && !b["from_line"].is_null()) {
@@ -94,7 +94,7 @@ void Api::job_routes() {
     }
     jobs_.resume_plan(job_id(r), from, r.client_id, res);
   });
-  router_.add("POST", "/api/v1/jobs/{id}/resume-confirm", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/jobs/{id}/resume-confirm", [this](Request& r, const Respond& res) {
     const json b = parse_body(r);
     if (!b.contains("plan_id") || !b["plan_id"].is_string()) throw ApiError{400, "bad_request", "plan_id: required"};
     res(Response::json(201, jobs_.resume_confirm(job_id(r), b["plan_id"].get<std::string>(), r.client_id)));

@@ -16,21 +16,21 @@ Response accepted(const session::CommandResult& r) {
 }  // namespace
 
 void Api::machine_routes() {
-  router_.add("GET", "/api/v1/machines", [this](Request&, Respond res) {
+  router_.add("GET", "/api/v1/machines", [this](Request&, const Respond& res) {
     json list = json::array();
     for (const auto& m : machines_.all()) list.push_back(machines_.summary(*m));
     res(Response::json(200, {{"machines", list}}));
   });
-  router_.add("GET", "/api/v1/machines/{m}", [this](Request& r, Respond res) {
+  router_.add("GET", "/api/v1/machines/{m}", [this](Request& r, const Respond& res) {
     res(Response::json(200, machines_.state(machine(r))));
   });
-  router_.add("GET", "/api/v1/machines/{m}/settings", [this](Request& r, Respond res) {
+  router_.add("GET", "/api/v1/machines/{m}/settings", [this](Request& r, const Respond& res) {
     res(Response::json(200, machines_.settings(machine(r))));
   });
-  router_.add("GET", "/api/v1/machines/{m}/control", [this](Request& r, Respond res) {
+  router_.add("GET", "/api/v1/machines/{m}/control", [this](Request& r, const Respond& res) {
     res(Response::json(200, machines_.control_json(machine(r), r.client_id)));
   });
-  router_.add("POST", "/api/v1/machines/{m}/control", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/machines/{m}/control", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
     const json b = parse_body(r);
     if (r.client_id.empty()) throw ApiError{428, "client_id_required", "taking control needs X-Client-Id"};
@@ -44,14 +44,14 @@ void Api::machine_routes() {
     machines_.set_control(m, r.client_id);
     res(Response::json(200, machines_.control_json(m, r.client_id)));
   });
-  router_.add("DELETE", "/api/v1/machines/{m}/control", [this](Request& r, Respond res) {
+  router_.add("DELETE", "/api/v1/machines/{m}/control", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
     if (!m.control_holder.empty() && m.control_holder != r.client_id)
       throw ApiError{409, "control_held", "only the holder ('" + m.control_holder + "') releases control"};
     machines_.set_control(m, "");
     res(Response::json(200, machines_.control_json(m, r.client_id)));
   });
-  router_.add("POST", "/api/v1/machines/{m}/console", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/machines/{m}/console", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
     const json b = parse_body(r);
     machines_.require_control(m, r.client_id);
@@ -63,7 +63,7 @@ void Api::machine_routes() {
     }
     res(accepted(result));
   });
-  router_.add("POST", "/api/v1/machines/{m}/jog", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/machines/{m}/jog", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
     const json b = parse_body(r);
     machines_.require_control(m, r.client_id);
@@ -72,12 +72,12 @@ void Api::machine_routes() {
     const double feed = number_field(b, "feed", 0, 100000);
     res(accepted(m.session->jog_step(dir, dist, feed)));
   });
-  router_.add("POST", "/api/v1/machines/{m}/jog/cancel", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/machines/{m}/jog/cancel", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
     m.jog_ws_client = 0;
     res(accepted(m.session->jog_release()));  // stopping is never refused, nor needs control
   });
-  router_.add("POST", "/api/v1/machines/{m}/actions/{action}", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/machines/{m}/actions/{action}", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
     const json b = parse_body(r);
     const std::string& a = r.params.at(1);
@@ -104,7 +104,7 @@ void Api::machine_routes() {
       res(accepted(s.reset()));
     }
   });
-  router_.add("POST", "/api/v1/machines/{m}/realtime", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/machines/{m}/realtime", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
     const json b = parse_body(r);
     const auto rt = override_command(b);
@@ -112,10 +112,10 @@ void Api::machine_routes() {
     res(accepted(m.session->realtime(rt)));
   });
   // Safety beats ownership: any authenticated client may hold or stop.
-  router_.add("POST", "/api/v1/machines/{m}/hold", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/machines/{m}/hold", [this](Request& r, const Respond& res) {
     res(accepted(machine(r).session->hold()));
   });
-  router_.add("POST", "/api/v1/machines/{m}/stop", [this](Request& r, Respond res) {
+  router_.add("POST", "/api/v1/machines/{m}/stop", [this](Request& r, const Respond& res) {
     res(accepted(machine(r).session->stop()));
   });
 }

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
+#include <system_error>
 
 namespace cncstream::daemon {
 
@@ -28,7 +29,7 @@ bool constant_time_equal(const std::string& a, const std::string& b) {
 std::string random_token_hex(std::size_t bytes) {
   std::string raw(bytes, '\0');
   const int fd = ::open("/dev/urandom", O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw std::runtime_error(std::string("/dev/urandom: ") + std::strerror(errno));
+  if (fd < 0) throw std::runtime_error(std::string("/dev/urandom: ") + std::generic_category().message(errno));
   std::size_t got = 0;
   while (got < bytes) {
     const ssize_t n = ::read(fd, raw.data() + got, bytes - got);
@@ -69,7 +70,7 @@ std::string load_or_create_token(const std::filesystem::path& data_dir, bool& cr
   const std::string t = random_token_hex();
   // O_EXCL + 0600 at creation: never a moment where the file is readable by others.
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd < 0) throw std::runtime_error(path.string() + ": cannot create the token file: " + std::strerror(errno));
+  if (fd < 0) throw std::runtime_error(path.string() + ": cannot create the token file: " + std::generic_category().message(errno));
   const std::string line = t + "\n";
   const bool ok = ::write(fd, line.data(), line.size()) == static_cast<ssize_t>(line.size()) && ::fsync(fd) == 0;
   ::close(fd);

@@ -75,10 +75,10 @@ fs::path find_web_root(const DaemonConfig& c) {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
-    const fs::path installed = exe.parent_path().parent_path() / "share" / "cncstream" / "web";
+    fs::path installed = exe.parent_path().parent_path() / "share" / "cncstream" / "web";
     if (fs::is_directory(installed, ec)) return installed;
   }
-  const fs::path source = CNCSTREAM_SOURCE_WEB_DIR;
+  fs::path source = CNCSTREAM_SOURCE_WEB_DIR;
   if (!source.empty() && fs::is_directory(source, ec)) return source;
   return {};
 }

@@ -15,7 +15,7 @@
 namespace cncstream::daemon {
 
 // The most a request's header may take (a larger one is answered 431).
-inline constexpr std::size_t kMaxHeaderBytes = 16 * 1024;
+inline constexpr std::size_t kMaxHeaderBytes = std::size_t{16} * 1024;
 
 // ok = false: the target is malformed (a bad escape, a NUL, no leading '/').
 Request request_from(const boost::beast::http::request_header<>& h, bool& ok);

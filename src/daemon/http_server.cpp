@@ -54,9 +54,9 @@ class WsSession : public WsPeer, public std::enable_shared_from_this<WsSession> 
       : server_(std::move(server)), ws_(std::move(socket)) {}
   ~WsSession() override { --server_->connections; }
 
-  void run(http::request<http::empty_body> req, Request upgrade) {
+  void run(const http::request<http::empty_body>& req, Request upgrade) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
-    ws_.read_message_max(64 * 1024);
+    ws_.read_message_max(std::size_t{64} * 1024);
     ws_.async_accept(req, [self = shared_from_this(), upgrade = std::move(upgrade)](beast::error_code ec) {
       if (ec) return;
       self->client_ = self->server_->api.ws_open(upgrade, self->weak_from_this());
@@ -328,7 +328,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   std::shared_ptr<HttpServer::Impl> server_;
   beast::tcp_stream stream_;
-  beast::flat_buffer buffer_{16 * 1024};
+  beast::flat_buffer buffer_{std::size_t{16} * 1024};
   std::optional<http::request_parser<http::empty_body>> header_;
   std::optional<http::request_parser<http::string_body>> body_;
   std::optional<http::request_parser<http::file_body>> upload_;

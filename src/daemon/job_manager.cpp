@@ -450,8 +450,7 @@ void JobManager::kick_generation(DaemonJob& j) {
               }
           });
         };
-        jobs::ToolpathParams p = params;
-        auto r = jobs::generate_toolpath(p, control);
+        auto r = jobs::generate_toolpath(params, control);
         text = std::move(r.gcode);
         prog = make_program(text, programs_dir_);
         prog->work_mesh = std::move(r.work_mesh);
@@ -494,8 +493,8 @@ void JobManager::kick_generation(DaemonJob& j) {
   });
 }
 
-void JobManager::on_generated(const std::string& key, std::shared_ptr<const Program> p, const std::string& error,
-                              bool cancelled) {
+void JobManager::on_generated(const std::string& key, const std::shared_ptr<const Program>& p,
+                              const std::string& error, bool cancelled) {
   auto waiting = std::move(generating_[key]);
   generating_.erase(key);
   generation_stop_.erase(key);
@@ -582,7 +581,7 @@ json JobManager::start(std::int64_t id, const std::string& client) {
   last_run_[j.row.machine] = id;
   j.progress = {};
   j.verify.reset();
-  const auto r = machines_.start_job(m, std::move(in), std::move(design), std::move(cutter));
+  const auto r = machines_.start_job(m, std::move(in), std::move(design), cutter);
   if (!r) {
     running_.erase(j.row.machine);
     throw ApiError{409, "refused", r.reason};
@@ -713,7 +712,8 @@ void JobManager::on_start_failed(const std::string& machine, const std::string& 
 
 // ---- resume from a line -----------------------------------------------------
 
-void JobManager::resume_plan(std::int64_t id, long from_line, const std::string& client, Respond respond) {
+void JobManager::resume_plan(std::int64_t id, long from_line, const std::string& client,
+                             const Respond& respond) {
   auto& j = get(id);
   machines_.require_control(machine_of(j), client);
   const auto& s = j.row.state;

@@ -52,7 +52,7 @@ json opt(const std::optional<T>& v) {
 const char* kind_name(protocol::EventKind k) {
   using protocol::EventKind;
   switch (k) {
-    case EventKind::LineError: return "error";
+    case EventKind::LineError:
     case EventKind::CheckError: return "error";
     case EventKind::Alarm: return "alarm";
     case EventKind::Warning: return "warning";
@@ -87,7 +87,7 @@ void SimMachinePort::opened() {
 
 void SimMachinePort::set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter) {
   base_.design = std::move(design);
-  base_.cutter = std::move(cutter);
+  base_.cutter = cutter;
 }
 
 std::shared_ptr<session::SimulatorPort> SimMachinePort::retire() { return std::exchange(current_, nullptr); }
@@ -322,7 +322,7 @@ session::CommandResult Machines::start_job(Machine& m, session::JobInput job, st
   if (auto r = s.close(); !r) return r;
   auto old = m.sim->retire();
   boost::asio::post(pool_, [old] {});  // its thread is joined off the event loop
-  m.sim->set_next_design(std::move(design), std::move(cutter));
+  m.sim->set_next_design(std::move(design), cutter);
   m.pending_start = std::move(job);
   m.verifying = true;
   try {

@@ -104,7 +104,7 @@ void Previews::serve(Lru& cache, const std::string& key, const std::string& cont
   });
 }
 
-void Previews::png(std::shared_ptr<const Program> program, int max_px, Respond respond) {
+void Previews::png(const std::shared_ptr<const Program>& program, int max_px, Respond respond) {
   std::string key = "png:";
   key.append(program->sha256).append(":").append(std::to_string(max_px));
   // Read here: only the event loop's thread touches a shared program's height.
@@ -124,7 +124,7 @@ void Previews::png(std::shared_ptr<const Program> program, int max_px, Respond r
   });
 }
 
-void Previews::path(std::shared_ptr<const Program> program, std::size_t max_points, Respond respond) {
+void Previews::path(const std::shared_ptr<const Program>& program, std::size_t max_points, Respond respond) {
   std::string key = "path:";
   key.append(program->sha256).append(":").append(std::to_string(max_points));
   serve(paths_, key, "application/json", std::move(respond), [program, max_points] {

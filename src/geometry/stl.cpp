@@ -9,6 +9,7 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <system_error>
 #include <unordered_map>
 
 namespace cncstream {
@@ -330,7 +331,7 @@ StlLoadResult parse_stl(const std::string& bytes, const std::string& name, const
 
 StlLoadResult load_stl(const std::filesystem::path& path, const StlLoadOptions& options) {
   std::ifstream f(path, std::ios::binary);
-  if (!f) throw StlError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  if (!f) throw StlError(path.string() + ": cannot open (" + std::generic_category().message(errno) + ")");
   std::string bytes;
   f.seekg(0, std::ios::end);
   const auto size = f.tellg();
@@ -344,9 +345,9 @@ StlLoadResult load_stl(const std::filesystem::path& path, const StlLoadOptions& 
 
 void write_stl_binary(const std::filesystem::path& path, const Mesh& mesh, const std::string& header) {
   std::ofstream f(path, std::ios::binary);
-  if (!f) throw StlError(path.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+  if (!f) throw StlError(path.string() + ": cannot open for writing (" + std::generic_category().message(errno) + ")");
   char hdr[80] = {};
-  std::memcpy(hdr, header.data(), std::min<std::size_t>(header.size(), 79));
+  header.copy(hdr, 79);
   f.write(hdr, 80);
   auto put_u32 = [&](std::uint32_t v) {
     char b[4];

@@ -67,11 +67,18 @@ MachineSession::MachineSession(boost::asio::io_context& io, MachineOptions optio
 
 MachineSession::~MachineSession() {
   *alive_ = false;
-  timer_.cancel();
-  reconnect_timer_.cancel();
-  if (transport_) transport_->close();
-  // Handlers still queued for this transport hold it alive (see retire below).
-  if (transport_) boost::asio::post(io_, [t = std::move(transport_)] {});
+  // A destructor that throws ends the program (std::terminate). Cancelling a
+  // timer may throw system_error, posting may throw bad_alloc: the session is
+  // gone either way, and the handlers check *alive_.
+  try {
+    timer_.cancel();
+    reconnect_timer_.cancel();
+    if (transport_) transport_->close();
+    // Handlers still queued for this transport hold it alive (see retire below).
+    if (transport_) boost::asio::post(io_, [t = std::move(transport_)] {});
+  } catch (...) {
+    // nothing is left to tell or undo
+  }
 }
 
 double MachineSession::now() const {

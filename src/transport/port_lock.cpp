@@ -9,8 +9,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -18,6 +20,7 @@
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <system_error>
 #include <thread>
 
 namespace cncstream::transport {
@@ -46,7 +49,7 @@ std::string own_program_name() {
   return name.empty() ? std::string("cncstream") : name;
 }
 
-std::string errno_text(int e) { return std::strerror(e); }
+std::string errno_text(int e) { return std::generic_category().message(e); }
 
 bool pid_alive(long pid) {
   if (pid <= 0) return false;
@@ -96,10 +99,9 @@ void remove_held_at_exit() {
 void register_held(const fs::path& file, dev_t dev, ino_t ino) {
   std::lock_guard<std::mutex> g(held_mutex());
   static bool registered = false;
-  if (!registered) {
-    std::atexit(remove_held_at_exit);
-    registered = true;
-  }
+  // If it cannot be registered (no memory), a lock is still removed by its
+  // destructor, and one left by exit() is found stale by its free flock.
+  if (!registered) registered = std::atexit(remove_held_at_exit) == 0;
   held_list().push_back({file, dev, ino, ::getpid()});
 }
 
@@ -152,7 +154,12 @@ LockInfo read_lock(int fd, const fs::path& file) {
       else if (line.rfind("program=", 0) == 0) info.owner.program = line.substr(8);
       else if (line.rfind("api=", 0) == 0) info.owner.api = line.substr(4);
       else if (line.rfind("device=", 0) == 0) info.owner.device = line.substr(7);
-      else if (line.rfind("since=", 0) == 0) info.owner.since = static_cast<std::time_t>(std::atoll(line.c_str() + 6));
+      else if (line.rfind("since=", 0) == 0) {
+        long long since = 0;
+        const char* end = line.data() + line.size();
+        if (const auto r = std::from_chars(line.data() + 6, end, since); r.ec == std::errc() && r.ptr == end)
+          info.owner.since = static_cast<std::time_t>(since);
+      }
     }
   }
   if (info.complete && info.owner.program.empty()) info.owner.program = proc_comm(info.owner.pid);
@@ -181,10 +188,9 @@ std::string format_since(std::time_t t) {
   const std::time_t now = std::time(nullptr);
   ::localtime_r(&t, &then);
   ::localtime_r(&now, &today);
+  const char* format = then.tm_year == today.tm_year && then.tm_yday == today.tm_yday ? "%H:%M" : "%Y-%m-%d %H:%M";
   char buf[64];
-  if (then.tm_year == today.tm_year && then.tm_yday == today.tm_yday) std::strftime(buf, sizeof buf, "%H:%M", &then);
-  else std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M", &then);
-  return buf;
+  return {buf, std::strftime(buf, sizeof buf, format, &then)};
 }
 
 std::string lock_content(const std::string& device) {
@@ -193,12 +199,15 @@ std::string lock_content(const std::string& device) {
   for (char& c : program)
     if (std::isspace(static_cast<unsigned char>(c))) c = '_';
   std::string user = "?";
-  if (const passwd* pw = ::getpwuid(::getuid())) user = pw->pw_name;
+  passwd pw{};
+  passwd* found = nullptr;
+  std::array<char, 4096> pw_text{};
+  if (::getpwuid_r(::getuid(), &pw, pw_text.data(), pw_text.size(), &found) == 0 && found) user = found->pw_name;
   // The first line is the UUCP/minicom form other programs parse: the PID in
   // ten columns, then the program and the user.
-  char first[128];
-  std::snprintf(first, sizeof first, "%10ld %s %s\n", static_cast<long>(::getpid()), program.c_str(), user.c_str());
-  std::string text = first;
+  std::string pid = std::to_string(static_cast<long>(::getpid()));
+  std::string text(pid.size() < 10 ? 10 - pid.size() : 0, ' ');
+  text.append(pid).append(" ").append(program).append(" ").append(user).append("\n");
   text.append(kMarker).append("\n");
   text.append("program=").append(program).append("\n");
   if (!id.api.empty()) text.append("api=").append(id.api).append("\n");
@@ -312,14 +321,16 @@ std::vector<PortOwner> processes_using(const std::string& device) {
   std::error_code ec;
   for (const auto& proc : fs::directory_iterator("/proc", ec)) {
     const std::string pid_text = proc.path().filename().string();
-    if (pid_text.empty() || !std::all_of(pid_text.begin(), pid_text.end(), ::isdigit)) continue;
+    long pid = 0;
+    const char* end = pid_text.data() + pid_text.size();
+    if (const auto r = std::from_chars(pid_text.data(), end, pid); r.ec != std::errc() || r.ptr != end) continue;
     std::error_code fec;
     for (const auto& fd : fs::directory_iterator(proc.path() / "fd", fec)) {
       std::error_code lec;
       if (fs::read_symlink(fd.path(), lec).string() != real) continue;
       PortOwner o;
       o.device = real;
-      o.pid = std::atol(pid_text.c_str());
+      o.pid = pid;
       o.program = proc_comm(o.pid);
       out.push_back(std::move(o));
       break;

@@ -10,6 +10,7 @@
 #include <charconv>
 #include <cstring>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 namespace cncstream::transport {
@@ -77,7 +78,7 @@ void SerialTransport::open(const std::string& path) {
   // too (root excepted: the kernel lets CAP_SYS_ADMIN through).
   if (::ioctl(port_.native_handle(), TIOCEXCL) != 0)
     lock_note_ += std::string(lock_note_.empty() ? "" : "; ") + path + ": no exclusive mode (TIOCEXCL): " +
-                  std::strerror(errno);
+                  std::generic_category().message(errno);
   using sp = boost::asio::serial_port_base;
   auto set = [&](const auto& opt, const char* what) {
     port_.set_option(opt, ec);

@@ -96,7 +96,7 @@ class JobManager {
   nlohmann::json cancel(std::int64_t id, const std::string& client);
   nlohmann::json move(std::int64_t id, std::int64_t position);
   // Answers later (plans on the pool).
-  void resume_plan(std::int64_t id, long from_line, const std::string& client, Respond respond);
+  void resume_plan(std::int64_t id, long from_line, const std::string& client, const Respond& respond);
   nlohmann::json resume_confirm(std::int64_t id, const std::string& plan_id, const std::string& client);
 
   void stop_generations() {
@@ -110,7 +110,8 @@ class JobManager {
 
  private:
   void kick_generation(DaemonJob& j);
-  void on_generated(const std::string& key, std::shared_ptr<const Program> p, const std::string& error, bool cancelled);
+  void on_generated(const std::string& key, const std::shared_ptr<const Program>& p, const std::string& error,
+                    bool cancelled);
   void persist(DaemonJob& j);
   void publish_job(const DaemonJob& j);
   void publish_queue(const std::string& machine);

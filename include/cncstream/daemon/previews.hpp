@@ -38,9 +38,9 @@ class Previews {
   // the program has no cutting move. A program whose heights are not known
   // yet (a G-code program before its trace after `ready` is done) is traced
   // for it, and keeps them.
-  void png(std::shared_ptr<const Program> program, int max_px, Respond respond);
+  void png(const std::shared_ptr<const Program>& program, int max_px, Respond respond);
   // 200 JSON {"points", "total_points", "cuts": [[x, y, z, x, y, z, ...], ...], "rapids": [...]}.
-  void path(std::shared_ptr<const Program> program, std::size_t max_points, Respond respond);
+  void path(const std::shared_ptr<const Program>& program, std::size_t max_points, Respond respond);
 
  private:
   using Bytes = std::shared_ptr<const std::string>;

@@ -234,7 +234,6 @@ class Machine {
   int wco_counter_ = 0, ovr_counter_ = 0;
   cncstream::Vec3 probe_position_{};
   bool probe_succeeded_ = false;
-  bool probe_contact_ = false;
 
   std::size_t bytes_received_ = 0;
   std::size_t rx_dropped_ = 0;

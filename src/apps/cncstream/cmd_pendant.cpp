@@ -125,9 +125,9 @@ int run_pendant(const PendantOptions& o) {
       const auto k = e.controller.kind;
       // Alarms, the jog engine's notes (a dead-man cancel) and refused commands always.
       if (k == protocol::EventKind::Alarm || k == protocol::EventKind::Warning ||
-          (k == protocol::EventKind::CommandAnswered && e.text.find("error") != std::string::npos))
+          (k == protocol::EventKind::CommandAnswered && e.text.find("error") != std::string::npos) ||
+          (verbose && k != protocol::EventKind::Status))
         say(e.text);
-      else if (verbose && k != protocol::EventKind::Status) say(e.text);
     }
   });
   pendant::PendantController controller(session, cfg);

@@ -248,7 +248,8 @@ DaemonSocket::DaemonSocket(const DaemonClient& client, double timeout_s) : impl_
   beast::error_code ec;
   const auto endpoints = resolver.resolve(addr.host, addr.port, ec);
   if (ec) throw std::runtime_error("cannot reach the daemon at " + s.url + ": " + ec.message());
-  const std::string id = client.client_id(), token = client.token();
+  const std::string& id = client.client_id();
+  const std::string token = client.token();
   // Non-browser clients send the long-lived token in the upgrade's header.
   s.ws.set_option(websocket::stream_base::decorator([id, token](websocket::request_type& req) {
     req.set(http::field::user_agent, "cncstream");
@@ -287,9 +288,15 @@ DaemonSocket::~DaemonSocket() {
   Impl& s = *impl_;
   if (s.closed) return;
   // A polite close, briefly: the daemon releases this client's control and jogs on close.
-  bool done = false;
-  s.ws.async_close(websocket::close_code::normal, [&](beast::error_code) { done = true; });
-  run_until(s.ioc, [&] { return done || s.closed; }, deadline_in(0.5));
+  // If it fails (it may throw, and a destructor must not), the daemon sees
+  // the connection drop, which releases them too.
+  try {
+    bool done = false;
+    s.ws.async_close(websocket::close_code::normal, [&](beast::error_code) { done = true; });
+    run_until(s.ioc, [&] { return done || s.closed; }, deadline_in(0.5));
+  } catch (...) {
+    // the connection is dropped instead
+  }
 }
 
 void DaemonSocket::send(const nlohmann::json& message, double timeout_s) {

@@ -22,7 +22,7 @@ double default_jog_feed(double max_jog_feed) { return max_jog_feed > 0 ? std::mi
 
 double next_jog_feed(double feed, int direction, double max_feed) {
   std::vector<double> ladder;
-  for (double decade = 10; decade <= 1e5; decade *= 10)
+  for (double decade : {10.0, 100.0, 1e3, 1e4, 1e5})
     for (double m : {1.0, 2.0, 5.0}) ladder.push_back(m * decade);
   double next = feed;
   if (direction > 0) {
@@ -58,7 +58,9 @@ JogControl::~JogControl() {
 
 double JogControl::feed_cap() const { return session_.ready() ? session_.max_jog_feed() : 0; }
 
-void JogControl::trace(const char* fmt, ...) {
+// C's variadic arguments, not a parameter pack, so that the compiler checks the
+// format against its arguments (the declaration's format attribute).
+void JogControl::trace(const char* fmt, ...) {  // NOLINT(cert-dcl50-cpp): see above
   if (!opt_.trace) return;
   char buf[256];
   const int head = std::snprintf(buf, sizeof buf, "%.4f ", trace_at_ >= 0 ? trace_at_ : session_.now());

@@ -11,7 +11,9 @@
 
 #include "commands.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run_cncstream(int argc, char** argv) {
   CLI::App app{"cncstream: tool paths from STL and G-code streaming for 3-axis CNC routers"};
   app.require_subcommand(0, 1);
   cncstream::app::CommandRegistry registry;
@@ -48,4 +50,19 @@ int main(int argc, char** argv) {
     std::cerr << "cncstream: error: " << e.what() << "\n";
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // What escapes run_cncstream() (registering the options, or an exception that is not
+  // an std::exception) ends the program with a message, not std::terminate.
+  try {
+    return run_cncstream(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "cncstream: error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "cncstream: error: an unknown exception\n";
+  }
+  return 1;
 }

@@ -13,7 +13,9 @@ namespace {
 cncstream::daemon::Daemon* g_daemon = nullptr;
 }
 
-int main(int argc, char** argv) {
+namespace {
+
+int run_daemon(int argc, char** argv) {
   using namespace cncstream::daemon;
   CLI::App app{"cncstreamd: serves CNC machines over HTTP and WebSocket (API: docs/api-v1.md)"};
   std::string config_file, listen, data;
@@ -62,4 +64,20 @@ int main(int argc, char** argv) {
     return 2;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // What escapes run_daemon() (setting up the options or the log, or an
+  // exception that is not an std::exception) ends the program with a
+  // message, not std::terminate.
+  try {
+    return run_daemon(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "cncstreamd: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "cncstreamd: an unknown exception\n";
+  }
+  return 2;
 }
