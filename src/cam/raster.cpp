@@ -182,10 +182,13 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
 
   const bool along_x = o.direction == RasterDirection::X;
   // u runs along the rows, v across them.
-  const auto [u0, u1] = snap_inward(along_x ? b.x0 : b.y0, along_x ? b.x1 : b.y1,
-                                    o.lattice ? (along_x ? o.lattice->x0 : o.lattice->y0) : 0, lat);
-  const auto [v0, v1] = snap_inward(along_x ? b.y0 : b.x0, along_x ? b.y1 : b.x1,
-                                    o.lattice ? (along_x ? o.lattice->y0 : o.lattice->x0) : 0, lat);
+  // Plain variables, not structured bindings: the lambdas below capture them
+  // (clang before 16, and so clang-tidy 14, refuses to capture a binding).
+  const auto u_range = snap_inward(along_x ? b.x0 : b.y0, along_x ? b.x1 : b.y1,
+                                   o.lattice ? (along_x ? o.lattice->x0 : o.lattice->y0) : 0, lat);
+  const auto v_range = snap_inward(along_x ? b.y0 : b.x0, along_x ? b.y1 : b.x1,
+                                   o.lattice ? (along_x ? o.lattice->y0 : o.lattice->x0) : 0, lat);
+  const double u0 = u_range.first, u1 = u_range.second, v0 = v_range.first, v1 = v_range.second;
   // Without a lattice: nu - 1 = whole steps times subdivisions, evenly spread.
   const AxisSamples us_axis =
       lat > 0 ? axis_samples(u1 - u0, step / o.check_subdivisions, lat)
