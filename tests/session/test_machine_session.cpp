@@ -14,6 +14,7 @@
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/session/job_journal.hpp"
 #include "cncstream/session/machine_session.hpp"
+#include "support/run_until.hpp"
 #include "cncstream/session/simulator_port.hpp"
 
 using namespace cncstream::session;
@@ -22,6 +23,7 @@ using cncstream::protocol::JobOutcome;
 using cncstream::protocol::JogDirection;
 using cncstream::protocol::MachineState;
 namespace fs = std::filesystem;
+using cncstream::test::run_until;
 
 namespace {
 
@@ -29,21 +31,6 @@ fs::path temp_dir() {
   const auto d = fs::temp_directory_path() / ("cncstream_session_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
-}
-
-// Runs the loop until `done` holds; false after `timeout_s` (a generous
-// bound for a loaded machine: the condition, not the time, is the test).
-bool run_until(boost::asio::io_context& io, const std::function<bool()>& done, double timeout_s = 60) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    io.run_for(std::chrono::milliseconds(20));
-    if (io.stopped()) {
-      io.restart();
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-  }
-  return true;
 }
 
 MachineOptions machine(const std::string& name, std::shared_ptr<MachinePort> port) {

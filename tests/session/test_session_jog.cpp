@@ -12,6 +12,7 @@
 
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/session/machine_session.hpp"
+#include "support/run_until.hpp"
 #include "cncstream/session/simulator_port.hpp"
 
 using namespace cncstream::session;
@@ -21,17 +22,9 @@ using cncstream::protocol::MachineState;
 
 namespace {
 
+// Jogs renew every few ms: a finer slice of the loop.
 bool run_until(boost::asio::io_context& io, const std::function<bool()>& done, double timeout_s = 60) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    io.run_for(std::chrono::milliseconds(5));
-    if (io.stopped()) {
-      io.restart();
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    }
-  }
-  return true;
+  return cncstream::test::run_until(io, done, timeout_s, std::chrono::milliseconds(5));
 }
 
 MachineOptions machine(std::shared_ptr<MachinePort> port) {

@@ -14,6 +14,7 @@
 
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/session/machine_session.hpp"
+#include "support/run_until.hpp"
 #include "cncstream/session/simulator_port.hpp"
 
 using namespace cncstream::session;
@@ -21,6 +22,7 @@ using cncstream::protocol::JobMode;
 using cncstream::protocol::JobOutcome;
 using cncstream::protocol::MachineState;
 namespace fs = std::filesystem;
+using cncstream::test::run_until;
 
 namespace {
 
@@ -28,21 +30,6 @@ fs::path travel_dir() {
   const auto d = fs::temp_directory_path() / ("cncstream_travel_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
-}
-
-// Runs the loop until `done` holds; false after a generous bound (the
-// condition, not the time, is the test).
-bool run_until_travel(boost::asio::io_context& io, const std::function<bool()>& done) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    io.run_for(std::chrono::milliseconds(20));
-    if (io.stopped()) {
-      io.restart();
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-  }
-  return true;
 }
 
 // The work spans X 0..`x`, Y 0..40, Z -2..5.
@@ -77,16 +64,16 @@ struct SmallMachine {
       if (e.kind == SessionEventKind::JobEnded) outcome = e.outcome;
     });
     session->open();
-    EXPECT_TRUE(run_until_travel(io, [&] { return session->ready(); }));
+    EXPECT_TRUE(run_until(io, [&] { return session->ready(); }));
     if (homing) {
       EXPECT_TRUE(session->home());
-      EXPECT_TRUE(run_until_travel(io, [&] {
+      EXPECT_TRUE(run_until(io, [&] {
         const auto st = session->snapshot().status;
         return st && st->state == MachineState::Idle;
       })) << "the machine did not home";
     }
   }
-  bool run_to_end() { return run_until_travel(io, [&] { return outcome.has_value(); }); }
+  bool run_to_end() { return run_until(io, [&] { return outcome.has_value(); }); }
 };
 
 }  // namespace
