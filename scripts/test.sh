@@ -3,10 +3,11 @@
 # then fuzzes every parser for a bounded, reproducible run.
 #
 # One build, not two: every test runs under the sanitizers (the library at
-# -O1, the test files at -O0), including the browser and install tests; the
-# benchmarks and tools are compiled too so they cannot rot. A second,
-# optimised build of the same tests found nothing the sanitizer build did not
-# and cost a third of CI's 25-minute budget (docs/PERFORMANCE.md).
+# -O1; the test files and the daemon at -O0), the browser and install tests
+# included; the benchmarks and tools are compiled too so they cannot rot. A
+# second, optimised build ran the same tests again without the sanitizers'
+# checks, at a third of CI's 25-minute budget (docs/PERFORMANCE.md); the demo
+# command builds Release.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
