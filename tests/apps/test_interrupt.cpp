@@ -235,26 +235,28 @@ TEST(Interrupt, AGridRunToTheEndWritesDataAndSidecarOnly) {
   EXPECT_EQ(files, (std::vector<std::string>{"gear.f32", "gear.f32.txt"}));
 }
 
-TEST(Interrupt, CtrlCDuringASelectionWritesNoReport) {
-  const fs::path dir = fresh_dir("interrupt_select") / "report";
-  PipedRun run({"select", mesh("lion_head_relief.stl"), "--scale", "100", "--tools", "ball:3,bull:3:0.5", "--stepover",
+namespace {
+
+// `command` (select or plan) on the lion head with two cutters, stopped by
+// Ctrl-C once its progress line shows: exit 130, the message naming what was
+// not written (`what` in `dir`), and `dir` missing or empty.
+void expect_ctrl_c_leaves_no_folder(const std::string& command, const std::string& what, const fs::path& dir) {
+  PipedRun run({command, mesh("lion_head_relief.stl"), "--scale", "100", "--tools", "ball:3,bull:3:0.5", "--stepover",
                 "0.1", "--progress", "always", "-o", dir.string()});
   ASSERT_TRUE(run.wait_for(" elapsed")) << run.output();
   run.signal(SIGINT);
   EXPECT_EQ(run.finish(), 130) << run.output();
-  EXPECT_NE(run.output().find("cncstream: interrupted: no report written in " + dir.string()), std::string::npos)
+  EXPECT_NE(run.output().find("cncstream: interrupted: no " + what + " written in " + dir.string()), std::string::npos)
       << run.output();
   EXPECT_TRUE(!fs::exists(dir) || fs::is_empty(dir));
 }
 
+}  // namespace
+
+TEST(Interrupt, CtrlCDuringASelectionWritesNoReport) {
+  expect_ctrl_c_leaves_no_folder("select", "report", fresh_dir("interrupt_select") / "report");
+}
+
 TEST(Interrupt, CtrlCDuringAPlanWritesNoProgram) {
-  const fs::path dir = fresh_dir("interrupt_plan") / "plan";
-  PipedRun run({"plan", mesh("lion_head_relief.stl"), "--scale", "100", "--tools", "ball:3,bull:3:0.5", "--stepover",
-                "0.1", "--progress", "always", "-o", dir.string()});
-  ASSERT_TRUE(run.wait_for(" elapsed")) << run.output();
-  run.signal(SIGINT);
-  EXPECT_EQ(run.finish(), 130) << run.output();
-  EXPECT_NE(run.output().find("cncstream: interrupted: no plan written in " + dir.string()), std::string::npos)
-      << run.output();
-  EXPECT_TRUE(!fs::exists(dir) || fs::is_empty(dir));
+  expect_ctrl_c_leaves_no_folder("plan", "plan", fresh_dir("interrupt_plan") / "plan");
 }
