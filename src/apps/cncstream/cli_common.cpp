@@ -44,10 +44,4 @@ std::array<double, 4> parse_bounds(const std::string& text) {
   return v;
 }
 
-jobs::JobControl thread_limited(unsigned threads) {
-  jobs::JobControl c;
-  c.threads = threads;
-  return c;
-}
-
 }  // namespace cncstream::app

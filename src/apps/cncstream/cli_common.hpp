@@ -22,10 +22,6 @@ void add_part_options(CLI::App* sub, PartOptions& o);
 // The jobs' description of the part (the file is read by the job).
 jobs::PartSource part_source(const PartOptions& o);
 
-// A job's control from --threads: the whole job in a oneTBB task arena of
-// that many slots (0: the shared scheduler, all cores).
-jobs::JobControl thread_limited(unsigned threads);
-
 // "X0,Y0,X1,Y1" -> four numbers, with a clear error.
 std::array<double, 4> parse_bounds(const std::string& text);
 
