@@ -2,9 +2,10 @@
 // machine and reports over the shared interpreter and motion planner.
 #include "cncsim/machine.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "cncstream/gcode/arc_segments.hpp"
 #include "cncstream/gcode/grbl_codes.hpp"
@@ -119,10 +120,8 @@ std::string Machine::format_vec(const Vec3& v) const {
   const double half_digit = inches ? 0.00005 : 0.0005;
   // The firmware never prints "-0.000": values that round to zero print as 0.
   auto clean = [&](double x) { return std::fabs(x * k) < half_digit ? 0.0 : x * k; };
-  char buf[96];
-  std::snprintf(buf, sizeof buf, inches ? "%.4f,%.4f,%.4f" : "%.3f,%.3f,%.3f", clean(v.x), clean(v.y),
-                clean(v.z));
-  return buf;
+  if (inches) return fmt::format("{:.4f},{:.4f},{:.4f}", clean(v.x), clean(v.y), clean(v.z));
+  return fmt::format("{:.3f},{:.3f},{:.3f}", clean(v.x), clean(v.y), clean(v.z));
 }
 
 // ---- boot and reset -----------------------------------------------------------
@@ -239,12 +238,9 @@ void Machine::receive_byte(unsigned char c) {
   if (rx_.size() >= kRxUsable) {
     ++rx_dropped_;
     if (options_.strict) {
-      char buf[200];
-      std::snprintf(buf, sizeof buf,
-                    "RX buffer overflow: byte %zu (0x%02X) from the host arrived while the %zu-byte RX "
-                    "buffer was full and was dropped (line %zu); the host must count characters",
-                    bytes_received_, c, kRxBufferSize, lines_received_ + 1);
-      throw RxOverflowError(buf);
+      throw RxOverflowError(fmt::format("RX buffer overflow: byte {} (0x{:02X}) from the host arrived while the {}-byte "
+                                        "RX buffer was full and was dropped (line {}); the host must count characters",
+                                        bytes_received_, c, kRxBufferSize, lines_received_ + 1));
     }
     return;
   }
@@ -727,9 +723,7 @@ void Machine::process_system(const std::string& line) {
       say("[G28:" + format_vec(parser_.coords.g28) + "]");
       say("[G30:" + format_vec(parser_.coords.g30) + "]");
       say("[G92:" + format_vec(parser_.g92) + "]");
-      char buf[48];
-      std::snprintf(buf, sizeof buf, "[TLO:%.3f]", parser_.tool_length_offset);
-      say(buf);
+      say(fmt::format("[TLO:{:.3f}]", parser_.tool_length_offset));
       say("[PRB:" + format_vec(probe_position_) + (probe_succeeded_ ? ":1]" : ":0]"));
       return reply(0);
     }
@@ -985,9 +979,7 @@ std::string Machine::status_report() {
     const bool spindle_on = parser_.modal.spindle != gc::SpindleState::Off && !spindle_stop_ &&
                             state_ != MachineState::Door && state_ != MachineState::Check;
     const double rpm = spindle_on ? parser_.spindle_speed * spindle_ovr_ / 100.0 : 0.0;
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "|FS:%.0f,%.0f", queue_.speed() * 60.0 * k, rpm);
-    r += buf;
+    r += fmt::format("|FS:{:.0f},{:.0f}", queue_.speed() * 60.0 * k, rpm);
   }
   const bool busy = state_ == MachineState::Run || state_ == MachineState::Hold || state_ == MachineState::Jog ||
                     state_ == MachineState::Home || state_ == MachineState::Door;

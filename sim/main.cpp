@@ -4,6 +4,7 @@
 //          --stock-from RESULT.f32 --position X,Y,Z start from a saved state)
 //   cncsim verify --design part.stl --result RESULT.f32 [--tolerance T] [--png MAP.png]
 #include <CLI/CLI.hpp>
+#include <fmt/core.h>
 
 #include <atomic>
 #include <cctype>
@@ -27,19 +28,6 @@ namespace {
 
 std::atomic<bool> g_stop{false};
 void on_signal(int) { g_stop.store(true); }
-
-// "LINE:VALUE" for the per-line faults.
-template <typename T>
-void parse_line_faults(const std::vector<std::string>& specs, const char* flag, std::map<std::size_t, T>& out) {
-  for (const std::string& s : specs) {
-    const auto colon = s.find(':');
-    const auto line = colon == std::string::npos ? std::nullopt : cncsim::number_from<std::size_t>(s.substr(0, colon));
-    const auto value = colon == std::string::npos ? std::nullopt : cncsim::number_from<double>(s.substr(colon + 1));
-    if (!line || !value || *line == 0)
-      throw std::invalid_argument(std::string(flag) + " '" + s + "': expected LINE:VALUE with LINE >= 1");
-    out[*line] = static_cast<T>(*value);
-  }
-}
 
 // "LINE:OFFSET", "LINE:eol" or "LINE:X" (its first X) for the wire faults at a point.
 void parse_byte_faults(const std::vector<std::string>& specs, const char* flag,
@@ -165,9 +153,9 @@ int run(int argc, char** argv) {
     options.faults.vanish_after = vanish_after;
     options.faults.homing_failure = homing_fail;
     options.probe_surface_z = probe_z;
-    parse_line_faults(error_at, "--error-at", options.faults.error_at);
-    parse_line_faults(alarm_at, "--alarm-at", options.faults.alarm_at);
-    parse_line_faults(stall_at, "--stall-at", options.faults.stall_at);
+    cncsim::parse_line_faults(error_at, "--error-at", options.faults.error_at);
+    cncsim::parse_line_faults(alarm_at, "--alarm-at", options.faults.alarm_at);
+    cncsim::parse_line_faults(stall_at, "--stall-at", options.faults.stall_at);
     parse_byte_faults(drop_at, "--drop-at", options.faults.drop_byte_at);
     parse_byte_faults(corrupt_at, "--corrupt-at", options.faults.corrupt_byte_at);
     if (!position_text.empty()) options.start_position = parse_position(position_text);
@@ -238,10 +226,8 @@ int run(int argc, char** argv) {
     if (const auto numbered = tally.summary(); !numbered.empty()) std::cerr << "cncsim: " << numbered << "\n";
     {
       const auto m = machine.machine_position();
-      char pos[128];
-      std::snprintf(pos, sizeof pos, "cncsim: final position MPos %.4f,%.4f,%.4f, state %s\n", m.x, m.y, m.z,
-                    machine.state_name().c_str());
-      std::cerr << pos;
+      std::cerr << fmt::format("cncsim: final position MPos {:.4f},{:.4f},{:.4f}, state {}\n", m.x, m.y, m.z,
+                               machine.state_name());
     }
     if (removal) {
       for (int t : removal->unknown_tools())

@@ -1,9 +1,10 @@
 #include "cncsim/settings.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -20,13 +21,8 @@ bool is_integer_setting(int n) {
 constexpr double kMaxStepRateHz = 30000;
 
 std::string format_value(int n, double v) {
-  char buf[64];
-  if (is_integer_setting(n)) {
-    std::snprintf(buf, sizeof buf, "%.0f", v);
-  } else {
-    std::snprintf(buf, sizeof buf, "%.3f", v);
-  }
-  return buf;
+  if (is_integer_setting(n)) return fmt::format("{:.0f}", v);
+  return fmt::format("{:.3f}", v);
 }
 
 }  // namespace
@@ -61,10 +57,8 @@ int Settings::set(int n, double value) {
 
 std::string Settings::report() const {
   std::string out;
-  char buf[32];
   for (const auto& [n, v] : values_) {
-    std::snprintf(buf, sizeof buf, "$%d=", n);
-    out += buf;
+    out += fmt::format("${}=", n);
     out += format_value(n, v);
     out += "\r\n";
   }
@@ -129,10 +123,8 @@ void save_store(const std::filesystem::path& path, const PersistentStore& store)
   std::ostringstream out;
   out << "# cncsim EEPROM image: GRBL settings, coordinate systems, startup lines\n";
   for (const auto& [n, v] : store.settings.values()) out << "$" << n << "=" << v << "\n";
-  char buf[128];
   auto vec = [&](const char* key, const cncstream::Vec3& v) {
-    std::snprintf(buf, sizeof buf, "%s=%.17g,%.17g,%.17g\n", key, v.x, v.y, v.z);
-    out << buf;
+    out << fmt::format("{}={:.17g},{:.17g},{:.17g}\n", key, v.x, v.y, v.z);
   };
   const char* names[] = {"G54", "G55", "G56", "G57", "G58", "G59"};
   for (std::size_t i = 0; i < 6; ++i) vec(names[i], store.coords.wcs[i]);

@@ -1,12 +1,13 @@
 #include "cncstream/daemon/auth.hpp"
 
+#include <fmt/core.h>
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -57,8 +58,7 @@ std::string load_or_create_token(const std::filesystem::path& data_dir, bool& cr
   struct stat st{};
   if (::stat(path.c_str(), &st) == 0) {
     if (st.st_mode & (S_IRWXG | S_IRWXO)) {
-      char mode[16];
-      std::snprintf(mode, sizeof mode, "%03o", static_cast<unsigned>(st.st_mode & 0777));
+      const std::string mode = fmt::format("{:03o}", static_cast<unsigned>(st.st_mode & 0777));
       throw std::runtime_error(cat({path.string(), ": the token file is open to others (mode ", mode, "); chmod 600 it"}));
     }
     std::ifstream in(path);

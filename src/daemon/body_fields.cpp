@@ -1,8 +1,9 @@
 #include "cncstream/daemon/body_fields.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "cncstream/daemon/http_types.hpp"
 
@@ -13,11 +14,7 @@ using nlohmann::json;
 namespace {
 [[noreturn]] void bad(std::string message) { throw ApiError{400, "bad_request", std::move(message)}; }
 
-std::string num_text(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", v);
-  return b;
-}
+std::string num_text(double v) { return fmt::format("{:g}", v); }
 }  // namespace
 
 double number_field(const json& b, const char* key, double lo, double hi) {

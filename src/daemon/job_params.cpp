@@ -1,7 +1,8 @@
 #include "cncstream/daemon/job_params.hpp"
 
+#include <fmt/core.h>
+
 #include <cmath>
-#include <cstdio>
 
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/daemon/http_types.hpp"
@@ -16,11 +17,7 @@ namespace {
   throw ApiError{400, "bad_request", "params." + field + ": " + why};
 }
 
-std::string num_text(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%g", v);
-  return b;
-}
+std::string num_text(double v) { return fmt::format("{:g}", v); }
 
 double number(const json& j, const char* key, double dflt, double lo, double hi, bool lo_open = false) {
   if (!j.contains(key) || j.at(key).is_null()) return dflt;

@@ -1,7 +1,8 @@
 #include "cncstream/gcode/gcode_writer.hpp"
 
+#include <fmt/core.h>
+
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 namespace cncstream {
@@ -10,9 +11,7 @@ std::string format_gcode_number(double value, int decimals) {
   if (!std::isfinite(value)) throw std::invalid_argument("G-code number is not finite");
   if (decimals < 0 || decimals > 6) throw std::invalid_argument("G-code decimals must be 0..6");
   if (std::fabs(value) >= 1e9) throw std::invalid_argument("G-code number too large: " + std::to_string(value));
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
-  std::string s(buf);
+  std::string s = fmt::format("{:.{}f}", value, decimals);
   if (s.find('.') != std::string::npos) {
     while (s.back() == '0') s.pop_back();
     if (s.back() == '.') s.pop_back();

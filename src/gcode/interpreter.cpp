@@ -2,8 +2,9 @@
 // that a bad block gets the same error code the firmware would send.
 #include "cncstream/gcode/interpreter.hpp"
 
+#include <fmt/core.h>
+
 #include <cmath>
-#include <cstdio>
 
 #include "cncstream/gcode/grbl_codes.hpp"
 #include "cncstream/gcode/line_lexer.hpp"
@@ -658,10 +659,8 @@ std::string format_modes(const ParserState& s) {
   if (s.modal.mist) out += " M7";
   if (s.modal.flood) out += " M8";
   out += " T" + std::to_string(s.tool);
-  char buf[64];
   const double feed = s.modal.inches ? s.feed_rate / kMmPerInch : s.feed_rate;
-  std::snprintf(buf, sizeof buf, " F%.0f S%.0f]", feed, s.spindle_speed);
-  out += buf;
+  out += fmt::format(" F{:.0f} S{:.0f}]", feed, s.spindle_speed);
   return out;
 }
 

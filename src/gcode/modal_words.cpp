@@ -1,7 +1,8 @@
 #include "cncstream/gcode/modal_words.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
-#include <cstdio>
 #include <stdexcept>
 #include <vector>
 
@@ -49,8 +50,6 @@ ParserState modal_from_words(const ModalWords& w) {
   // Each group on its own block, through the interpreter itself: the same
   // rules as the program's own lines (a motion word needs no axis words).
   ParserState s;
-  char num[64];
-  std::snprintf(num, sizeof num, "F%.6gS%.6gT%d", w.feed, w.spindle_speed, w.tool);
   // The motion mode is set directly: a G1 block without axis words and
   // without a feed is refused by the interpreter, yet the mode is valid.
   std::vector<std::string> blocks{w.units, w.distance, w.plane, w.wcs, w.feed_mode, w.spindle};
@@ -60,7 +59,7 @@ ParserState modal_from_words(const ModalWords& w) {
   } else {
     blocks.push_back(w.coolant);
   }
-  blocks.emplace_back(num);
+  blocks.push_back(fmt::format("F{:.6g}S{:.6g}T{}", w.feed, w.spindle_speed, w.tool));
   for (const auto& b : blocks) {
     if (b.empty()) continue;  // an older record without this group: the default holds
     auto r = execute_block(s, b);
@@ -81,14 +80,12 @@ ParserState modal_from_words(const ModalWords& w) {
 
 std::string modal_json(const ParserState& s) {
   const ModalWords w = modal_words(s);
-  char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "{\"units\":\"%s\",\"distance\":\"%s\",\"plane\":\"%s\",\"wcs\":\"%s\",\"motion\":\"%s\","
-                "\"feed_mode\":\"%s\",\"feed\":%.6g,\"spindle_speed\":%.6g,\"spindle\":\"%s\",\"coolant\":\"%s\","
-                "\"tool\":%d}",
-                w.units.c_str(), w.distance.c_str(), w.plane.c_str(), w.wcs.c_str(), w.motion.c_str(),
-                w.feed_mode.c_str(), w.feed, w.spindle_speed, w.spindle.c_str(), w.coolant.c_str(), w.tool);
-  return buf;
+  return fmt::format(
+      "{{\"units\":\"{}\",\"distance\":\"{}\",\"plane\":\"{}\",\"wcs\":\"{}\",\"motion\":\"{}\","
+      "\"feed_mode\":\"{}\",\"feed\":{:.6g},\"spindle_speed\":{:.6g},\"spindle\":\"{}\",\"coolant\":\"{}\","
+      "\"tool\":{}}}",
+      w.units, w.distance, w.plane, w.wcs, w.motion, w.feed_mode, w.feed, w.spindle_speed, w.spindle, w.coolant,
+      w.tool);
 }
 
 }  // namespace cncstream::gcode

@@ -1,9 +1,10 @@
 // Page layout shared by the map renderers.
 #include "map_frame.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 namespace cncstream::map_frame {
@@ -46,9 +47,7 @@ void draw_north_arrow(Frame& f) {
 }  // namespace
 
 std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", std::clamp(decimals, 0, 6), v);
-  std::string s = buf;
+  std::string s = fmt::format("{:.{}f}", v, std::clamp(decimals, 0, 6));
   if (s == "-0" || s.find_first_not_of("-0.") == std::string::npos) s = s.substr(s[0] == '-' ? 1 : 0);
   return s;
 }

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <fmt/core.h>
 
 namespace cncstream::jobs {
 
@@ -11,10 +11,8 @@ namespace {
 // "0:07", "12:34", "1:02:03".
 std::string clock_text(double seconds) {
   const long s = std::lround(std::max(0.0, seconds));
-  char buf[32];
-  if (s >= 3600) std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
-  else std::snprintf(buf, sizeof buf, "%ld:%02ld", s / 60, s % 60);
-  return buf;
+  if (s >= 3600) return fmt::format("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60);
+  return fmt::format("{}:{:02}", s / 60, s % 60);
 }
 
 }  // namespace
@@ -22,9 +20,7 @@ std::string clock_text(double seconds) {
 std::string progress_line(std::string_view stage, double fraction, double elapsed_s) {
   const double f = std::isfinite(fraction) ? std::clamp(fraction, 0.0, 1.0) : 0.0;
   std::string line(stage);
-  char pct[16];
-  std::snprintf(pct, sizeof pct, "  %3d %%", static_cast<int>(std::floor(f * 100)));
-  line.append(pct).append("  ").append(clock_text(elapsed_s)).append(" elapsed");
+  line.append(fmt::format("  {:3} %", static_cast<int>(std::floor(f * 100)))).append("  ").append(clock_text(elapsed_s)).append(" elapsed");
   if (f >= 0.02 && f < 1 && elapsed_s >= 1) line.append(", about ").append(clock_text(elapsed_s * (1 - f) / f)).append(" left");
   return line;
 }

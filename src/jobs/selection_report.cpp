@@ -1,5 +1,6 @@
 #include "cncstream/jobs/selection_report.hpp"
 
+#include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
 #include <oneapi/tbb/blocked_range.h>
@@ -8,9 +9,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -96,22 +97,19 @@ void write_nodes_csv(const SelectionResult& r, std::ostream& f) {
   const auto& zr = r.radiused.path.grid.z;
   auto name = [](Choice c) { return c == Choice::Ball ? "ball" : c == Choice::Radiused ? "radiused" : ""; };
   std::string out;
-  char* at = nullptr;
-  char line[256];
+  auto at = std::back_inserter(out);
   auto num = [&](double v, int digits) {  // empty where NaN
-    if (std::isfinite(v)) at += std::snprintf(at, 40, "%.*f", digits, v);
+    if (std::isfinite(v)) at = fmt::format_to(at, "{:.{}f}", v, digits);
     *at++ = ',';
   };
   for (std::size_t k = 0; k < g.size(); ++k) {
-    at = line;
     num(g.x(k % g.nx), 4);
     num(g.y(k / g.nx), 4);
     num(zb[k], 5);
     num(zr[k], 5);
     num(r.choice.d[k], 5);
     num(r.choice.slope_deg[k], 2);
-    at += std::snprintf(at, 24, "%s,%s\n", name(r.choice.by_volume[k]), name(r.choice.by_area[k]));
-    out.append(line, static_cast<std::size_t>(at - line));
+    at = fmt::format_to(at, "{},{}\n", name(r.choice.by_volume[k]), name(r.choice.by_area[k]));
     if (out.size() > (1u << 20)) f << std::exchange(out, {});
   }
   f << out;

@@ -1,8 +1,9 @@
 #include "cncstream/pendant/pendant_controller.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 namespace cncstream::pendant {
@@ -74,9 +75,18 @@ PendantController::PendantController(session::MachineSession& session, PendantCo
 
 PendantController::~PendantController() {
   *alive_ = false;
-  display_timer_.cancel();
-  // A jog must not outlive its holder.
-  if (continuous_) session_.jog_release();
+  // A jog must not outlive its holder: released first. A destructor that throws
+  // ends the program (std::terminate); what may throw here (an allocation, a
+  // timer's cancel) leaves nothing to undo, and a release that is lost still
+  // ends at the jog's dead-man lease in the session.
+  try {
+    if (continuous_) session_.jog_release();
+  } catch (...) {
+  }
+  try {
+    display_timer_.cancel();
+  } catch (...) {
+  }
 }
 
 void PendantController::log(LogLevel level, const std::string& text) {
@@ -315,10 +325,8 @@ void PendantController::on_wheel(const PendantEvent& e) {
     return;
   }
   ++counters_.continuous_starts;
-  char buf[96];
-  std::snprintf(buf, sizeof buf, "pendant: continuous jog %c%c at %.0f mm/min", sign > 0 ? '+' : '-',
-                kAxisLetters[*axis], feed);
-  log(LogLevel::Debug, buf);
+  log(LogLevel::Debug,
+      fmt::format("pendant: continuous jog {}{} at {:.0f} mm/min", sign > 0 ? '+' : '-', kAxisLetters[*axis], feed));
 }
 
 void PendantController::release_jog(const char* why, bool always) {

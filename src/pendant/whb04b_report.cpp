@@ -1,15 +1,14 @@
 #include "cncstream/pendant/whb04b_report.hpp"
 
-#include <cstdio>
+#include <fmt/core.h>
+
 
 namespace cncstream::pendant {
 
 namespace {
 
 std::string byte_error(int index, const char* what, std::uint8_t value, const char* expected) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "byte %d (%s) is 0x%02x: expected %s", index, what, value, expected);
-  return buf;
+  return fmt::format("byte {} ({}) is 0x{:02x}: expected {}", index, what, value, expected);
 }
 
 std::optional<Key> key_from(std::uint8_t b) {
@@ -153,11 +152,9 @@ const char* to_string(PendantEventKind k) {
 
 std::string hex_bytes(const std::uint8_t* data, std::size_t size) {
   std::string out;
-  char buf[4];
   for (std::size_t i = 0; i < size; ++i) {
-    std::snprintf(buf, sizeof buf, "%02x", data[i]);
     if (i) out.push_back(' ');
-    out += buf;
+    out += fmt::format("{:02x}", data[i]);
   }
   return out;
 }

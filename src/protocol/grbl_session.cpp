@@ -1,10 +1,12 @@
 #include "cncstream/protocol/grbl_session.hpp"
 
+#include <fmt/core.h>
+
 #include "cncstream/protocol/pattern.hpp"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
+#include <charconv>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -327,14 +329,17 @@ void GrblSession::check_silence() {
   // A dwell keeps GRBL idle and silent for its P seconds.
   double limit = kSilenceLimit;
   if (const auto g4 = oldest.text.find("G4"); g4 != std::string::npos) {
-    if (const auto p = oldest.text.find('P', g4); p != std::string::npos) limit += std::atof(oldest.text.c_str() + p + 1);
+    if (const auto p = oldest.text.find('P', g4); p != std::string::npos) {
+      double dwell = 0;
+      const char* end = oldest.text.data() + oldest.text.size();
+      if (std::from_chars(oldest.text.data() + p + 1, end, dwell).ec == std::errc() && std::isfinite(dwell) && dwell > 0)
+        limit += dwell;
+    }
   }
   if (now_ - waiting_since_ < limit) return;
   silence_reported_ = true;
-  char secs[32];
-  std::snprintf(secs, sizeof secs, "%.0f", now_ - waiting_since_);
   Event e{EventKind::Warning, "no answer to line " + std::to_string(oldest.source_line) + " '" + oldest.text +
-                                  "' for " + secs +
+                                  "' for " + fmt::format("{:.0f}", now_ - waiting_since_) +
                                   " s although the controller is idle: the line or its answer was lost on the wire "
                                   "(a dropped end of line never completes). The job cannot go on by itself: stop it "
                                   "and resume it from the journal."};

@@ -1,9 +1,10 @@
 #include "cncstream/protocol/identifier.hpp"
 
+#include <fmt/core.h>
+
 #include <limits>
 
 #include <algorithm>
-#include <cstdio>
 #include <stdexcept>
 
 #include "cncstream/protocol/pattern.hpp"
@@ -115,9 +116,7 @@ double FirmwareIdentifier::next_deadline() const {
 
 void FirmwareIdentifier::tick(double now) {
   if (phase_ == Phase::WaitBanner && now >= deadline_) {
-    char secs[32];
-    std::snprintf(secs, sizeof secs, "%.1f", opt_.banner_timeout_s);
-    warnings_.push_back(std::string("no banner within ") + secs +
+    warnings_.push_back(fmt::format("no banner within {:.1f}", opt_.banner_timeout_s) +
                         " s after opening the port (board without DTR reset?); asking with $I once it is idle");
     phase_ = Phase::WaitQuiet;
     deadline_ = now + opt_.query_timeout_s;

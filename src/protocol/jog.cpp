@@ -1,21 +1,19 @@
 #include "cncstream/protocol/jog.hpp"
 
+#include <fmt/core.h>
+
 #include <cmath>
-#include <cstdio>
 
 namespace cncstream::protocol {
 
 std::string move_words(const std::array<double, 3>& delta, double feed) {
   static constexpr char kAxis[3] = {'X', 'Y', 'Z'};
   std::string out;
-  char buf[48];
   for (int i = 0; i < 3; ++i) {
     if (std::fabs(delta[i]) < 0.0005) continue;
-    std::snprintf(buf, sizeof buf, "%c%.3f", kAxis[i], delta[i]);
-    out += buf;
+    out += fmt::format("{}{:.3f}", kAxis[i], delta[i]);
   }
-  std::snprintf(buf, sizeof buf, "F%.0f", feed);
-  out += buf;
+  out += fmt::format("F{:.0f}", feed);
   return out;
 }
 

@@ -1,8 +1,9 @@
 #include "cncstream/protocol/jog_engine.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <utility>
 
@@ -234,10 +235,8 @@ void JogEngine::tick(double now) {
   if (cfg_.settle_by_time_s)
     std::erase_if(moving_, [&](const Moving& m) { return m.done_at + *cfg_.settle_by_time_s <= now; });
   if (held_ && now >= held_->lease_until) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf,
-                  "continuous jog cancelled: its holder was silent for %.0f ms (dead man)", held_->lease_s * 1000);
-    notes_.emplace_back(buf);
+    notes_.push_back(fmt::format("continuous jog cancelled: its holder was silent for {:.0f} ms (dead man)",
+                                 held_->lease_s * 1000));
     release();
   }
 }
@@ -289,12 +288,9 @@ std::optional<JogMove> JogEngine::next_move(double now) {
   if (cancel_ || winding_down_) return std::nullopt;
   auto clamp_note = [&](const std::array<double, 3>& delta, const char* what) {
     std::string s = std::string("jog ") + what + " at the machine's travel ($130-$132, soft limits on):";
-    char buf[40];
     for (int i = 0; i < 3; ++i)
-      if (std::fabs(delta[i]) > 0 || (planned_end_ && std::fabs((*planned_end_)[i]) < 1e-9)) {
-        std::snprintf(buf, sizeof buf, " %c %.3f", kAxis[i], planned_end_ ? (*planned_end_)[i] + delta[i] : 0.0);
-        s += buf;
-      }
+      if (std::fabs(delta[i]) > 0 || (planned_end_ && std::fabs((*planned_end_)[i]) < 1e-9))
+        s += fmt::format(" {} {:.3f}", kAxis[i], planned_end_ ? (*planned_end_)[i] + delta[i] : 0.0);
     notes_.push_back(std::move(s));
   };
   if (held_) {

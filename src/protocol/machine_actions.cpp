@@ -1,27 +1,12 @@
 #include "cncstream/protocol/machine_actions.hpp"
 
+#include <fmt/core.h>
+
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 
 namespace cncstream::protocol {
-
-namespace {
-
-std::string fmt(const char* f, double a) {
-  char buf[96];
-  std::snprintf(buf, sizeof buf, f, a);
-  return buf;
-}
-
-std::string fmt2(const char* f, double a, double b) {
-  char buf[96];
-  std::snprintf(buf, sizeof buf, f, a, b);
-  return buf;
-}
-
-}  // namespace
 
 std::vector<std::string> zero_axes_lines(std::string_view axes, ActionFamily f) {
   if (axes.empty()) throw std::invalid_argument("zero: name the axes to zero (X, Y, Z)");
@@ -38,9 +23,9 @@ std::vector<std::string> zero_axes_lines(std::string_view axes, ActionFamily f) 
 }
 
 std::vector<std::string> safe_z_lines(const MachineActionSettings& s, std::optional<double> work_z) {
-  if (s.safe_z_machine_mm) return {fmt("G21G53G0Z%.3f", *s.safe_z_machine_mm)};
+  if (s.safe_z_machine_mm) return {fmt::format("G21G53G0Z{:.3f}", *s.safe_z_machine_mm)};
   if (work_z && *work_z >= s.safe_z_mm) return {};  // already above: never down
-  return {fmt("G21G90G0Z%.3f", s.safe_z_mm)};
+  return {fmt::format("G21G90G0Z{:.3f}", s.safe_z_mm)};
 }
 
 std::vector<std::string> go_to_work_zero_lines(const MachineActionSettings& s, std::optional<double> work_z) {
@@ -53,14 +38,14 @@ std::vector<std::string> go_to_work_zero_lines(const MachineActionSettings& s, s
 std::vector<std::string> spindle_lines(bool on, const MachineActionSettings& s) {
   if (!on) return {"M5"};
   if (!(s.spindle_rpm > 0)) throw std::invalid_argument("spindle: the speed must be positive");
-  return {fmt("M3S%.0f", s.spindle_rpm)};
+  return {fmt::format("M3S{:.0f}", s.spindle_rpm)};
 }
 
 std::vector<std::string> probe_z_lines(const MachineActionSettings& s) {
   if (!(s.probe_travel_mm > 0) || !(s.probe_feed_mm_min > 0))
     throw std::invalid_argument("probe: travel and feed must be positive");
   // Relative search, then absolute again whatever the answer.
-  return {fmt2("G21G91G38.2Z%.3fF%.0f", -s.probe_travel_mm, s.probe_feed_mm_min), "G90"};
+  return {fmt::format("G21G91G38.2Z{:.3f}F{:.0f}", -s.probe_travel_mm, s.probe_feed_mm_min), "G90"};
 }
 
 std::optional<ProbeReport> parse_probe_report(std::string_view line) {
@@ -94,8 +79,8 @@ std::optional<ProbeReport> parse_probe_report(std::string_view line) {
 
 std::vector<std::string> probe_finish_lines(const MachineActionSettings& s, double touch_mz) {
   // The machine stops a little past the touch: go back to it before setting Z.
-  return {fmt2("G21G53G1Z%.3fF%.0f", touch_mz, s.probe_feed_mm_min), fmt("G10L20P0Z%.3f", s.probe_plate_mm),
-          fmt("G21G91G0Z%.3f", s.probe_retract_mm), "G90"};
+  return {fmt::format("G21G53G1Z{:.3f}F{:.0f}", touch_mz, s.probe_feed_mm_min),
+          fmt::format("G10L20P0Z{:.3f}", s.probe_plate_mm), fmt::format("G21G91G0Z{:.3f}", s.probe_retract_mm), "G90"};
 }
 
 }  // namespace cncstream::protocol

@@ -1,8 +1,9 @@
 #include "cncstream/protocol/travel_check.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 namespace cncstream::protocol {
 
@@ -10,11 +11,7 @@ namespace {
 
 constexpr double kSlackMm = 0.001;  // rounding in the program's numbers
 
-std::string mm(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+std::string mm(double v) { return fmt::format("{:.6g}", v); }
 
 }  // namespace
 

@@ -1,10 +1,11 @@
 #include "cncstream/session/machine_session.hpp"
 
+#include <fmt/core.h>
+
 #include <boost/asio/post.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -24,11 +25,7 @@ constexpr double kNever = std::numeric_limits<double>::infinity();
 
 bool marlin_family(const FirmwareProfile& p) { return p.flow == FlowControl::SendResponse; }
 
-std::string fixed3(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", v);
-  return buf;
-}
+std::string fixed3(double v) { return fmt::format("{:.3f}", v); }
 
 }  // namespace
 
@@ -271,9 +268,7 @@ void MachineSession::after_identification() {
     }
   }
   if (settings_phase_ == SettingsPhase::Reading && now() >= settings_deadline_) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", opt_.settings_timeout_s);
-    settings_done(std::string("no answer within ") + buf + " s");
+    settings_done(fmt::format("no answer within {:g} s", opt_.settings_timeout_s));
   }
   if (settings_phase_ == SettingsPhase::Done) start_engine();
 }

@@ -1,8 +1,9 @@
 #include "cncstream/session/simulator_port.hpp"
 
+#include <fmt/core.h>
+
 #include "cncsim/output_file.hpp"
 
-#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 
@@ -85,10 +86,9 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
   o << "\n";
   const auto mpos = machine_->machine_position();
   const auto wpos = machine_->work_position();
-  char pos[160];
-  std::snprintf(pos, sizeof pos, "sim: final position MPos %.3f,%.3f,%.3f WPos %.3f,%.3f,%.3f, state ", mpos.x, mpos.y,
-                mpos.z, wpos.x, wpos.y, wpos.z);
-  o << pos << machine_->state_name() << "\n";
+  o << fmt::format("sim: final position MPos {:.3f},{:.3f},{:.3f} WPos {:.3f},{:.3f},{:.3f}, state ", mpos.x, mpos.y,
+                   mpos.z, wpos.x, wpos.y, wpos.z)
+    << machine_->state_name() << "\n";
   if (!fatal_.empty()) {
     o << "sim: stopped early: " << fatal_ << "\n";
     r.overflowed = fatal_.find("overflow") != std::string::npos;

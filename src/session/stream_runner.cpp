@@ -1,5 +1,7 @@
 #include "cncstream/session/stream_runner.hpp"
 
+#include <fmt/core.h>
+
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
@@ -175,9 +177,7 @@ RunResult StreamRunner::run(const JobInput& job) {
         std::chrono::duration<double>(opt_.max_run_s)));
     deadline.async_wait([&](const boost::system::error_code& ec) {
       if (ec || done) return;
-      char buf[48];
-      std::snprintf(buf, sizeof buf, "gave up after %g s", opt_.max_run_s);
-      finish(JobOutcome::Error, buf);
+      finish(JobOutcome::Error, fmt::format("gave up after {:g} s", opt_.max_run_s));
       io.stop();
     });
   }

@@ -1,5 +1,7 @@
 #include "cncstream/transport/journal.hpp"
 
+#include <fmt/core.h>
+
 #include "cncstream/gcode/modal_words.hpp"
 
 #include <sqlite3.h>
@@ -174,10 +176,8 @@ std::string Journal::now_iso8601() {
   std::tm tm{};
   gmtime_r(&t, &tm);
   char buf[40];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
-  char out[48];
-  std::snprintf(out, sizeof out, "%s.%03dZ", buf, static_cast<int>(ms));
-  return out;
+  const std::size_t n = std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);  // 19 characters, never 0
+  return fmt::format("{}.{:03}Z", std::string_view(buf, n), static_cast<int>(ms));
 }
 
 std::int64_t Journal::begin_job(const std::string& file, const std::string& sha256, const std::string& profile,

@@ -1,9 +1,10 @@
 #include "cncstream/transport/port_discovery.hpp"
 
+#include <fmt/core.h>
+
 #include <libserialport.h>
 
 #include <cctype>
-#include <cstdio>
 #include <stdexcept>
 
 namespace cncstream::transport {
@@ -86,9 +87,7 @@ std::vector<PortInfo> list_ports() {
 std::string format_port(const PortInfo& p) {
   std::string s = p.path + "  [" + p.transport;
   if (p.vid && p.pid) {
-    char buf[16];
-    std::snprintf(buf, sizeof buf, " %04X:%04X", *p.vid, *p.pid);
-    s += buf;
+    s += fmt::format(" {:04X}:{:04X}", *p.vid, *p.pid);
   }
   s += "]";
   if (!p.manufacturer.empty()) s += "  " + p.manufacturer;

@@ -5,10 +5,17 @@
 // out of range (cert-err34-c). Blanks around a field and a leading '+' are
 // taken, as sscanf took them.
 #include <charconv>
+#include <cmath>
 #include <cstddef>
+#include <limits>
+#include <map>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 #include <system_error>
+#include <type_traits>
+#include <vector>
 
 #include "cncstream/geometry/vec3.hpp"
 
@@ -36,6 +43,27 @@ inline std::optional<cncstream::Vec3> vec3_from(std::string_view text) {
   const auto z = number_from<double>(text.substr(c2 + 1));
   if (!x || !y || !z) return std::nullopt;
   return cncstream::Vec3{*x, *y, *z};
+}
+
+// "LINE:VALUE" for the per-line faults (--error-at, --alarm-at, --stall-at, in
+// cncsim's options and cncstream's --sim-*): LINE >= 1; an integer VALUE (an
+// error or alarm code) must be a whole number T holds.
+template <typename T>
+void parse_line_faults(const std::vector<std::string>& specs, const char* flag, std::map<std::size_t, T>& out) {
+  for (const std::string& s : specs) {
+    const std::string_view text(s);
+    const auto colon = text.find(':');
+    const auto line = colon == std::string_view::npos ? std::nullopt : number_from<std::size_t>(text.substr(0, colon));
+    const auto value = colon == std::string_view::npos ? std::nullopt : number_from<double>(text.substr(colon + 1));
+    bool fits = value.has_value();
+    if constexpr (std::is_integral_v<T>)
+      fits = fits && *value == std::floor(*value) && *value >= static_cast<double>(std::numeric_limits<T>::min()) &&
+             *value <= static_cast<double>(std::numeric_limits<T>::max());
+    if (!line || *line == 0 || !fits)
+      throw std::invalid_argument(std::string(flag) + " '" + s + "': expected LINE:VALUE with LINE >= 1" +
+                                  (std::is_integral_v<T> ? " and a whole VALUE" : ""));
+    out[*line] = static_cast<T>(*value);
+  }
 }
 
 }  // namespace cncsim

@@ -1,9 +1,11 @@
 // `cncstream clgrid PART.stl --tool SPEC --grid STEP [--bounds ...] [--floor Z] -o OUT.{csv,png,f32}`
+#include <fmt/core.h>
+
 #include <chrono>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <memory>
 
 #include "cli_common.hpp"
@@ -34,14 +36,15 @@ void write_csv(const ClEngine& engine, const GridSpec& spec, const std::filesyst
   std::ofstream f(out, std::ios::binary);
   if (!f) throw std::runtime_error(out.string() + ": cannot open for writing");
   f << "x,y,z\n";
-  char buf[96];
+  std::string row;
   engine.compute_tiles(spec, [&](const ClTile& tile) {
     const GridSpec& g = tile.grid.spec;
-    for (std::size_t j = 0; j < g.ny; ++j)
-      for (std::size_t i = 0; i < g.nx; ++i) {
-        const int n = std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f\n", g.x(i), g.y(j), tile.grid.at(i, j));
-        f.write(buf, n);
-      }
+    for (std::size_t j = 0; j < g.ny; ++j) {
+      row.clear();
+      for (std::size_t i = 0; i < g.nx; ++i)
+        fmt::format_to(std::back_inserter(row), "{:.6f},{:.6f},{:.6f}\n", g.x(i), g.y(j), tile.grid.at(i, j));
+      f << row;
+    }
   }, grid_checkpoint(control));
   f.close();
   if (!f) throw std::runtime_error(out.string() + ": write failed");

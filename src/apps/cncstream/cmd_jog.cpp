@@ -4,6 +4,8 @@
 // call) and the display. A held key is a continuous jog only while the
 // terminal's auto-repeat keeps coming (jog_control.hpp); quitting, a signal,
 // a closed stdin or a lost link all release it.
+#include <fmt/core.h>
+
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/posix/stream_descriptor.hpp>
 #include <boost/asio/signal_set.hpp>
@@ -28,6 +30,7 @@
 #include "commands.hpp"
 #include "job_session.hpp"
 #include "jog_control.hpp"
+#include "terminal_text.hpp"
 
 namespace cncstream::app {
 
@@ -66,19 +69,16 @@ class DroPrinter {
  public:
   DroPrinter(std::FILE* out, bool tty) : out_(out), tty_(tty) {}
   void draw(const std::string& line) {
-    if (tty_) std::fprintf(out_, "\r%s\x1b[K", fit(line).c_str());
-    else if (line != last_) std::fprintf(out_, "%s\n", line.c_str());
+    if (tty_) put_text(out_, "\r" + fit(line) + "\x1b[K");
+    else if (line != last_) put_text(out_, line + "\n");
     last_ = line;
-    std::fflush(out_);
   }
   void print(const std::string& text) {
-    if (tty_) std::fprintf(out_, "\r\x1b[K%s\n%s\x1b[K", text.c_str(), fit(last_).c_str());
-    else std::fprintf(out_, "%s\n", text.c_str());
-    std::fflush(out_);
+    if (tty_) put_text(out_, "\r\x1b[K" + text + "\n" + fit(last_) + "\x1b[K");
+    else put_text(out_, text + "\n");
   }
   void finish() {
-    if (tty_) std::fputc('\n', out_);
-    std::fflush(out_);
+    put_text(out_, tty_ ? "\n" : "");
   }
 
  private:
@@ -133,11 +133,8 @@ int run_jog(const JogCliOptions& o) {
   if (!o.trace.empty()) {
     trace_file.reset(std::fopen(o.trace.c_str(), "w"));
     if (!trace_file) throw std::runtime_error("--trace: cannot write " + o.trace);
-    std::setvbuf(trace_file.get(), nullptr, _IOLBF, 0);  // whole lines, even if the process is killed
-    jo.trace = [f = trace_file.get()](const std::string& line) {
-      std::fputs(line.c_str(), f);
-      std::fputc('\n', f);
-    };
+    // Each line flushed whole, so that a killed process leaves every line it traced.
+    jo.trace = [f = trace_file.get()](const std::string& line) { put_text(f, line + "\n"); };
   }
 
   boost::asio::io_context io;
@@ -226,9 +223,7 @@ int run_jog(const JogCliOptions& o) {
   dro.draw(format_dro_line(control.view()));
   dro.finish();
   if (jo.trace) {
-    char line[48];
-    std::snprintf(line, sizeof line, "%.4f exit", session.now());
-    jo.trace(line);
+    jo.trace(fmt::format("{:.4f} exit", session.now()));
   }
   return 0;
 }

@@ -2,6 +2,8 @@
 // machine on PORT (a device, `auto`, or `sim`). From the USB receiver until
 // Ctrl-C; with --replay, from a file of timestamped reports, then the final
 // position is printed (tests check it; anyone can replay a recorded pendant).
+#include <fmt/core.h>
+
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
@@ -47,9 +49,7 @@ struct PendantOptions {
 };
 
 std::string axes_text(const protocol::Axes& a) {
-  char buf[96];
-  std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f", a[0], a[1], a[2]);
-  return buf;
+  return fmt::format("{:.3f},{:.3f},{:.3f}", a[0], a[1], a[2]);
 }
 
 // After the replay: the machine has settled when two status reports a

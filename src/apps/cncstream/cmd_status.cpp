@@ -2,9 +2,10 @@
 // work position, job and progress, queue); with no daemon answering, says so
 // and lists who holds the local serial ports (their lock files). `--json`
 // prints the same as one JSON object for scripts.
+#include <fmt/core.h>
+
 #include <nlohmann/json.hpp>
 
-#include <cstdio>
 #include <iostream>
 #include <set>
 
@@ -50,10 +51,8 @@ json owner_json(const transport::PortOwner& o) {
 
 std::string status_pos_text(const json& a) {
   if (!a.is_array() || a.size() < 3) return "-";
-  char buf[96];
-  std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f", a[0].is_number() ? a[0].get<double>() : 0.0,
-                a[1].is_number() ? a[1].get<double>() : 0.0, a[2].is_number() ? a[2].get<double>() : 0.0);
-  return buf;
+  return fmt::format("{:.3f},{:.3f},{:.3f}", a[0].is_number() ? a[0].get<double>() : 0.0,
+                     a[1].is_number() ? a[1].get<double>() : 0.0, a[2].is_number() ? a[2].get<double>() : 0.0);
 }
 
 std::string status_job_text(const json& jb) {
@@ -62,9 +61,7 @@ std::string status_job_text(const json& jb) {
   const json p = oget(jb, "progress");
   const json prog = oget(jb, "program");
   if (p.is_object() && p.contains("fraction") && p["fraction"].is_number()) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, " %.1f %%", 100.0 * p["fraction"].get<double>());
-    s += buf;
+    s += fmt::format(" {:.1f} %", 100.0 * p["fraction"].get<double>());
   }
   if (p.is_object() && p.contains("last_answered_line") && p["last_answered_line"].is_number()) {
     s.append(" line ").append(std::to_string(p["last_answered_line"].get<long>()));

@@ -1,5 +1,7 @@
 #include "daemon_client.hpp"
 
+#include <fmt/core.h>
+
 #include <boost/asio/connect.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
@@ -10,7 +12,6 @@
 #include <cctype>
 #include <chrono>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
 #include <deque>
 #include <limits>
@@ -30,11 +31,7 @@ Clock::time_point deadline_in(double seconds) {
   return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
-std::string seconds_text(double s) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g s", s);
-  return buf;
-}
+std::string seconds_text(double s) { return fmt::format("{:g} s", s); }
 
 // Runs handlers until `done()` or the deadline; false on the deadline.
 template <typename Done>
@@ -96,9 +93,7 @@ std::string url_encode(const std::string& text) {
     if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~') {
       out.push_back(static_cast<char>(c));
     } else {
-      char buf[4];
-      std::snprintf(buf, sizeof buf, "%%%02X", c);
-      out += buf;
+      out += fmt::format("%{:02X}", c);
     }
   }
   return out;

@@ -1,8 +1,9 @@
 #include "job_display.hpp"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 
 namespace cncstream::app {
@@ -10,10 +11,8 @@ namespace cncstream::app {
 std::string format_duration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "--:--";
   const long t = std::lround(seconds);
-  char buf[32];
-  if (t >= 3600) std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
-  else std::snprintf(buf, sizeof buf, "%ld:%02ld", t / 60, t % 60);
-  return buf;
+  if (t >= 3600) return fmt::format("{}:{:02}:{:02}", t / 3600, (t / 60) % 60, t % 60);
+  return fmt::format("{}:{:02}", t / 60, t % 60);
 }
 
 std::string format_progress_bar(double fraction, int width) {
@@ -32,13 +31,8 @@ std::string format_progress_bar(double fraction, int width) {
 namespace {
 
 std::string axes(const char* name, const std::optional<protocol::Axes>& a) {
-  char buf[96];
-  if (!a) {
-    std::snprintf(buf, sizeof buf, "%s X%9s Y%9s Z%9s", name, "-", "-", "-");
-  } else {
-    std::snprintf(buf, sizeof buf, "%s X%9.3f Y%9.3f Z%9.3f", name, (*a)[0], (*a)[1], (*a)[2]);
-  }
-  return buf;
+  if (!a) return fmt::format("{} X{:>9} Y{:>9} Z{:>9}", name, "-", "-", "-");
+  return fmt::format("{} X{:9.3f} Y{:9.3f} Z{:9.3f}", name, (*a)[0], (*a)[1], (*a)[2]);
 }
 
 double fraction(const JobView& v) { return v.total_lines > 0 ? double(v.line) / double(v.total_lines) : 0.0; }
@@ -56,9 +50,7 @@ std::string overrides_text(const JobView& v) {
 
 std::string buffer_text(const JobView& v) {
   if (!v.buffer_fill) return "buffer -";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "buffer %3.0f %%", 100.0 * std::clamp(*v.buffer_fill, 0.0, 1.0));
-  return buf;
+  return fmt::format("buffer {:3.0f} %", 100.0 * std::clamp(*v.buffer_fill, 0.0, 1.0));
 }
 
 }  // namespace
@@ -75,8 +67,7 @@ std::string format_job_panel(const JobView& v, int width) {
   o << fit(v.title + "  " + v.job_state + (v.show_help ? "" : "   (? for keys)"), width) << "\n";
   o << fit("state " + (v.machine_state.empty() ? std::string("-") : v.machine_state), width) << "\n";
   o << fit(axes("WPos", v.wpos) + "   " + axes("MPos", v.mpos), width) << "\n";
-  char pct[16];
-  std::snprintf(pct, sizeof pct, "%5.1f %%", 100.0 * fraction(v));
+  const std::string pct = fmt::format("{:5.1f} %", 100.0 * fraction(v));
   o << fit("line " + std::to_string(v.line) + "/" + std::to_string(v.total_lines) + " " +
                format_progress_bar(fraction(v), 30) + " " + pct,
            width)
@@ -93,16 +84,13 @@ std::string format_job_panel(const JobView& v, int width) {
 }
 
 std::string format_job_line(const JobView& v) {
-  char pct[16];
-  std::snprintf(pct, sizeof pct, "%.1f %%", 100.0 * fraction(v));
+  const std::string pct = fmt::format("{:.1f} %", 100.0 * fraction(v));
   std::ostringstream o;
   o << "line " << v.line << "/" << v.total_lines << " " << pct << " | " << v.job_state << " | "
     << (v.machine_state.empty() ? "-" : v.machine_state) << " | elapsed " << format_duration(v.elapsed_s) << " | ETA "
     << (v.eta_s ? format_duration(*v.eta_s) : "--:--");
   if (v.wpos) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, " | WPos %.3f,%.3f,%.3f", (*v.wpos)[0], (*v.wpos)[1], (*v.wpos)[2]);
-    o << buf;
+    o << fmt::format(" | WPos {:.3f},{:.3f},{:.3f}", (*v.wpos)[0], (*v.wpos)[1], (*v.wpos)[2]);
   }
   o << " | " << overrides_text(v) << " | " << buffer_text(v);
   return o.str();

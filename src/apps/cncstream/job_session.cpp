@@ -19,23 +19,11 @@
 #include "keyboard_control.hpp"
 #include "live_panel.hpp"
 #include "cncstream/session/simulator_port.hpp"
+#include "cncsim/number_text.hpp"
 
 namespace cncstream::app {
 
 namespace {
-
-// "LINE:VALUE" fault specs.
-template <typename T>
-void parse_line_faults(const std::vector<std::string>& specs, const char* flag, std::map<std::size_t, T>& out) {
-  for (const std::string& s : specs) {
-    std::size_t line = 0;
-    double value = 0;
-    char tail = 0;
-    if (std::sscanf(s.c_str(), "%zu:%lf%c", &line, &value, &tail) != 2 || line == 0)
-      throw std::invalid_argument(std::string(flag) + " '" + s + "': expected LINE:VALUE with LINE >= 1");
-    out[line] = static_cast<T>(value);
-  }
-}
 
 std::string limits_text(const gcode::MotionLimits& m) {
   std::ostringstream o;
@@ -101,9 +89,9 @@ session::SimulatorOptions simulator_options(const SimCliOptions& s) {
   so.faults.drop_every = s.drop_every;
   so.faults.corrupt_every = s.corrupt_every;
   so.faults.vanish_after = s.vanish_after;
-  parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
-  parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
-  parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
+  cncsim::parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
+  cncsim::parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
+  cncsim::parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
   return so;
 }
 

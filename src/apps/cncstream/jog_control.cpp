@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
-#include <cstdio>
 
 namespace cncstream::app {
 
@@ -58,17 +56,8 @@ JogControl::~JogControl() {
 
 double JogControl::feed_cap() const { return session_.ready() ? session_.max_jog_feed() : 0; }
 
-// C's variadic arguments, not a parameter pack, so that the compiler checks the
-// format against its arguments (the declaration's format attribute).
-void JogControl::trace(const char* fmt, ...) {  // NOLINT(cert-dcl50-cpp): see above
-  if (!opt_.trace) return;
-  char buf[256];
-  const int head = std::snprintf(buf, sizeof buf, "%.4f ", trace_at_ >= 0 ? trace_at_ : session_.now());
-  va_list ap;
-  va_start(ap, fmt);
-  std::vsnprintf(buf + head, sizeof buf - static_cast<std::size_t>(head), fmt, ap);
-  va_end(ap);
-  opt_.trace(buf);
+void JogControl::trace_line(const std::string& text) {
+  opt_.trace(fmt::format("{:.4f} {}", trace_at_ >= 0 ? trace_at_ : session_.now(), text));
 }
 
 protocol::JogDirection JogControl::direction(JogKey k) const {
@@ -90,7 +79,7 @@ void JogControl::show(std::string message) {
 }
 
 void JogControl::result(const session::CommandResult& r, const std::string& what) {
-  trace("%s: %s", what.c_str(), r ? "accepted" : r.reason.c_str());
+  trace("{}: {}", what, r ? "accepted" : r.reason.c_str());
   show(r ? what : "refused: " + r.reason);
 }
 
@@ -105,8 +94,8 @@ void JogControl::handle_key(const KeyEvent& k) {
   for (const auto& i : intents) apply(i);
   if (opt_.trace) {  // after the commands: the key's own arrival time
     trace_at_ = k.at;
-    if (k.key == Key::Char) trace("key 0x%02x", static_cast<unsigned char>(k.ch));
-    else trace("key %s", to_string(k.key));
+    if (k.key == Key::Char) trace("key 0x{:02x}", static_cast<unsigned char>(k.ch));
+    else trace("key {}", to_string(k.key));
     trace_at_ = -1;
   }
   if (k.key == Key::Char) {
@@ -132,7 +121,7 @@ void JogControl::apply(const JogIntent& intent) {
       // HeldKeyTiming::max_lease_s, is the one that ends a released key).
       const auto r = session_.jog_start(direction(intent.key), feed_mm_min_, opt_.session_lease_s);
       continuous_ = r.accepted;
-      trace("lease %.3f s (repeat period %.3f s)", detector_.lease_s(), detector_.repeat_period_s());
+      trace("lease {:.3f} s (repeat period {:.3f} s)", detector_.lease_s(), detector_.repeat_period_s());
       result(r, std::string("jog ") + key + " held");
       break;
     }
@@ -150,7 +139,7 @@ void JogControl::apply(const JogIntent& intent) {
       if (continuous_) {
         continuous_ = false;
         session_.jog_release();
-        trace("release %s", key);
+        trace("release {}", key);
         show(std::string("jog ") + key + " released");
       }
       break;
@@ -163,7 +152,7 @@ void JogControl::stop_jog(const std::string& why) {
   if (!continuous_) return;
   continuous_ = false;
   session_.jog_release();
-  trace("release (%s)", why.c_str());
+  trace("release ({})", why);
   show("jog released: " + why);
 }
 
@@ -178,9 +167,7 @@ void JogControl::handle_command_key(char c) {
     case '+': case '=': case '-': {
       feed_mm_min_ = next_jog_feed(feed_mm_min_, c == '-' ? -1 : 1, feed_cap());
       feed_given_ = true;
-      char buf[48];
-      std::snprintf(buf, sizeof buf, "jog feed %.0f mm/min", feed_mm_min_);
-      return show(buf);
+      return show(fmt::format("jog feed {:.0f} mm/min", feed_mm_min_));
     }
     case '0': return result(session_.zero_axes("XYZ"), "work zero set at XYZ");
     case 'X': case 'Y': case 'Z': {
@@ -209,12 +196,9 @@ void JogControl::handle_command_key(char c) {
       if (on_quit) on_quit();
       return;
     default: {
-      char buf[64];
       if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f)
-        std::snprintf(buf, sizeof buf, "key '%c' does nothing here (? lists the keys)", c);
-      else
-        std::snprintf(buf, sizeof buf, "key 0x%02x does nothing here (? lists the keys)", static_cast<unsigned char>(c));
-      return show(buf);
+        return show(fmt::format("key '{}' does nothing here (? lists the keys)", c));
+      return show(fmt::format("key 0x{:02x} does nothing here (? lists the keys)", static_cast<unsigned char>(c)));
     }
   }
 }
@@ -248,7 +232,7 @@ void JogControl::on_session_event(const session::SessionEvent& e) {
       if (e.link != session::LinkState::Ready) {
         // The session forgot the jog with the link; forget the key too, so
         // only fresh presses move the machine once it is back.
-        if (continuous_) trace("link %s: jog ended", to_string(e.link));
+        if (continuous_) trace("link {}: jog ended", to_string(e.link));
         continuous_ = false;
         detector_.reset();
         lease_timer_.cancel();

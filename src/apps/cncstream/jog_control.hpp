@@ -9,11 +9,12 @@
 // link, a quit, a signal or a closed stdin release it too (fail closed).
 // Used by `cncstream jog`; the display (DRO) is the caller's.
 #include <boost/asio/steady_timer.hpp>
+#include <fmt/core.h>
 
-#include <cstdio>
 #include <functional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "cncstream/protocol/jog.hpp"
@@ -71,7 +72,12 @@ class JogControl {
   void show(std::string message);
   void result(const session::CommandResult& r, const std::string& what);
   void arm_timers();
-  void trace(const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+  // fmt checks the format against the arguments at compile time.
+  template <typename... Args>
+  void trace(fmt::format_string<Args...> format, Args&&... args) {
+    if (opt_.trace) trace_line(fmt::format(format, std::forward<Args>(args)...));
+  }
+  void trace_line(const std::string& text);
   protocol::JogDirection direction(JogKey k) const;
   double feed_cap() const;  // 0 before the controller is ready
 

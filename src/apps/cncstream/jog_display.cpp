@@ -1,32 +1,25 @@
 #include "jog_display.hpp"
 
+#include <fmt/core.h>
+
 #include <cmath>
-#include <cstdio>
 
 namespace cncstream::app {
 
 namespace {
 std::string dro_axes(const char* name, const std::optional<protocol::Axes>& a) {
-  char buf[96];
-  if (!a) std::snprintf(buf, sizeof buf, "%s X%8s Y%8s Z%8s", name, "-", "-", "-");
-  else std::snprintf(buf, sizeof buf, "%s X%8.3f Y%8.3f Z%8.3f", name, (*a)[0], (*a)[1], (*a)[2]);
-  return buf;
+  if (!a) return fmt::format("{} X{:>8} Y{:>8} Z{:>8}", name, "-", "-", "-");
+  return fmt::format("{} X{:8.3f} Y{:8.3f} Z{:8.3f}", name, (*a)[0], (*a)[1], (*a)[2]);
 }
 }  // namespace
 
-std::string format_step(double mm) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", mm);
-  return buf;
-}
+std::string format_step(double mm) { return fmt::format("{:g}", mm); }
 
 std::string format_dro_line(const DroView& v, int width) {
   std::string s = v.link == "ready" ? (v.state.empty() ? std::string("-") : v.state) : v.link;
   s.append(" | ").append(dro_axes("WPos", v.wpos));
   s.append(" | ").append(dro_axes("MPos", v.mpos));
-  char buf[96];
-  std::snprintf(buf, sizeof buf, " | step %s mm | feed %.0f mm/min", format_step(v.step_mm).c_str(), v.feed_mm_min);
-  s.append(buf);
+  s.append(fmt::format(" | step {} mm | feed {:.0f} mm/min", format_step(v.step_mm), v.feed_mm_min));
   if (!v.jog.empty()) s.append(" | ").append(v.jog);
   if (!v.message.empty()) s.append(" | ").append(v.message);
   if (width > 3 && static_cast<int>(s.size()) > width) s = s.substr(0, static_cast<std::size_t>(width - 3)) + "...";

@@ -3,7 +3,11 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <fmt/core.h>
+
 #include <algorithm>
+
+#include "terminal_text.hpp"
 
 namespace cncstream::app {
 
@@ -20,7 +24,7 @@ LivePanel::LivePanel(std::FILE* out, bool tty, double plain_interval_s)
 
 void LivePanel::erase() {
   if (!tty_ || drawn_lines_ == 0) return;
-  std::fprintf(out_, "\x1b[%dA\r\x1b[J", drawn_lines_);
+  put_text(out_, fmt::format("\x1b[{}A\r\x1b[J", drawn_lines_));
   drawn_lines_ = 0;
 }
 
@@ -28,12 +32,11 @@ void LivePanel::draw(const JobView& v) {
   if (tty_) {
     erase();
     const std::string text = format_job_panel(v, terminal_width(out_));
-    std::fputs(text.c_str(), out_);
+    put_text(out_, text);
     drawn_lines_ = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
   } else {
-    std::fprintf(out_, "%s\n", format_job_line(v).c_str());
+    put_text(out_, format_job_line(v) + "\n");
   }
-  std::fflush(out_);
 }
 
 void LivePanel::update(const JobView& v, double now) {
@@ -46,9 +49,8 @@ void LivePanel::update(const JobView& v, double now) {
 
 void LivePanel::message(const std::string& text) {
   erase();
-  std::fprintf(out_, "%s\n", text.c_str());
+  put_text(out_, text + "\n");
   if (tty_ && have_last_) draw(last_);
-  std::fflush(out_);
 }
 
 void LivePanel::finish(const JobView& v) {

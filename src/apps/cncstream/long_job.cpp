@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "terminal_text.hpp"
+
 namespace cncstream::app {
 
 LongJob::LongJob(ProgressMode mode, unsigned threads) : progress_(stderr, mode), threads_(threads) {}
@@ -18,8 +20,7 @@ int LongJob::interrupted_exit(const std::string& what) {
   progress_.clear();
   std::string msg = "cncstream: interrupted: ";
   msg.append(what).append("\n");
-  std::fputs(msg.c_str(), stderr);
-  std::fflush(stderr);
+  put_text(stderr, msg);
   return guard_.exit_status();
 }
 

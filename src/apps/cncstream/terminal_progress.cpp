@@ -5,6 +5,8 @@
 #include <map>
 #include <string>
 
+#include "terminal_text.hpp"
+
 namespace cncstream::app {
 
 void add_progress_option(CLI::App* sub, ProgressMode& mode) {
@@ -27,8 +29,7 @@ void TerminalProgress::report(std::string_view stage, double fraction) {
   // Back to the line's start, the text, then erase what a longer line left.
   std::string line = "\r";
   line.append(jobs::progress_line(stage, fraction, now)).append("\x1b[K");
-  std::fwrite(line.data(), 1, line.size(), out_);
-  std::fflush(out_);
+  put_text(out_, line);
   shown_ = true;
 }
 
@@ -36,8 +37,7 @@ void TerminalProgress::clear() {
   if (!enabled_) return;
   std::lock_guard<std::mutex> l(mutex_);
   if (!shown_) return;
-  std::fputs("\r\x1b[K", out_);
-  std::fflush(out_);
+  put_text(out_, "\r\x1b[K");
   shown_ = false;
   pacer_.reset();
 }
