@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs, builds with ASan+UBSan (-Werror) and runs the whole test suite,
-# then fuzzes every parser for a bounded, reproducible run.
+# fuzzes every parser for a bounded, reproducible run, and checks src/ and
+# sim/ with clang-tidy (.clang-tidy; any finding fails).
 #
 # One build, not two: every test runs under the sanitizers (the library at
 # -O1; the test files and the daemon at -O0), the browser and install tests
@@ -21,11 +22,25 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX
   -DCNCSTREAM_WERROR=ON -DCNCSTREAM_SANITIZE=ON -DCNCSTREAM_BUILD_TOOLS=ON
 cmake --build build/asan -j"$jobs"
 
-lap "ASan+UBSan tests"
+lap "ASan+UBSan tests, with clang-tidy beside them at the lowest priority"
+# clang-tidy over src/ and sim/ (.clang-tidy; about 400 CPU-s) takes the CPU
+# time the tests leave idle while they wait on simulated machines and sockets;
+# at nice 19 it gets almost nothing while they are busy. Its own session, so
+# that a failing step stops it and its children too.
+setsid nice -n 19 bash tools/tidy.sh build/asan >build/asan/tidy.log 2>&1 &
+tidy_pid=$!
+trap 'kill -- -"$tidy_pid" 2>/dev/null || true' EXIT
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --output-on-failure -j"$jobs" --timeout 1800
 
 lap "Fuzzing (libFuzzer, clang, ASan+UBSan): saved regressions, then a bounded run of each target"
 bash tools/fuzz.sh --ci
+
+lap "clang-tidy (tools/tidy.sh): waiting for the rest of its run"
+tidy_rc=0
+wait "$tidy_pid" || tidy_rc=$?
+trap - EXIT
+cat build/asan/tidy.log
+[[ $tidy_rc -eq 0 ]] || { echo "clang-tidy: findings above (exit $tidy_rc)"; exit 1; }
 
 lap "all passed"

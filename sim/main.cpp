@@ -214,8 +214,9 @@ int run(int argc, char** argv) {
     // Serving has ended (Ctrl-C, SIGTERM, the port vanished): another signal
     // during the end-of-run work (result, verify) ends the program at once;
     // its files are written whole or not at all.
-    std::signal(SIGINT, SIG_DFL);
-    std::signal(SIGTERM, SIG_DFL);
+    // SIG_DFL for signals this program may catch cannot fail.
+    (void)std::signal(SIGINT, SIG_DFL);
+    (void)std::signal(SIGTERM, SIG_DFL);
     if (removal && (!result_path.empty() || design))
       std::cerr << "cncsim: writing the result and verifying (Ctrl-C again to quit without them)\n";
     std::cerr << "cncsim: " << machine.lines_received() << " lines received, " << machine.lines_answered()

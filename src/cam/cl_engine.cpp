@@ -27,7 +27,7 @@ struct ClEngine::Impl {
   mutable std::once_flag index_once;
   mutable std::unique_ptr<cl_detail::PointIndex> index;
 
-  Impl(const Mesh& m, const Cutter& c, ClOptions o) : mesh(&m), cutter(c), shape(c), options(std::move(o)) {}
+  Impl(const Mesh& m, const Cutter& c, ClOptions o) : mesh(&m), cutter(c), shape(c), options(o) {}
 
   void rows(const GridSpec& spec, std::size_t j0, std::size_t j1, double* z, std::uint8_t* on_floor,
             const Checkpoint& checkpoint) const {
@@ -81,7 +81,7 @@ void validate_spec(const GridSpec& s) {
 ClEngine::ClEngine(const Mesh& mesh, const Cutter& cutter, ClOptions options) {
   validate_cutter(cutter);
   validate_mesh(mesh);
-  impl_ = std::make_unique<Impl>(mesh, cutter, std::move(options));
+  impl_ = std::make_unique<Impl>(mesh, cutter, options);
   Impl& d = *impl_;
   if (d.options.floor) {
     if (!std::isfinite(*d.options.floor)) throw std::invalid_argument("CL engine: floor must be finite");

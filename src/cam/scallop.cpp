@@ -51,8 +51,9 @@ ScallopMap scallops_from_cut(const GridSpec& g, const std::vector<double>& machi
     above += un > kUnreachableMin;
     if (un > u.max) {
       u.max = un;
-      u.max_x = g.x0 + double(k % g.nx) * g.dx;
-      u.max_y = g.y0 + double(k / g.nx) * g.dy;
+      const std::size_t column = k % g.nx, row = k / g.nx;
+      u.max_x = g.x0 + double(column) * g.dx;
+      u.max_y = g.y0 + double(row) * g.dy;
     }
   }
   if (on) {

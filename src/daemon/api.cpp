@@ -34,7 +34,7 @@ std::int64_t Api::job_id(const Request& r) const { return job_id_param(r.params.
 
 std::optional<Response> Api::precheck(Request& r, bool ws) { return precheck_request(router_, auth_, config_.limits, r, ws); }
 
-void Api::handle(Request r, Respond respond) {
+void Api::handle(Request r, const Respond& respond) {
   int status = 0;
   const Route* route = router_.match(r, status);
   if (!route) {

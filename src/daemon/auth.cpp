@@ -67,7 +67,7 @@ std::string load_or_create_token(const std::filesystem::path& data_dir, bool& cr
     if (t.size() < 32) throw std::runtime_error(path.string() + ": the token file is empty or too short");
     return t;
   }
-  const std::string t = random_token_hex();
+  std::string t = random_token_hex();
   // O_EXCL + 0600 at creation: never a moment where the file is readable by others.
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
   if (fd < 0) throw std::runtime_error(path.string() + ": cannot create the token file: " + std::generic_category().message(errno));

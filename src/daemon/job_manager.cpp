@@ -537,13 +537,11 @@ std::shared_ptr<const Program> JobManager::program_for_preview(std::int64_t id) 
 }
 
 void JobManager::preview_png(std::int64_t id, int max_px, Respond respond) {
-  auto p = program_for_preview(id);
-  previews_.png(std::move(p), max_px, std::move(respond));
+  previews_.png(program_for_preview(id), max_px, std::move(respond));
 }
 
 void JobManager::preview_path(std::int64_t id, std::size_t max_points, Respond respond) {
-  auto p = program_for_preview(id);
-  previews_.path(std::move(p), max_points, std::move(respond));
+  previews_.path(program_for_preview(id), max_points, std::move(respond));
 }
 
 // ---- running ----------------------------------------------------------------

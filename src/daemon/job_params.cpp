@@ -38,7 +38,7 @@ std::string choice(const json& j, const char* key, const std::string& dflt, std:
   if (!j.contains(key) || j.at(key).is_null()) return dflt;
   const auto& v = j.at(key);
   if (!v.is_string()) bad(key, "expected a string");
-  const std::string s = v.get<std::string>();
+  std::string s = v.get<std::string>();
   std::string list;
   for (const char* a : allowed) {
     if (s == a) return s;

@@ -59,20 +59,20 @@ void WsHub::deliver(WsClient& c, Frame f, const std::string* status_machine) {
   peer->kick();
 }
 
-void WsHub::publish_status(const std::string& machine, Frame f) {
+void WsHub::publish_status(const std::string& machine, const Frame& f) {
   // Copy: a peer closing inside deliver() may remove itself from the map.
   auto list = clients_;
   for (auto& [id, c] : list)
     if (c->wants(machine)) deliver(*c, f, &machine);
 }
 
-void WsHub::publish(const std::string& machine, Frame f) {
+void WsHub::publish(const std::string& machine, const Frame& f) {
   auto list = clients_;
   for (auto& [id, c] : list)
     if (c->wants(machine)) deliver(*c, f, nullptr);
 }
 
-void WsHub::broadcast(Frame f) {
+void WsHub::broadcast(const Frame& f) {
   auto list = clients_;
   for (auto& [id, c] : list) deliver(*c, f, nullptr);
 }

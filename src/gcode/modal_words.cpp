@@ -65,7 +65,7 @@ ParserState modal_from_words(const ModalWords& w) {
     auto r = execute_block(s, b);
     if (!r.ok()) throw std::invalid_argument("modal state word '" + b + "' is not valid G-code (error " +
                                              std::to_string(r.status) + ")");
-    s = std::move(r.state);
+    s = r.state;
   }
   if (w.motion.empty()) return s;
   for (const MotionMode m : {MotionMode::Rapid, MotionMode::Linear, MotionMode::ArcCW, MotionMode::ArcCCW,

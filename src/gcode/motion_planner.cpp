@@ -52,10 +52,8 @@ bool MotionQueue::push(const MotionBlock& block) {
     p.junction_sq = 0;
   } else {
     const double cos_theta = -dot(last_unit_, p.unit);
-    if (!has_last_unit_) {
-      p.junction_sq = 0;
-    } else if (cos_theta > 0.999999) {
-      p.junction_sq = 0;  // full reversal
+    if (!has_last_unit_ || cos_theta > 0.999999) {
+      p.junction_sq = 0;  // no direction before, or a full reversal
     } else if (cos_theta < -0.999999) {
       p.junction_sq = kHuge;  // straight on
     } else {

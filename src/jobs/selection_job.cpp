@@ -158,7 +158,7 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
       const double a = r.ball.scallops.strip[k], c = r.radiused.scallops.strip[k];
       if (!std::isfinite(a) || !std::isfinite(c)) continue;
       r.min_scallop_choice[k] =
-          std::fabs(a - c) <= 1e-3 ? 2 : static_cast<std::int8_t>(a < c ? Choice::Ball : Choice::Radiused);
+          std::fabs(a - c) <= 1e-3 ? std::int8_t{2} : static_cast<std::int8_t>(a < c ? Choice::Ball : Choice::Radiused);
     }
     r.seconds = seconds_since(t_all);
   });

@@ -20,7 +20,7 @@ bool is_builtin(const std::string& action) {
   return std::find(std::begin(kBuiltins), std::end(kBuiltins), action) != std::end(kBuiltins);
 }
 
-std::string trim(std::string s) {
+std::string trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t");
   const auto e = s.find_last_not_of(" \t");
   return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);

@@ -190,7 +190,7 @@ std::optional<PendantReport> decode_report(const InputReport& b, std::string* er
   r.fn = r.key1 == Key::Fn || r.key2 == Key::Fn;
   r.feed_knob = *knob;
   r.axis = *axis;
-  r.wheel = static_cast<std::int8_t>(b[6]);
+  r.wheel = b[6] < 0x80 ? int{b[6]} : int{b[6]} - 0x100;  // two's complement int8
   return r;
 }
 

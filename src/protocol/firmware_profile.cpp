@@ -312,6 +312,7 @@ std::vector<FirmwareProfile> load_firmware_profiles(const std::filesystem::path&
     if (e.is_regular_file() && e.path().extension() == ".toml") files.push_back(e.path());
   std::sort(files.begin(), files.end());
   std::vector<FirmwareProfile> out;
+  out.reserve(files.size());
   for (const auto& f : files) out.push_back(load_firmware_profile(f));
   if (out.empty()) throw ProfileError(dir.string() + ": contains no *.toml firmware profiles");
   std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.priority > b.priority; });

@@ -136,7 +136,7 @@ void MarlinSession::on_line(std::string_view line, double now) {
                                           std::to_string(progress_.last_answered_line) + " was answered");
       return;
     }
-    case ResponseKind::Busy: return;  // keepalive: last_rx_ already refreshed
+    case ResponseKind::Busy:  // keepalive: last_rx_ already refreshed
     case ResponseKind::Empty: return;
     default: break;
   }

@@ -13,7 +13,7 @@ void apply_answered_line(gcode::ParserState& state, std::string_view line) {
   for (const char c : line)
     if (c != ' ' && c != '\t') cleaned.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
   auto r = gcode::execute_block(state, cleaned);
-  if (r.ok()) state = std::move(r.state);  // a program end is applied by the interpreter
+  if (r.ok()) state = r.state;  // a program end is applied by the interpreter
 }
 
 }  // namespace cncstream::protocol

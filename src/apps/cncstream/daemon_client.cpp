@@ -244,7 +244,7 @@ DaemonSocket::DaemonSocket(const DaemonClient& client, double timeout_s) : impl_
   const auto endpoints = resolver.resolve(addr.host, addr.port, ec);
   if (ec) throw std::runtime_error("cannot reach the daemon at " + s.url + ": " + ec.message());
   const std::string& id = client.client_id();
-  const std::string token = client.token();
+  const std::string& token = client.token();
   // Non-browser clients send the long-lived token in the upgrade's header.
   s.ws.set_option(websocket::stream_base::decorator([id, token](websocket::request_type& req) {
     req.set(http::field::user_agent, "cncstream");

@@ -35,7 +35,8 @@ using Clock = std::chrono::steady_clock;
 volatile std::sig_atomic_t g_handoff_sigints = 0;
 extern "C" void handoff_on_sigint(int) {
   g_handoff_sigints = g_handoff_sigints + 1;
-  if (g_handoff_sigints >= 2) std::signal(SIGINT, SIG_DFL);
+  // If this fails, a third Ctrl-C is only counted again: nothing to do here.
+  if (g_handoff_sigints >= 2) (void)std::signal(SIGINT, SIG_DFL);
 }
 
 bool handoff_terminal_state(const std::string& s) {
@@ -218,7 +219,9 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
   auto* previous = std::signal(SIGINT, handoff_on_sigint);
   struct RestoreSignal {
     decltype(previous) p;
-    ~RestoreSignal() { std::signal(SIGINT, p); }
+    ~RestoreSignal() {
+      if (p != SIG_ERR) (void)std::signal(SIGINT, p);  // valid, so it cannot fail
+    }
   } restore{previous};
 
   // Generation (STL): wait for the program, saying which stage it is in.

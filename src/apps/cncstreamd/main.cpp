@@ -56,7 +56,9 @@ int run_daemon(int argc, char** argv) {
       d.stop();
     });
     d.run();
-    pthread_kill(signals.native_handle(), SIGTERM);
+    // The signal thread waits in sigwait for SIGINT/SIGTERM, which every other
+    // thread blocks: this SIGTERM is the one it takes, to end its wait.
+    pthread_kill(signals.native_handle(), SIGTERM);  // NOLINT(bugprone-bad-signal-to-kill-thread): see above
     signals.join();
     g_daemon = nullptr;
   } catch (const std::exception& e) {
