@@ -1,5 +1,8 @@
 #include "cncstream/gcode/arc_fit.hpp"
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -69,6 +72,12 @@ class ChordModel {
       cos_half_[k] = std::cos(0.5 * deltas_[k]);
     }
     models_ = counts_[0] == counts_[1] ? 1 : 2;
+  }
+  // The smallest distance from the centre of any chord (at its middle).
+  double deepest() const {
+    double lowest = r_;
+    for (int k = 0; k < models_; ++k) lowest = std::min(lowest, r_ * cos_half_[k]);
+    return lowest;
   }
   // Smallest distance from the centre, over the chord counts, of the chord
   // path at angle phi from the start (r itself at a chord's end).
@@ -163,7 +172,10 @@ class Fitter {
       th = HUGE_VAL;
       for (std::size_t k = i + 1; k < j; ++k) {
         const P2 q = at(k) - M;
-        const auto [glo, ghi] = window(side, r, chords.lowest_radius(direction_angle(c, at(k))), 0);
+        const P2 pk = at(k);
+        const double rho = len2(pk - c);
+        const double uz = side == Side::Both || !(rho > 0) ? 1.0 : std::fabs((ax.first == 2 ? pk.a - c.a : pk.b - c.b) / rho);
+        const auto [glo, ghi] = window(side, r, chords.lowest_radius(direction_angle(c, pk)), 0, uz);
         if (!(ghi >= glo)) return std::nullopt;
         // g = r - rho in [glo, ghi]  <=>  rho^2 - r^2 = alpha - beta t in [flo, fhi].
         const double flo = -2 * r * ghi + ghi * ghi, fhi = -2 * r * glo + glo * glo;
@@ -191,6 +203,32 @@ class Fitter {
             th = std::min(th, alpha / beta);
           } else {
             tl = std::max(tl, alpha / beta);
+          }
+        }
+      }
+      if (side != Side::Concave) {
+        // Nor may the arc rise more than the tolerance over a long segment
+        // between two points (a sparse straight stretch): points along it,
+        // rho >= r - tol, alpha - beta t >= flo. Checked exactly below.
+        for (std::size_t k = i; k < j; ++k) {
+          const P2 p0 = at(k), p1 = at(k + 1);
+          const int parts = int(std::clamp(std::ceil(len2(p1 - p0) / 0.25), 1.0, 16.0));
+          for (int f = 1; f < parts || (parts == 1 && f == 1); ++f) {
+            const double w = parts == 1 ? 0.5 : double(f) / parts;
+            const P2 pw{p0.a + w * (p1.a - p0.a), p0.b + w * (p1.b - p0.b)};
+            const double rho = len2(pw - c);
+            const double uz =
+                side == Side::Both || !(rho > 0) ? 1.0 : std::fabs((ax.first == 2 ? pw.a - c.a : pw.b - c.b) / rho);
+            const double tol = o_.tolerance * uz, flo = -2 * r * tol + tol * tol;
+            const P2 q = pw - M;
+            const double alpha = dot2(q, q) - 0.25 * d * d, beta = 2 * dot2(q, n);
+            if (std::fabs(beta) < 1e-12) {
+              if (alpha < flo) return std::nullopt;
+            } else if (beta > 0) {
+              th = std::min(th, (alpha - flo) / beta);
+            } else {
+              tl = std::max(tl, (alpha - flo) / beta);
+            }
           }
         }
       }
@@ -236,8 +274,15 @@ class Fitter {
       last = phi;
       const auto [glo, ghi] = window(side, r, chords.lowest_radius(phi), margin);
       const double g = r - len2(q - C);
-      if (!(g >= glo && g <= ghi)) return std::nullopt;
+      // Over material only the floor is radial; the ceiling is vertical, below.
+      if (!(g >= glo) || (side == Side::Both && !(g <= ghi))) return std::nullopt;
     }
+    // Every segment between the points within the tolerance of the arc:
+    // its point nearest the centre no further inside the circle.
+    if (side == Side::Both)
+      for (std::size_t k = i; k < j; ++k)
+        if (r - distance_to_segment(C, at(k), at(k + 1)) > o_.tolerance - margin) return std::nullopt;
+    if (side != Side::Both && !within_vertically(ax, i, j, C, r, sweep, side, margin)) return std::nullopt;
     if (side != Side::Both) {
       // The arc must stay on one half of its circle (a graph over the row):
       // the upper half over a centre below all points, the lower half under one above.
@@ -272,8 +317,56 @@ class Fitter {
   // The allowed g = r - rho (how far inside the circle a point may lie) for a
   // point where the controller's path runs between the circle and
   // `lowest` (its chords), each side narrowed by `margin`.
-  std::pair<double, double> window(Side side, double r, double lowest, double margin) const {
-    const double tol = o_.tolerance, sag = r - lowest;
+  // Over material: the highest the cut runs over each point and each
+  // segment at most the tolerance above it, vertically. Convex: the arc
+  // itself is highest (upper half, z = cz + sqrt(r^2 - h^2)). Concave: the
+  // chords are, within the ring down to r - their largest sag.
+  bool within_vertically(const PlaneAxes& ax, std::size_t i, std::size_t j, P2 C, double r, double sweep, Side side,
+                         double margin) const {
+    const bool z_first = ax.first == 2;
+    auto sz = [&](std::size_t k) {
+      const P2 p{coord(pts_[k], ax.first), coord(pts_[k], ax.second)};
+      return z_first ? P2{p.b, p.a} : p;  // (row position, height)
+    };
+    const P2 c = z_first ? P2{C.b, C.a} : C;
+    const double tol = o_.tolerance - margin;
+    double rr = r;
+    if (side == Side::Concave) {
+      const ChordModel chords(r, sweep, o_.controller_arc_tolerance);
+      rr = chords.deepest();
+    }
+    auto top = [&](double s, double& z) {
+      const double h = s - c.a, q = rr * rr - h * h;
+      if (!(q > 0)) return false;
+      z = side == Side::Convex ? c.b + std::sqrt(q) : c.b - std::sqrt(q);
+      return true;
+    };
+    for (std::size_t k = i; k <= j; ++k) {
+      const P2 p = sz(k);
+      double z = 0;
+      if (!top(p.a, z) || z - p.b > tol) return false;
+    }
+    if (side == Side::Convex) {
+      // Over a segment the gap is largest where the circle's slope is the segment's.
+      for (std::size_t k = i; k < j; ++k) {
+        const P2 p0 = sz(k), p1 = sz(k + 1);
+        const double ds = p1.a - p0.a;
+        if (ds == 0) continue;
+        const double m = (p1.b - p0.b) / ds;
+        const double s = c.a - m * r / std::sqrt(1 + m * m);
+        if ((s - p0.a) * (s - p1.a) >= 0) continue;  // not inside the segment
+        double z = 0;
+        if (!top(s, z) || z - (p0.b + m * (s - p0.a)) > tol) return false;
+      }
+    }
+    return true;
+  }
+
+  // Over material the tolerance is vertical (as the raster's): radially it
+  // is tol times |uz|, the vertical part of the radius through the point
+  // (1 elsewhere).
+  std::pair<double, double> window(Side side, double r, double lowest, double margin, double uz = 1) const {
+    const double tol = o_.tolerance * uz, sag = r - lowest;
     switch (side) {
       case Side::Convex: return {sag + margin, tol - margin};    // under the chords, within tol of the arc
       case Side::Concave: return {sag - tol + margin, -margin};  // under the arc, within tol of the chords
@@ -304,29 +397,26 @@ class Fitter {
 
 constexpr std::size_t kSearchSpan = 96;
 
-std::vector<FittedMove> fit_arcs(const std::vector<Vec3>& points, const ArcFitOptions& o) {
-  if (!(o.tolerance >= 0) || !(o.controller_arc_tolerance >= 0))
-    throw std::invalid_argument("arc fit tolerances must not be negative");
-  if (!(o.max_radius > 0) || !(o.center_step > 0) || !(o.min_sweep >= 0))
-    throw std::invalid_argument("arc fit: radius cap, centre step and minimum sweep must be positive");
-  std::vector<FittedMove> out;
-  const std::size_t n = points.size();
-  if (n < 2) return out;
-  const Fitter fitter(points, o);
+namespace {
+
+// The greedy fit of points[first..last] (the longest arc from each point,
+// else a line to the next).
+void fit_range(const Fitter& fitter, const std::vector<Vec3>& points, std::size_t first, std::size_t last,
+               const ArcFitOptions& o, std::vector<FittedMove>& out) {
   const std::size_t min_span = std::max<std::size_t>(2, o.min_segments);
   const bool possible = o.tolerance > 0;
-  std::size_t i = 0;
-  while (i + 1 < n) {
+  std::size_t i = first;
+  while (i < last) {
     std::optional<FittedMove> best;
     std::size_t best_j = i + 1;
-    if (possible && i + min_span < n) {
+    if (possible && i + min_span <= last) {
       // Longest arc from i: spans doubling while they fit, then halving back
       // between the longest that fitted and the next that did not. Short
       // spans may not fit where longer ones do (noise; a convex run under
       // the controller's few long chords), so failures are passed over up to
       // kSearchSpan points before the first fit.
       std::size_t ok = 0, bad = 0, span = min_span;
-      while (i + span < n) {
+      while (i + span <= last) {
         if (auto a = fitter.arc(i, i + span)) {
           ok = span;
           best = a;
@@ -335,8 +425,8 @@ std::vector<FittedMove> fit_arcs(const std::vector<Vec3>& points, const ArcFitOp
           bad = span;
           if (ok > 0 || span >= kSearchSpan) break;
         }
-        if (i + span == n - 1) break;
-        span = std::min(2 * span, n - 1 - i);
+        if (i + span == last) break;
+        span = std::min(2 * span, last - i);
       }
       if (ok > 0 && bad > ok + 1) {
         std::size_t lo = ok, hi = bad;
@@ -362,6 +452,38 @@ std::vector<FittedMove> fit_arcs(const std::vector<Vec3>& points, const ArcFitOp
     }
     i = best_j;
   }
+}
+
+}  // namespace
+
+std::vector<FittedMove> fit_arcs(const std::vector<Vec3>& points, const ArcFitOptions& o) {
+  if (!(o.tolerance >= 0) || !(o.controller_arc_tolerance >= 0))
+    throw std::invalid_argument("arc fit tolerances must not be negative");
+  if (!(o.max_radius > 0) || !(o.center_step > 0) || !(o.min_sweep >= 0))
+    throw std::invalid_argument("arc fit: radius cap, centre step and minimum sweep must be positive");
+  std::vector<FittedMove> out;
+  const std::size_t n = points.size();
+  if (n < 2) return out;
+  const Fitter fitter(points, o);
+  // No arc passes through a corner (a point whose neighbours share no
+  // coordinate with it): the greedy fit stops at every corner, so the
+  // stretches between corners are fitted independently, in parallel, with
+  // the same result.
+  std::vector<std::size_t> cuts{0};
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    const Vec3 &a = points[k - 1], &b = points[k], &c = points[k + 1];
+    const bool shared = (a.x == b.x && b.x == c.x) || (a.y == b.y && b.y == c.y) || (a.z == b.z && b.z == c.z);
+    if (!shared) cuts.push_back(k);
+  }
+  cuts.push_back(n - 1);
+  std::vector<std::vector<FittedMove>> parts(cuts.size() - 1);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, parts.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p) fit_range(fitter, points, cuts[p], cuts[p + 1], o, parts[p]);
+  });
+  std::size_t total = 0;
+  for (const auto& part : parts) total += part.size();
+  out.reserve(total);
+  for (auto& part : parts) out.insert(out.end(), part.begin(), part.end());
   return out;
 }
 

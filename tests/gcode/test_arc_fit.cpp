@@ -146,7 +146,7 @@ TEST(ArcFit, CircleInEachPlaneIsOneArc) {
 // way round: the chords pass the middle point, not the far side of the circle.
 TEST(ArcFit, WrittenDirectionRunsThroughThePoints) {
   for (Plane plane : {Plane::XY, Plane::ZX, Plane::YZ}) {
-    const std::vector<Vec3> pts = circle_points(plane, 0, 0, 10, 200, 300, 5, 1);
+    const std::vector<Vec3> pts = circle_points(plane, 0, 0, 10, 200, 300, 2.5, 1);
     const auto moves = fit_arcs(pts, two_sided(0.005));
     ASSERT_EQ(moves.size(), 1u);
     int arcs = 0;
