@@ -395,7 +395,7 @@ class Fitter {
 
 }  // namespace
 
-constexpr std::size_t kSearchSpan = 96;
+constexpr std::size_t kSearchSpan = 48;
 
 namespace {
 
