@@ -119,10 +119,20 @@ class Fitter {
     const P2 u{(B.a - A.a) / d, (B.b - A.b) / d};
     const P2 n{-u.b, u.a};  // centres lie at M + t n
     // The side the points bulge to: the farthest from the chord decides.
+    // One pass: the farthest point, and the sums of the least-squares centre below.
     std::size_t far = i + 1;
-    for (std::size_t k = i + 1; k < j; ++k)
-      if (std::fabs(dot2(at(k) - M, n)) > std::fabs(dot2(at(far) - M, n))) far = k;
-    const double bulge = dot2(at(far) - M, n);
+    double bulge = 0, sum_ab = 0, sum_bb = 0;
+    for (std::size_t k = i + 1; k < j; ++k) {
+      const P2 q = at(k) - M;
+      const double side_k = dot2(q, n);
+      if (std::fabs(side_k) > std::fabs(bulge)) {
+        bulge = side_k;
+        far = k;
+      }
+      const double alpha = dot2(q, q) - 0.25 * d * d, beta = 2 * side_k;
+      sum_ab += alpha * beta;
+      sum_bb += beta * beta;
+    }
     if (bulge == 0) return std::nullopt;
     // Under half a turn the centre is on the other side of the chord from
     // the bulge; with n to the left of A->B, a bulge to the left turns clockwise.
@@ -139,17 +149,9 @@ class Fitter {
 
     // The centre, t along the chord's bisector: the feasible range of t is
     // where every point's window holds (a linear programme in t, with the
-    // radius and the chords frozen at the previous guess, first the circle
-    // through the farthest point); in it, the least-squares circle (exact
-    // data: the exact circle), or else the middle of the range. The centre
-    // is checked exactly below.
-    double sum_ab = 0, sum_bb = 0;
-    for (std::size_t k = i + 1; k < j; ++k) {
-      const P2 q = at(k) - M;
-      const double alpha = dot2(q, q) - 0.25 * d * d, beta = 2 * dot2(q, n);
-      sum_ab += alpha * beta;
-      sum_bb += beta * beta;
-    }
+    // radius and the chords frozen at the previous guess); in it, the
+    // least-squares circle (exact data: the exact circle), or else the
+    // middle of the range. The centre is checked exactly below.
     if (!(sum_bb > 0)) return std::nullopt;
     const double t_ls = sum_ab / sum_bb;
     // First guess: the least-squares circle, on the far side of the chord
