@@ -21,13 +21,14 @@ namespace {
 
 constexpr double kTolerance = 0.02;  // mm, vertical (the raster's)
 
-jobs::ToolpathProgram plaque_program(bool arcs) {
+jobs::ToolpathProgram plaque_program(bool arcs, RasterDirection direction) {
   jobs::ToolpathParams p;
   p.part.stl = (std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "examples/plaque.stl").string();
   p.cutter = parse_cutter_spec("ball:3.175");
   p.stepover = 1.0;
   p.tolerance = kTolerance;
   p.arcs = arcs;
+  p.direction = direction;
   p.feed = 3000;
   p.rpm = 0;
   return jobs::generate_toolpath(p);
@@ -55,15 +56,20 @@ HeightFieldStock machined(const jobs::ToolpathProgram& prog) {
 
 }  // namespace
 
-TEST(ArcPrograms, PlaqueWithArcsCutsTheSameSurfaceInFewerLines) {
-  const auto lines = plaque_program(false);
-  const auto arcs = plaque_program(true);
+// Rows along X are G18 arcs, rows along Y G19 arcs.
+class ArcPrograms : public ::testing::TestWithParam<RasterDirection> {};
+
+TEST_P(ArcPrograms, PlaqueWithArcsCutsTheSameSurfaceInFewerLines) {
+  const auto lines = plaque_program(false, GetParam());
+  const auto arcs = plaque_program(true, GetParam());
+  const std::string plane_word = GetParam() == RasterDirection::X ? "G18" : "G19";
+  EXPECT_NE(arcs.gcode.find(plane_word), std::string::npos);
   EXPECT_EQ(lines.stats.arcs, 0u);
   EXPECT_GT(arcs.stats.arcs, 1000u);
   const double drop = double(lines.stats.lines) / double(arcs.stats.lines);
   RecordProperty("lines_without_arcs", int(lines.stats.lines));
   RecordProperty("lines_with_arcs", int(arcs.stats.lines));
-  std::cout << "plaque at stepover 1, tolerance " << kTolerance << ": " << lines.stats.lines << " lines without arcs, "
+  std::cout << "plaque at stepover 1, rows along " << (GetParam() == RasterDirection::X ? "X" : "Y") << ", tolerance " << kTolerance << ": " << lines.stats.lines << " lines without arcs, "
             << arcs.stats.lines << " with " << arcs.stats.arcs << " arcs (" << drop << " x fewer)\n";
   EXPECT_GE(drop, 3.0);
 
@@ -102,3 +108,6 @@ TEST(ArcPrograms, PlaqueWithArcsCutsTheSameSurfaceInFewerLines) {
     }
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Rows, ArcPrograms, ::testing::Values(RasterDirection::X, RasterDirection::Y),
+                         [](const auto& info) { return info.param == RasterDirection::X ? "AlongX" : "AlongY"; });
