@@ -162,6 +162,14 @@ class Fitter {
       const P2 q = at(far) - M;
       t = std::clamp((dot2(q, q) - 0.25 * d * d) / (2 * bulge), -t_cap, t_cap);
     }
+    // Over a convex stretch an arc the controller cuts as one straight chord
+    // is under the points: not worth a linear programme.
+    if (side == Side::Convex && o_.controller_arc_tolerance > 0) {
+      const double r = std::hypot(0.5 * d, t);
+      const double c12 = o_.controller_arc_tolerance;
+      const double sweep = 2 * std::asin(std::min(1.0, 0.5 * d / r));
+      if (c12 < 2 * r && 0.5 * sweep * r / std::sqrt(c12 * (2 * r - c12)) < 1.5) return std::nullopt;
+    }
     double tl = -HUGE_VAL, th = HUGE_VAL;
     for (int iter = 0; iter < 3; ++iter) {
       const double r = std::hypot(0.5 * d, t);
@@ -480,7 +488,10 @@ std::vector<FittedMove> fit_arcs(const std::vector<Vec3>& points, const ArcFitOp
   cuts.push_back(n - 1);
   std::vector<std::vector<FittedMove>> parts(cuts.size() - 1);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, parts.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t p = r.begin(); p != r.end(); ++p) fit_range(fitter, points, cuts[p], cuts[p + 1], o, parts[p]);
+    for (std::size_t p = r.begin(); p != r.end(); ++p) {
+      parts[p].reserve(cuts[p + 1] - cuts[p]);
+      fit_range(fitter, points, cuts[p], cuts[p + 1], o, parts[p]);
+    }
   });
   std::size_t total = 0;
   for (const auto& part : parts) total += part.size();
