@@ -73,6 +73,9 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   p.rpm = number(j, "rpm", 18000, 0, 100000);
   p.safe_z = opt_number(j, "safe_z", -1000, 1000);
   p.tolerance = number(j, "tolerance", 0.002, 0, 1);
+  const std::string arcs = choice(j, "arcs", "on", {"on", "off"});
+  p.arcs = arcs == "on";
+  p.controller_arc_tolerance = number(j, "controller_arc_tolerance", 0.002, 0, 0.1);
   p.floor = opt_number(j, "floor", -10000, 10000);
   const std::string origin = choice(j, "origin", "min", {"min", "center", "model"});
   p.origin = origin == "center" ? XYOrigin::PartCenter : origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
@@ -114,7 +117,8 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   out.canonical = {{"tool", tool},       {"stepover", p.stepover},       {"step", p.step},
                    {"direction", dir},   {"feed", p.feed},               {"plunge_feed", p.plunge_feed},
                    {"rpm", p.rpm},       {"safe_z", p.safe_z ? json(*p.safe_z) : json(nullptr)},
-                   {"tolerance", p.tolerance}, {"bounds", bounds},
+                   {"tolerance", p.tolerance}, {"arcs", arcs},
+                   {"controller_arc_tolerance", p.controller_arc_tolerance}, {"bounds", bounds},
                    {"floor", p.floor ? json(*p.floor) : json(nullptr)},
                    {"origin", origin},   {"z_zero", zz},                 {"units", units},
                    {"scale", p.part.scale}};

@@ -91,7 +91,34 @@ std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offs
     rapid_to(first.x, first.y, std::nullopt);
     have_at = true;
     feed_to(first, p.plunge_feed);
-    for (const auto& v : pl) feed_to(place(v), p.feed);
+    if (!p.arcs) {
+      for (const auto& v : pl) feed_to(place(v), p.feed);
+    } else {
+      // The fit sees the points as they are printed.
+      std::vector<Vec3> pts;
+      pts.reserve(pl.size());
+      for (const auto& v : pl) {
+        Vec3 w = place(v);
+        w.x = std::round(w.x * q) / q;
+        w.y = std::round(w.y * q) / q;
+        pts.push_back(w);
+      }
+      for (const FittedMove& m : fit_arcs(pts, *p.arcs)) {
+        if (!m.arc) {
+          feed_to(m.to, p.feed);
+          continue;
+        }
+        const int plane = m.plane == gcode::Plane::XY ? 17 : m.plane == gcode::Plane::ZX ? 18 : 19;
+        if (w.arc(plane, m.clockwise, m.to.x, m.to.y, m.to.z, m.center_offset.x, m.center_offset.y,
+                  m.center_offset.z, p.feed)) {
+          const double len = m.radius * m.sweep;
+          st.cut_length += len;
+          st.feed_time_s += len / p.feed * 60.0;
+          ++st.arcs;
+        }
+        at = m.to;
+      }
+    }
     rapid_to(std::nullopt, std::nullopt, p.safe_z);
   }
   if (p.rpm > 0) w.line("M5");

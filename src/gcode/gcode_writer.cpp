@@ -63,6 +63,7 @@ void GcodeWriter::line(const std::string& text) {
 
 void GcodeWriter::reset_modal() {
   motion_.reset();
+  plane_ = 0;
   x_.reset();
   y_.reset();
   z_.reset();
@@ -79,8 +80,30 @@ bool GcodeWriter::feed(std::optional<double> x, std::optional<double> y, std::op
   return move(1, x, y, z, feed_rate);
 }
 
+bool GcodeWriter::arc(int plane, bool clockwise, double x, double y, double z, double i, double j, double k,
+                      double feed_rate, int offset_decimals) {
+  if (plane < 17 || plane > 19) throw std::invalid_argument("arc plane must be 17, 18 or 19");
+  if (!(feed_rate > 0)) throw std::invalid_argument("feed rate must be positive");
+  // The two offsets in the plane (GRBL wants at least one; both are written).
+  std::string offsets;
+  auto offset = [&](char letter, double v) {
+    offsets += letter;
+    offsets += format_gcode_number(v, offset_decimals);
+  };
+  if (plane == 17) { offset('I', i); offset('J', j); }
+  if (plane == 18) { offset('I', i); offset('K', k); }
+  if (plane == 19) { offset('J', j); offset('K', k); }
+  std::string prefix;
+  if (plane != plane_) {
+    prefix.append("G").append(std::to_string(plane));
+  }
+  const bool written = move(clockwise ? 2 : 3, x, y, z, feed_rate, prefix, offsets);
+  if (written) plane_ = plane;
+  return written;
+}
+
 bool GcodeWriter::move(int g, std::optional<double> x, std::optional<double> y, std::optional<double> z,
-                       std::optional<double> f) {
+                       std::optional<double> f, const std::string& prefix, const std::string& offsets) {
   std::string words;
   auto axis = [&](char letter, std::optional<double> v, std::optional<std::string>& last) {
     if (!v) return;
@@ -94,11 +117,13 @@ bool GcodeWriter::move(int g, std::optional<double> x, std::optional<double> y, 
   axis('Y', y, y_);
   axis('Z', z, z_);
   if (words.empty()) return false;
+  words += offsets;
   // Built by appending: GCC 12 warns falsely (-Wrestrict) on prefix + words.
   std::string text;
-  text.reserve(32);
+  text.reserve(48);
+  text.append(prefix);
   if (!motion_ || *motion_ != g) {
-    text.append(g == 0 ? "G0" : "G1");
+    text.append("G").append(std::to_string(g));
     motion_ = g;
   }
   if (f) {

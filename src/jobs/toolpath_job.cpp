@@ -71,6 +71,13 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     mp.plunge_feed = p.plunge_feed;
     mp.rpm = p.rpm;
     mp.safe_z = p.safe_z.value_or(box.hi.z + work.offset.z + 5.0);
+    if (p.arcs) {
+      ArcFitOptions arcs;
+      arcs.tolerance = p.tolerance;
+      arcs.controller_arc_tolerance = p.controller_arc_tolerance;
+      arcs.material_below = true;
+      mp.arcs = arcs;
+    }
     const XYOrigin xy = p.origin;
     const ZZero zz = p.z_zero;
     mp.header_comments = {
@@ -79,7 +86,11 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
         "tool: " + r.cutter.description() + " [" + r.cutter.spec() + "]",
         "stepover " + format_gcode_number(r.path.stepover, 4) + " mm along " +
             (p.direction == RasterDirection::Y ? "Y" : "X") + ", step " + format_gcode_number(r.path.step, 4) +
-            " mm, tolerance " + format_gcode_number(p.tolerance, 4) + " mm",
+            " mm, tolerance " + format_gcode_number(p.tolerance, 4) + " mm" +
+            (p.arcs ? std::string(", arcs for a controller arc tolerance of ")
+                          .append(format_gcode_number(p.controller_arc_tolerance, 4))
+                          .append(" mm")
+                    : std::string(", no arcs")),
         std::string("work origin: XY at ") +
             (xy == XYOrigin::PartMin ? "part minimum" : xy == XYOrigin::PartCenter ? "part centre" : "model origin") +
             ", Z0 at " + (zz == ZZero::PartTop ? "part top" : zz == ZZero::PartBottom ? "part bottom" : "model origin"),

@@ -44,3 +44,21 @@ TEST(GcodeWriter, CommentsAreSafeAndShort) {
   }
   EXPECT_THROW(w.line(std::string(81, 'X')), std::invalid_argument);
 }
+
+// Arcs: the plane word only when it changes, the two in-plane offsets always
+// (4 decimals), the motion word again for the line after an arc.
+TEST(GcodeWriter, ArcsNameTheirPlaneAndOffsets) {
+  GcodeWriter w;
+  w.feed(0.0, 0.0, -1.0, 500);
+  EXPECT_TRUE(w.arc(18, true, 2.0, 0.0, -1.0, 1.0, 0.0, -0.00004, 500));
+  EXPECT_TRUE(w.arc(18, true, 4.0, 0.0, -1.5, 1.23456, 0.0, 0.5, 500));
+  EXPECT_TRUE(w.arc(19, false, 4.0, 1.0, -1.5, 0.0, 0.5, 0.25, 500));
+  w.feed(4.0, 2.0, -1.5, 500);
+  EXPECT_TRUE(w.arc(17, false, 5.0, 3.0, -1.5, 1.0, 0.0, 0.0, 500));
+  EXPECT_FALSE(w.arc(17, false, 5.0, 3.0, -1.5, 1.0, 0.0, 0.0, 500));  // already there
+  EXPECT_THROW(w.arc(20, false, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 500), std::invalid_argument);
+  const std::vector<std::string> expect{"G1X0Y0Z-1F500", "G18G2X2I1K0",       "X4Z-1.5I1.2346K0.5",
+                                        "G19G3Y1J0.5K0.25", "G1Y2", "G17G3X5Y3I1J0"};
+  EXPECT_EQ(w.lines(), expect);
+  EXPECT_EQ(w.motion_lines(), 6u);
+}

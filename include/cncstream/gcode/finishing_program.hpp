@@ -3,10 +3,12 @@
 // (units, absolute mode, plane, spindle on with a dwell), safe retracts,
 // the cut, spindle off and program end. Coordinates are placed in the work
 // coordinate system chosen by the operator.
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cncstream/cam/raster.hpp"
+#include "cncstream/gcode/arc_fit.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
 namespace cncstream {
@@ -28,11 +30,15 @@ struct MachiningParams {
   // T number written after the header (0: none). GRBL accepts T and ignores
   // it; it names the tool for the operator and for a simulator's tool table.
   int tool = 0;
+  // Set: runs of the cut become arcs (G2/G3) where they fit (one-sided over
+  // the material, see arc_fit.hpp); unset: straight moves only.
+  std::optional<ArcFitOptions> arcs;
 };
 
 struct ProgramStats {
   std::size_t lines = 0;
   std::size_t motion_lines = 0;
+  std::size_t arcs = 0;       // G2/G3 moves among them
   double cut_length = 0;      // mm at feed
   double rapid_length = 0;    // mm at rapid
   double feed_time_s = 0;     // cut length / feed (no acceleration)

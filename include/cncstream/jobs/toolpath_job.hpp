@@ -27,6 +27,11 @@ struct ToolpathParams {
   double rpm = 18000;                     // 0: no spindle commands
   std::optional<double> safe_z;           // work coordinates; default 5 mm above the part's top
   double tolerance = 0.002;               // merged points stay within this above the CL, mm
+  // Arcs (G2/G3 in the rows' upright planes) where they fit within the
+  // tolerance, less the controller's own arc tolerance (GRBL $12), which its
+  // chords take.
+  bool arcs = true;
+  double controller_arc_tolerance = 0.002;  // mm
   std::optional<XYBounds> bounds;         // of the tool tip, model coordinates; default: part box grown by the radius
   std::optional<double> floor;            // lowest tip height, model coordinates; default: the part's lowest z
   XYOrigin origin = XYOrigin::PartMin;

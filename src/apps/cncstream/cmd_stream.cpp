@@ -65,7 +65,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
   for (auto* opt : sub->get_options())
     if (opt->get_group() == "Options" && opt->get_name().rfind("--", 0) == 0 &&
         std::string("--units --scale --tool --stepover --step --direction --feed --plunge-feed --rpm --safe-z "
-                    "--tolerance --bounds --floor --origin --z-zero --threads ")
+                    "--tolerance --arcs --controller-arc-tolerance --bounds --floor --origin --z-zero --threads ")
                 .find(opt->get_name() + " ") != std::string::npos)
       opt->group("Tool path (STL input)");
   sub->add_option("-o,--output", o->output, "STL input: write the generated G-code here (default: next to the journal)")

@@ -131,6 +131,8 @@ json job_params_from(const ToolpathOptions& tp) {
   p["rpm"] = tp.rpm;
   p["safe_z"] = tp.safe_z ? json(*tp.safe_z) : json(nullptr);
   p["tolerance"] = tp.tolerance;
+  p["arcs"] = tp.arcs;
+  p["controller_arc_tolerance"] = tp.controller_arc_tolerance;
   if (tp.bounds.empty()) {
     p["bounds"] = nullptr;
   } else {

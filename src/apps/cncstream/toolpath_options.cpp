@@ -20,6 +20,12 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
   sub->add_option("--safe-z", o.safe_z, "Retract height in work coordinates (default: 5 mm above the part top)");
   sub->add_option("--tolerance", o.tolerance, "Merge points on a line within this, mm (one-sided, never below the CL)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--arcs", o.arcs,
+                  "G2/G3 arcs where they fit within the tolerance less the controller's arc tolerance: on or off")
+      ->check(CLI::IsMember({"on", "off"}))->capture_default_str();
+  sub->add_option("--controller-arc-tolerance", o.controller_arc_tolerance,
+                  "The controller's arc tolerance (GRBL $12): the chords it cuts an arc with sag this much, mm")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--bounds", o.bounds, "X0,Y0,X1,Y1 of the tool tip in model coordinates (default: part box grown by the tool radius)");
   sub->add_option("--floor", o.floor, "Lowest tip height in model coordinates (default: the part's lowest z)");
   sub->add_option("--origin", o.origin, "Work X0 Y0 at the part's XY minimum, its centre, or the model origin")
@@ -42,6 +48,8 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   p.rpm = o.rpm;
   p.safe_z = o.safe_z;
   p.tolerance = o.tolerance;
+  p.arcs = o.arcs == "on";
+  p.controller_arc_tolerance = o.controller_arc_tolerance;
   if (!o.bounds.empty()) {
     const auto v = parse_bounds(o.bounds);
     p.bounds = XYBounds{v[0], v[1], v[2], v[3]};
@@ -67,7 +75,7 @@ std::string toolpath_report(const jobs::ToolpathProgram& r) {
     o << format_gcode_number(100.0 * (1.0 - double(path.points_after_merge) / double(path.points_before_merge)), 1)
       << " % fewer lines";
   o << ")\n";
-  o << "G-code: " << stats.lines << " lines, cut " << format_gcode_number(stats.cut_length / 1000, 2) << " m, feed time "
+  o << "G-code: " << stats.lines << " lines (" << stats.arcs << " arcs), cut " << format_gcode_number(stats.cut_length / 1000, 2) << " m, feed time "
     << format_duration(stats.feed_time_s) << " (no acceleration)\n";
   o << "tool tip in work coordinates: X " << format_gcode_number(b.lo.x) << " .. " << format_gcode_number(b.hi.x) << ", Y "
     << format_gcode_number(b.lo.y) << " .. " << format_gcode_number(b.hi.y) << ", Z " << format_gcode_number(b.lo.z) << " .. "

@@ -24,6 +24,8 @@ struct ToolpathOptions {
   double rpm = 18000;
   std::optional<double> safe_z;
   double tolerance = 0.002;
+  std::string arcs = "on";
+  double controller_arc_tolerance = 0.002;
   std::string bounds;
   std::optional<double> floor;
   std::string origin = "min";
