@@ -36,7 +36,7 @@ class Api {
   // and for an upload its declared size. nullopt: go on.
   std::optional<Response> precheck(Request& r, bool websocket_upgrade);
   bool is_upload(const Request& r) const { return daemon::is_upload(r); }
-  void handle(Request r, Respond respond);
+  void handle(Request r, const Respond& respond);
 
   // WebSocket clients.
   std::shared_ptr<WsClient> ws_open(const Request& upgrade, std::weak_ptr<WsPeer> peer);

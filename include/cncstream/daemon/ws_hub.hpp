@@ -70,9 +70,9 @@ class WsHub {
   // Number of open sockets of one client id.
   std::size_t count(const std::string& client_id) const;
 
-  void publish_status(const std::string& machine, Frame f);
-  void publish(const std::string& machine, Frame f);  // to the machine's subscribers
-  void broadcast(Frame f);                            // to everyone
+  void publish_status(const std::string& machine, const Frame& f);
+  void publish(const std::string& machine, const Frame& f);  // to the machine's subscribers
+  void broadcast(const Frame& f);                            // to everyone
   void send(WsClient& c, Frame f);
 
   static Frame frame(std::string s) { return std::make_shared<const std::string>(std::move(s)); }
