@@ -22,15 +22,22 @@ namespace {
 // ---------------------------------------------------------------- shaders
 
 const char* const kVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 pos;
-layout(location = 1) in vec3 offset;
-layout(location = 2) in vec3 plane0;
+layout(location = 0) in vec3 pos;     // relative mm (the cap's own frame for vertex offsets)
+layout(location = 1) in vec3 offset;  // the cap's vertex, relative mm (0 for other triangles)
+layout(location = 2) in vec3 plane0;  // trim: the facet's prism as half-planes a*x + b*y + c >= 0
 layout(location = 3) in vec3 plane1;
 layout(location = 4) in vec3 plane2;
-layout(location = 5) in vec2 zrange;  // the triangle's lowest and highest z (relative, before offset)
-uniform vec4 xy_map;  // ndc.xy = p.xy * xy_map.xy + xy_map.zw
-uniform float z_map;  // ndc.z = p.z * z_map (p.z relative to the middle of the depth range)
+layout(location = 5) in vec2 zrange;  // the triangle's lowest and highest z (before offset)
+layout(location = 6) in vec4 ref;     // reference point in window pixels, as float hi + lo
+layout(location = 7) in vec3 plane;   // z at q0 (before offset), dz/dx, dz/dy (mm per mm)
+layout(location = 8) in vec2 q0;      // where plane.x holds, mm from ref
+uniform vec4 xy_map;   // ndc.xy = p.xy * xy_map.xy + xy_map.zw
+uniform float z_map;   // ndc.z = p.z * z_map (p.z relative to the middle of the depth range)
+uniform vec2 pixel;    // grid step, mm
 flat out vec2 depth_range;
+flat out vec4 f_ref;
+flat out vec3 f_plane;
+flat out vec2 f_q0;
 void main() {
   vec3 p = pos + offset;
   gl_ClipDistance[0] = dot(plane0, vec3(p.xy, 1.0));
@@ -38,15 +45,53 @@ void main() {
   gl_ClipDistance[2] = dot(plane2, vec3(p.xy, 1.0));
   gl_Position = vec4(p.xy * xy_map.xy + xy_map.zw, p.z * z_map, 1.0);
   depth_range = (zrange + offset.z) * (0.5 * z_map) + 0.5;
+  f_ref = ref;
+  f_plane = vec3((plane.x + offset.z) * (0.5 * z_map), plane.y * pixel.x * (0.5 * z_map), plane.z * pixel.y * (0.5 * z_map));
+  f_q0 = q0 / pixel;
 }
 )";
-// A fragment's depth stays within its triangle's own z range: a rasterizer
-// that lights a pixel just outside a steep, thin triangle (sub-pixel snapping)
-// would otherwise extrapolate its plane far beyond it.
+// The depth of a fragment is its triangle's plane evaluated at the pixel
+// centre (the node) from the unsnapped triangle: a rasterizer snaps vertices
+// to a sub-pixel grid (1/256 pixel in llvmpipe), which on a steep triangle
+// would move its interpolated depth by slope * snap. Clamped to the
+// triangle's own z range: a pixel lit just outside a steep, thin triangle
+// must not take its plane far beyond it.
 const char* const kFragmentShader = R"(#version 330 core
 flat in vec2 depth_range;
-void main() { gl_FragDepth = clamp(gl_FragCoord.z, depth_range.x, depth_range.y); }
+flat in vec4 f_ref;
+flat in vec3 f_plane;
+flat in vec2 f_q0;
+void main() {
+  vec2 d = ((gl_FragCoord.xy - f_ref.xy) - f_ref.zw) - f_q0;
+  float depth = (f_plane.x + 0.5) + f_plane.y * d.x + f_plane.z * d.y;
+  gl_FragDepth = clamp(depth, depth_range.x, depth_range.y);
+}
 )";
+
+// Window coordinates of the current tile, in double: pixel centres at +0.5.
+struct TileMap {
+  double x0 = 0, y0 = 0, dx = 1, dy = 1;  // grid origin and step
+  double ti = 0, tj = 0;                  // tile's first node
+  double wx(double x) const { return (x - x0) / dx - ti + 0.5; }
+  double wy(double y) const { return (y - y0) / dy - tj + 0.5; }
+};
+
+// A double as float hi + lo (hi + lo == v to about 1e-14 relative).
+void split(double v, float& hi, float& lo) {
+  hi = static_cast<float>(v);
+  lo = static_cast<float>(v - static_cast<double>(hi));
+}
+
+// Plane z = z0 + gx * (x - x_0) + gy * (y - y_0) through three points; false
+// when the triangle has no area seen from above.
+bool plane_of(const Vec3& a, const Vec3& b, const Vec3& c, double& gx, double& gy) {
+  const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z, vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+  const double det = ux * vy - uy * vx;
+  if (det == 0) return false;
+  gx = (uz * vy - uy * vz) / det;
+  gy = (ux * vz - uz * vx) / det;
+  return true;
+}
 
 GLuint compile(GLenum kind, const char* src) {
   const GLuint s = glCreateShader(kind);
@@ -129,22 +174,26 @@ class Batch {
   Batch(const Batch&) = delete;
   Batch& operator=(const Batch&) = delete;
 
-  void triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& o, const Planes* pl) {
+  void triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& o, const TileMap& tm, const Planes* pl) {
     // A triangle with no area seen from above (a vertical one) adds nothing
     // to the top view, and its depth plane is meaningless in float: a
     // rasterizer may still light a pixel with it. Leave such ones out.
     const double ux = b.x - a.x, uy = b.y - a.y, vx = c.x - a.x, vy = c.y - a.y;
     const double area2 = std::fabs(ux * vy - uy * vx), size2 = ux * ux + uy * uy + vx * vx + vy * vy;
     if (!(area2 > 1e-6 * size2)) return;
+    double gx = 0, gy = 0;
+    if (!plane_of(a, b, c, gx, gy)) return;
     if (data_.size() + 3 * stride() > kMaxVertices * stride()) flush();
     const float zlo = static_cast<float>(std::min({a.z, b.z, c.z}) - o.z);
     const float zhi = static_cast<float>(std::max({a.z, b.z, c.z}) - o.z);
+    float rx, rxl, ry, ryl;
+    split(tm.wx(a.x), rx, rxl);
+    split(tm.wy(a.y), ry, ryl);
+    const float z0 = static_cast<float>(a.z - o.z);
     for (const Vec3* v : {&a, &b, &c}) {
-      data_.push_back(static_cast<float>(v->x - o.x));
-      data_.push_back(static_cast<float>(v->y - o.y));
-      data_.push_back(static_cast<float>(v->z - o.z));
-      data_.push_back(zlo);
-      data_.push_back(zhi);
+      data_.insert(data_.end(), {static_cast<float>(v->x - o.x), static_cast<float>(v->y - o.y),
+                                 static_cast<float>(v->z - o.z), zlo, zhi, rx, ry, rxl, ryl, z0,
+                                 static_cast<float>(gx), static_cast<float>(gy)});
       if (planes_) {
         const Planes def;
         const Planes& p = pl ? *pl : def;
@@ -159,16 +208,23 @@ class Batch {
     glBindBuffer(GL_ARRAY_BUFFER, vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data_.size() * sizeof(float)), data_.data(), GL_STREAM_DRAW);
     const auto st = static_cast<GLsizei>(stride() * sizeof(float));
+    auto at = [](std::size_t floats) { return reinterpret_cast<const void*>(floats * sizeof(float)); };
     glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, st, nullptr);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, st, at(0));
     glEnableVertexAttribArray(5);
-    glVertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, st, reinterpret_cast<const void*>(3 * sizeof(float)));
+    glVertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, st, at(3));
+    glEnableVertexAttribArray(6);
+    glVertexAttribPointer(6, 4, GL_FLOAT, GL_FALSE, st, at(5));
+    glEnableVertexAttribArray(7);
+    glVertexAttribPointer(7, 3, GL_FLOAT, GL_FALSE, st, at(9));
     glDisableVertexAttribArray(1);
     glVertexAttrib3f(1, 0, 0, 0);
+    glDisableVertexAttribArray(8);
+    glVertexAttrib2f(8, 0, 0);
     for (GLuint k = 0; k < 3; ++k) {
       if (planes_) {
         glEnableVertexAttribArray(2 + k);
-        glVertexAttribPointer(2 + k, 3, GL_FLOAT, GL_FALSE, st, reinterpret_cast<const void*>((5 + 3 * k) * sizeof(float)));
+        glVertexAttribPointer(2 + k, 3, GL_FLOAT, GL_FALSE, st, at(12 + 3 * k));
       } else {
         glDisableVertexAttribArray(2 + k);
         glVertexAttrib3f(2 + k, 0, 0, 1);
@@ -180,8 +236,8 @@ class Batch {
   std::size_t triangles() const { return triangles_; }
 
  private:
-  static constexpr std::size_t kMaxVertices = 3 << 18;
-  std::size_t stride() const { return planes_ ? 14 : 5; }
+  static constexpr std::size_t kMaxVertices = 3 << 16;
+  std::size_t stride() const { return planes_ ? 21 : 12; }
   bool planes_;
   GLuint vao_ = 0, vbo_ = 0;
   std::vector<float> data_;
@@ -194,24 +250,35 @@ class CapDraw {
  public:
   CapDraw(const CutterCap& cap, bool with_planes) : planes_(with_planes) {
     std::vector<float> tris;
+    const auto& P = cap.points();
     for (const auto& t : cap.triangles()) {
-      const auto& P = cap.points();
-      const double zlo = std::min({P[t[0]].z, P[t[1]].z, P[t[2]].z}), zhi = std::max({P[t[0]].z, P[t[1]].z, P[t[2]].z});
-      for (auto i : t)
-        tris.insert(tris.end(), {static_cast<float>(P[i].x), static_cast<float>(P[i].y), static_cast<float>(P[i].z),
-                                 static_cast<float>(zlo), static_cast<float>(zhi)});
+      const Vec3 a = P[t[0]], b = P[t[1]], c = P[t[2]];
+      double gx = 0, gy = 0;
+      plane_of(a, b, c, gx, gy);
+      const double zlo = std::min({a.z, b.z, c.z}), zhi = std::max({a.z, b.z, c.z});
+      for (const Vec3* v : {&a, &b, &c})
+        tris.insert(tris.end(), {static_cast<float>(v->x), static_cast<float>(v->y), static_cast<float>(v->z),
+                                 static_cast<float>(zlo), static_cast<float>(zhi), static_cast<float>(a.z),
+                                 static_cast<float>(gx), static_cast<float>(gy), static_cast<float>(a.x),
+                                 static_cast<float>(a.y)});
     }
-    vertices_ = static_cast<GLsizei>(tris.size() / 5);
+    vertices_ = static_cast<GLsizei>(tris.size() / 10);
     glGenVertexArrays(1, &vao_);
     glGenBuffers(1, &mesh_vbo_);
     glGenBuffers(1, &inst_vbo_);
     glBindVertexArray(vao_);
     glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(tris.size() * sizeof(float)), tris.data(), GL_STATIC_DRAW);
+    const GLsizei st = 10 * sizeof(float);
+    auto at = [](std::size_t floats) { return reinterpret_cast<const void*>(floats * sizeof(float)); };
     glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 5 * sizeof(float), nullptr);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, st, at(0));
     glEnableVertexAttribArray(5);
-    glVertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, 5 * sizeof(float), reinterpret_cast<const void*>(3 * sizeof(float)));
+    glVertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, st, at(3));
+    glEnableVertexAttribArray(7);
+    glVertexAttribPointer(7, 3, GL_FLOAT, GL_FALSE, st, at(5));
+    glEnableVertexAttribArray(8);
+    glVertexAttribPointer(8, 2, GL_FLOAT, GL_FALSE, st, at(8));
   }
   ~CapDraw() {
     glDeleteBuffers(1, &inst_vbo_);
@@ -221,10 +288,12 @@ class CapDraw {
   CapDraw(const CapDraw&) = delete;
   CapDraw& operator=(const CapDraw&) = delete;
 
-  void add(const Vec3& v, const Vec3& o, const Planes* pl) {
-    inst_.push_back(static_cast<float>(v.x - o.x));
-    inst_.push_back(static_cast<float>(v.y - o.y));
-    inst_.push_back(static_cast<float>(v.z - o.z));
+  void add(const Vec3& v, const Vec3& o, const TileMap& tm, const Planes* pl) {
+    float rx, rxl, ry, ryl;
+    split(tm.wx(v.x), rx, rxl);
+    split(tm.wy(v.y), ry, ryl);
+    inst_.insert(inst_.end(), {static_cast<float>(v.x - o.x), static_cast<float>(v.y - o.y),
+                               static_cast<float>(v.z - o.z), rx, ry, rxl, ryl});
     if (planes_) {
       const Planes def;
       const Planes& p = pl ? *pl : def;
@@ -238,25 +307,28 @@ class CapDraw {
     glBindBuffer(GL_ARRAY_BUFFER, inst_vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(inst_.size() * sizeof(float)), inst_.data(), GL_STREAM_DRAW);
     const auto st = static_cast<GLsizei>(stride() * sizeof(float));
-    glEnableVertexAttribArray(1);
-    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, st, nullptr);
-    glVertexAttribDivisor(1, 1);
-    for (GLuint k = 0; k < 3; ++k) {
-      if (planes_) {
-        glEnableVertexAttribArray(2 + k);
-        glVertexAttribPointer(2 + k, 3, GL_FLOAT, GL_FALSE, st, reinterpret_cast<const void*>((3 + 3 * k) * sizeof(float)));
-        glVertexAttribDivisor(2 + k, 1);
-      } else {
-        glDisableVertexAttribArray(2 + k);
-        glVertexAttrib3f(2 + k, 0, 0, 1);
-      }
-    }
     // Instances in chunks: llvmpipe bins a whole draw before rasterizing it.
     const std::size_t n = instances(), chunk = 4096;
     for (std::size_t first = 0; first < n; first += chunk) {
-      for (GLuint a = 1; a < (planes_ ? 5u : 2u); ++a)
-        glVertexAttribPointer(a, 3, GL_FLOAT, GL_FALSE, st,
-                              reinterpret_cast<const void*>((first * stride() + (a == 1 ? 0 : 3 + 3 * (a - 2))) * sizeof(float)));
+      auto at = [&](std::size_t floats) {
+        return reinterpret_cast<const void*>((first * stride() + floats) * sizeof(float));
+      };
+      glEnableVertexAttribArray(1);
+      glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, st, at(0));
+      glVertexAttribDivisor(1, 1);
+      glEnableVertexAttribArray(6);
+      glVertexAttribPointer(6, 4, GL_FLOAT, GL_FALSE, st, at(3));
+      glVertexAttribDivisor(6, 1);
+      for (GLuint k = 0; k < 3; ++k) {
+        if (planes_) {
+          glEnableVertexAttribArray(2 + k);
+          glVertexAttribPointer(2 + k, 3, GL_FLOAT, GL_FALSE, st, at(7 + 3 * k));
+          glVertexAttribDivisor(2 + k, 1);
+        } else {
+          glDisableVertexAttribArray(2 + k);
+          glVertexAttrib3f(2 + k, 0, 0, 1);
+        }
+      }
       glDrawArraysInstanced(GL_TRIANGLES, 0, vertices_, static_cast<GLsizei>(std::min(chunk, n - first)));
     }
     inst_.clear();
@@ -264,7 +336,7 @@ class CapDraw {
   std::size_t triangles_per_instance() const { return static_cast<std::size_t>(vertices_) / 3; }
 
  private:
-  std::size_t stride() const { return planes_ ? 12 : 3; }
+  std::size_t stride() const { return planes_ ? 16 : 7; }
   bool planes_;
   GLuint vao_ = 0, mesh_vbo_ = 0, inst_vbo_ = 0;
   GLsizei vertices_ = 0;
@@ -402,6 +474,7 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   glUseProgram(program);
   const GLint loc_xy = glGetUniformLocation(program, "xy_map"), loc_z = glGetUniformLocation(program, "z_map");
   glUniform1f(loc_z, static_cast<float>(2.0 / (zhi - zlo)));
+  glUniform2f(glGetUniformLocation(program, "pixel"), static_cast<float>(spec.dx), static_cast<float>(spec.dy));
   const DepthTarget target(static_cast<GLsizei>(tw), static_cast<GLsizei>(th));
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_GREATER);
@@ -450,9 +523,18 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   st.edges_drawn = edges.size();
   st.vertices_drawn = verts.size();
 
+  // Each edge's generators on the exact offset surface, once for all tiles.
+  std::vector<Vec3> gens, one;
+  std::vector<std::size_t> gen_first{0};
+  gen_first.reserve(edges.size() + 1);
+  for (const EdgeDraw& e : edges) {
+    edge_generators(cutter, mesh.vertices[e.a], mesh.vertices[e.b], opt.tolerance, one);
+    gens.insert(gens.end(), one.begin(), one.end());
+    gen_first.push_back(gens.size());
+  }
+
   Batch batch(opt.trim);
   CapDraw caps(cap, opt.trim);
-  std::vector<std::array<std::uint32_t, 2>> sil;
   std::vector<float> depth(tw * th);
   const double R = cutter.radius;
   for (std::size_t tj = 0; tj < spec.ny; tj += th)
@@ -465,6 +547,13 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
                   static_cast<float>((0.5 - static_cast<double>(ti)) * 2.0 / static_cast<double>(w) - 1.0),
                   static_cast<float>((0.5 - static_cast<double>(tj)) * 2.0 / static_cast<double>(h) - 1.0));
       glClear(GL_DEPTH_BUFFER_BIT);
+      TileMap tm;
+      tm.x0 = spec.x0;
+      tm.y0 = spec.y0;
+      tm.dx = spec.dx;
+      tm.dy = spec.dy;
+      tm.ti = static_cast<double>(ti);
+      tm.tj = static_cast<double>(tj);
       // The tile's xy range, grown by a pixel: what lies wholly outside is skipped.
       const double x0 = spec.x(ti) - spec.dx, x1 = spec.x(ti + w - 1) + spec.dx;
       const double y0 = spec.y(tj) - spec.dy, y1 = spec.y(tj + h - 1) + spec.dy;
@@ -473,27 +562,23 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
       for (const auto& f : faces) {
         const double lx = std::min({f[0].x, f[1].x, f[2].x}), hx = std::max({f[0].x, f[1].x, f[2].x});
         const double ly = std::min({f[0].y, f[1].y, f[2].y}), hy = std::max({f[0].y, f[1].y, f[2].y});
-        if (!outside(lx, ly, hx, hy)) batch.triangle(f[0], f[1], f[2], origin, nullptr);
+        if (!outside(lx, ly, hx, hy)) batch.triangle(f[0], f[1], f[2], origin, tm, nullptr);
       }
       for (const VertexDraw& vd : verts) {
         const Vec3& v = mesh.vertices[vd.v];
-        if (!outside(v.x - R, v.y - R, v.x + R, v.y + R)) caps.add(v, origin, opt.trim ? &vd.planes : nullptr);
+        if (!outside(v.x - R, v.y - R, v.x + R, v.y + R)) caps.add(v, origin, tm, opt.trim ? &vd.planes : nullptr);
       }
       st.triangles += caps.instances() * caps.triangles_per_instance();
       caps.draw();
-      for (const EdgeDraw& e : edges) {
+      for (std::size_t k = 0; k < edges.size(); ++k) {
+        const EdgeDraw& e = edges[k];
         const Vec3 a = mesh.vertices[e.a], b = mesh.vertices[e.b];
         if (outside(std::min(a.x, b.x) - R, std::min(a.y, b.y) - R, std::max(a.x, b.x) + R, std::max(a.y, b.y) + R)) continue;
-        // A vertical edge's offset is its upper vertex's (drawn); its sweeps
-        // would have no area, and a rasterizer may still light a pixel of a
-        // zero-area triangle with a meaningless depth.
-        if (!(std::hypot(b.x - a.x, b.y - a.y) > 1e-9 * (1 + std::fabs(b.z - a.z)))) continue;
-        cap.silhouette_edges(b - a, sil);
         const Planes* pl = opt.trim ? &e.planes : nullptr;
-        for (const auto& s : sil) {
-          const Vec3 q1 = cap.points()[s[0]], q2 = cap.points()[s[1]];
-          batch.triangle(a + q1, a + q2, b + q2, origin, pl);
-          batch.triangle(a + q1, b + q2, b + q1, origin, pl);
+        for (std::size_t g = gen_first[k]; g + 1 < gen_first[k + 1]; ++g) {
+          const Vec3 q1 = gens[g], q2 = gens[g + 1];
+          batch.triangle(a + q1, a + q2, b + q2, origin, tm, pl);
+          batch.triangle(a + q1, b + q2, b + q1, origin, tm, pl);
         }
       }
       batch.flush();

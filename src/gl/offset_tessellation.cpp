@@ -142,6 +142,76 @@ void CutterCap::silhouette_edges(const Vec3& d, std::vector<std::array<std::uint
   }
 }
 
+namespace {
+
+// Where along the segment (u, from the node's foot) the cutter touches at
+// lateral offset d: maximises g(u) = -m u - h(sqrt(d^2 + u^2)) over
+// |u| <= sqrt(R^2 - d^2); g is concave. Returns u and g(u).
+double best_u(const Profile& p, double m, double d, double& gbest) {
+  const double w = std::sqrt(std::max(0.0, p.R * p.R - d * d));
+  auto g = [&](double u) { return -m * u + p.g(std::sqrt(d * d + u * u)); };
+  double u = 0;
+  if (p.rk == 0) {
+    u = m > 0 ? -w : m < 0 ? w : 0.0;  // flat: the rim, uphill
+  } else if (p.rc == 0) {
+    u = -m * w / std::sqrt(1 + m * m);  // ball: the great circle across the segment
+  } else {
+    double lo = -w, hi = w;
+    for (int it = 0; it < 80; ++it) {
+      const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+      if (g(m1) < g(m2)) lo = m1;
+      else hi = m2;
+    }
+    u = 0.5 * (lo + hi);
+  }
+  gbest = g(u);
+  return u;
+}
+
+}  // namespace
+
+void edge_generators(const Cutter& cutter, const Vec3& a, const Vec3& b, double tolerance, std::vector<Vec3>& out) {
+  out.clear();
+  const Profile p(cutter);
+  const double ex = b.x - a.x, ey = b.y - a.y, L = std::hypot(ex, ey);
+  if (!(L > 1e-9 * (1 + std::fabs(b.z - a.z)))) return;
+  const double ux = ex / L, uy = ey / L, nx = -uy, ny = ux;
+  const double m = (b.z - a.z) / L;
+  struct Sample {
+    double d, F, u;
+  };
+  auto sample = [&](double d) {
+    Sample s{d, 0, 0};
+    s.u = best_u(p, m, d, s.F);
+    return s;
+  };
+  // Chords of the concave F: the gap at an interval's middle is at least
+  // half its largest gap, so a middle gap <= tolerance/2 bounds it.
+  std::vector<Sample> done;
+  std::vector<std::pair<Sample, Sample>> todo;
+  const int n0 = 8;
+  Sample prev = sample(-p.R);
+  for (int k = 1; k <= n0; ++k) {
+    const Sample next = sample(-p.R + 2 * p.R * k / n0);
+    todo.push_back({prev, next});
+    prev = next;
+  }
+  std::reverse(todo.begin(), todo.end());
+  done.push_back(todo.back().first);
+  while (!todo.empty()) {
+    const auto [l, r] = todo.back();
+    todo.pop_back();
+    const Sample mid = sample(0.5 * (l.d + r.d));
+    if (mid.F - 0.5 * (l.F + r.F) > tolerance / 2 && r.d - l.d > 1e-9 * p.R && done.size() < 65536) {
+      todo.push_back({mid, r});
+      todo.push_back({l, mid});
+    } else {
+      done.push_back(r);
+    }
+  }
+  for (const Sample& s : done) out.push_back({s.u * ux + s.d * nx, s.u * uy + s.d * ny, s.F + m * s.u});
+}
+
 Vec3 upward_unit_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
   Vec3 n = normalized(cross(p1 - p0, p2 - p0));
   if (n.z < 0) n = -n;

@@ -9,10 +9,10 @@
 // (inscribed), so:
 //   vertex offset  = P translated to the vertex (the sphere / vertex torus /
 //                    flat disc),
-//   edge offset    = the top of segment + P: P at both ends (drawn as the
-//                    vertex offsets) and, for each edge of P on its silhouette
-//                    along the segment, the parallelogram it sweeps (the
-//                    cylinder / swept torus / swept disc),
+//   edge offset    = the top of segment + (-C): the vertex offsets at both
+//                    ends and, between, parallelograms between generators
+//                    of the exact surface (the cylinder / swept torus / swept
+//                    disc; edge_generators),
 //   face offset    = the facet moved by the thesis's offset vector (eq. 3.3),
 //                    exact.
 // The top of a polytope inscribed in a convex solid is never above the
@@ -20,9 +20,14 @@
 // spokes of P are chosen so that, over P's own shadow, it is at most
 // `tolerance` below (radial chords <= tolerance/2, angular chords <=
 // tolerance/2). Where the exact surface is vertical (the rim of a vertex
-// disc, the sides of an edge's sweep) P's shadow is an inscribed polygon of
-// the exact shadow: a node in that sliver (at most sliver_width() wide) gets
-// its height from whatever lies below instead.
+// disc) P's shadow is an inscribed polygon of the exact shadow: a node in
+// that sliver (at most sliver_width() wide) gets its height from whatever
+// lies below instead.
+//
+// The edge offsets are not swept from P (P's rim polygon, swept along a
+// sloping edge, falls short of the disc along the edge by up to
+// sqrt(2 R sliver), which the slope turns into height): each edge gets its own
+// generators on the exact surface (edge_generators).
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -72,6 +77,18 @@ class CutterCap {
   double R_ = 0;
   double height_error_bound_ = 0;
 };
+
+// The edge offset of segment a-b: a ruled surface whose generators run
+// parallel to the segment (for each lateral offset d from the segment's XY
+// line, the height rises along it with the segment's slope), its cross
+// section F(d) = max_u (-m u - h(sqrt(d^2 + u^2))) concave in d. Returns the
+// points q_k (offsets from a point of the segment, on the inverted cutter's
+// top) of generators at lateral offsets from -R to R, sampled so that the
+// chords of F are at most `tolerance` below it; the parallelograms between
+// consecutive generators, from a + q_k to b + q_k, are the edge offset's
+// tessellation (the ends beyond them are the vertex offsets'). Empty for a
+// vertical segment (its offset is its upper vertex's).
+void edge_generators(const Cutter& cutter, const Vec3& a, const Vec3& b, double tolerance, std::vector<Vec3>& out);
 
 // The thesis's face offset (eq. 3.3) of a facet for the tool tip: the facet
 // moved by rk * n + rc * n_xy / |n_xy| - rk * z, n its upward unit normal.
