@@ -28,7 +28,7 @@
 namespace cncstream::gl {
 
 struct GlClOptions {
-  double tolerance = 0.01;        // chordal tolerance of the offset tessellation, mm
+  double tolerance = 0.05;        // chordal tolerance of the offset tessellation, mm
   bool trim = false;              // the thesis's bounding-space trimming
   std::optional<double> floor;    // height of untouched nodes; default the mesh's lowest z
   std::size_t max_tile = 0;       // framebuffer side in pixels; 0: the GL's limit, at most 4096

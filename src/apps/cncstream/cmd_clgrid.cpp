@@ -128,7 +128,7 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
                   "exact: the exact CPU engine; gl: the thesis's depth buffer (OpenGL 3.3 through headless EGL)")
       ->check(CLI::IsMember({"exact", "gl"}));
   sub->add_option("--gl-tolerance", o->gl_tolerance,
-                  "GL engine: chordal tolerance of the offset tessellation, mm (default 0.01); nodes are at most this below the exact surface")
+                  "GL engine: chordal tolerance of the offset tessellation, mm (default 0.05; llvmpipe time grows about as tolerance^-1.5); nodes are at most this below the exact surface")
       ->check(CLI::PositiveNumber);
   sub->add_flag("--trim", o->trim, "GL engine: the thesis's bounding-space trimming (can gouge: shows what it does)");
   sub->add_option("-o,--output", o->out, "Output: .csv, .png or .f32")->required();
