@@ -343,9 +343,12 @@ class CapDraw {
   std::vector<float> inst_;
 };
 
-// Manifold edges that cannot raise the envelope (a valley or a flat fold
-// between two non-steep facets; the exact engine's rule): their facets' face
-// offsets cover them.
+// Manifold edges between two coplanar non-steep facets: their face offsets
+// are moved by the same vector, so they share the offset edge exactly and
+// the rasterizer covers every node along it. (The exact engine also leaves
+// out valley edges; there the two face offsets meet along different lines,
+// and a node in the crack between them, which the exact engine's inclusion
+// tolerance catches, would fall through to what lies below.)
 struct EdgeSlot {
   std::uint32_t a = 0, b = 0;
   std::uint32_t opposite[2] = {0, 0};
@@ -358,6 +361,7 @@ bool redundant(const Mesh& m, const EdgeSlot& s) {
   const Vec3 oa = m.vertices[s.opposite[0]], ob = m.vertices[s.opposite[1]];
   const Vec3 na = upward_unit_normal(pa, pb, oa), nb = upward_unit_normal(pa, pb, ob);
   if (na.z < 0.01 || nb.z < 0.01) return false;
+  if (norm(na - nb) > 1e-9) return false;
   const bool ha = std::hypot(na.x, na.y) < 1e-9, hb = std::hypot(nb.x, nb.y) < 1e-9;
   if (ha != hb) return false;
   const double ex = pb.x - pa.x, ey = pb.y - pa.y;
@@ -516,7 +520,7 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
     for (const auto& t : mesh.triangles)
       for (auto i : t) used[i] = 1;
     for (const EdgeSlot& s : mesh_edges(mesh))
-      if (!opt.skip_concave_edges || !redundant(mesh, s)) edges.push_back({s.a, s.b, {}});
+      if (!opt.skip_coplanar_edges || !redundant(mesh, s)) edges.push_back({s.a, s.b, {}});
     for (std::uint32_t v = 0; v < used.size(); ++v)
       if (used[v]) verts.push_back({v, {}});
   }
@@ -535,6 +539,8 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
 
   Batch batch(opt.trim);
   CapDraw caps(cap, opt.trim);
+  // The radius of the circle inside the cap's rim polygon (a hair less).
+  const double r_in = cutter.radius * std::cos(M_PI / static_cast<double>(cap.spokes())) * (1 - 1e-7);
   std::vector<float> depth(tw * th);
   const double R = cutter.radius;
   for (std::size_t tj = 0; tj < spec.ny; tj += th)
@@ -575,10 +581,34 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
         const Vec3 a = mesh.vertices[e.a], b = mesh.vertices[e.b];
         if (outside(std::min(a.x, b.x) - R, std::min(a.y, b.y) - R, std::max(a.x, b.x) + R, std::max(a.y, b.y) + R)) continue;
         const Planes* pl = opt.trim ? &e.planes : nullptr;
+        // The uphill end's generators start on the exact rim of its vertex
+        // offset, whose drawn polygon is inscribed: an apron, flat at the
+        // lower of the two generators' heights, reaches back from them into
+        // the polygon (inside the disc, where the vertex offset is at least
+        // that high), so no lens between polygon and rim is left uncovered.
+        const double L = std::hypot(b.x - a.x, b.y - a.y);
+        const double m = L > 0 ? (b.z - a.z) / L : 0.0;
+        const Vec3 up = m < 0 ? a : b;
+        const Vec3 dir = L > 0 ? Vec3{(b.x - a.x) / L, (b.y - a.y) / L, 0} * (m < 0 ? -1.0 : 1.0) : Vec3{};
+        auto apron = [&](const Vec3& q, double& delta) {  // false: the generator cannot reach inside
+          const double sdot = -(q.x * dir.x + q.y * dir.y), c2 = q.x * q.x + q.y * q.y - r_in * r_in;
+          if (c2 <= 0) return delta = 0, true;
+          if (sdot * sdot < c2) return false;
+          delta = sdot - std::sqrt(sdot * sdot - c2) + 1e-6 * R;
+          return true;
+        };
         for (std::size_t g = gen_first[k]; g + 1 < gen_first[k + 1]; ++g) {
           const Vec3 q1 = gens[g], q2 = gens[g + 1];
           batch.triangle(a + q1, a + q2, b + q2, origin, tm, pl);
           batch.triangle(a + q1, b + q2, b + q1, origin, tm, pl);
+          double d1 = 0, d2 = 0;
+          if (m != 0 && apron(q1, d1) && apron(q2, d2) && (d1 > 0 || d2 > 0)) {
+            const double z = up.z + std::min(q1.z, q2.z);
+            const Vec3 p1{up.x + q1.x, up.y + q1.y, z}, p2{up.x + q2.x, up.y + q2.y, z};
+            const Vec3 p3 = p2 + dir * d2, p4 = p1 + dir * d1;
+            batch.triangle(p1, p2, p3, origin, tm, pl);
+            batch.triangle(p1, p3, p4, origin, tm, pl);
+          }
         }
       }
       batch.flush();

@@ -32,7 +32,7 @@ struct GlClOptions {
   bool trim = false;              // the thesis's bounding-space trimming
   std::optional<double> floor;    // height of untouched nodes; default the mesh's lowest z
   std::size_t max_tile = 0;       // framebuffer side in pixels; 0: the GL's limit, at most 4096
-  bool skip_concave_edges = true; // leave out valley / coplanar manifold edges (as the exact engine does)
+  bool skip_coplanar_edges = true; // leave out manifold edges between coplanar facets (their face offsets meet)
   int egl_platform = 0x31DD;      // EGL_PLATFORM_SURFACELESS_MESA
 };
 
