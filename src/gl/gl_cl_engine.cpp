@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -448,6 +449,10 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   st.sliver_width = cap.sliver_width();
   st.height_error_bound = cap.height_error_bound();
 
+  // One grid at a time per process: EGL's surfaceless display is one per
+  // process, and each call initializes and terminates it.
+  static std::mutex one_at_a_time;
+  const std::lock_guard<std::mutex> lock(one_at_a_time);
   const EglContext ctx(opt.egl_platform);
   st.renderer = ctx.renderer();
   if (spec.size() == 0 || box.empty()) {

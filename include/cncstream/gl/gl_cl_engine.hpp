@@ -7,11 +7,14 @@
 // (i, j): the same nodes, format and floor as the exact engine's ClGrid.
 //
 // Without trimming, every node is <= the exact engine's height (up to float
-// rounding, see docs/PERFORMANCE.md) and >= it minus the tolerance, except
-// in slivers at most CutterCap::sliver_width() wide beside places where the
-// exact surface is vertical. With `trim` (the thesis's bounding spaces, 3.4)
-// each facet's edge and vertex offsets are clipped to the facet's vertical
-// prism, which drops parts of the envelope: nodes can fall far below.
+// rounding: measured <= 0.002 mm, see docs/PERFORMANCE.md) and >= it minus
+// the tolerance, except at nodes right beside a vertical part of the exact
+// surface (a vertex offset's rim, a wall): within the rasterizer's sub-pixel
+// snap (1/256 pixel) a node may be lit from the top of the wall, and within
+// CutterCap::sliver_width() of a rim it may miss it. With `trim` (the
+// thesis's bounding spaces, 3.4) each facet's edge and vertex offsets are
+// clipped to the facet's vertical prism, which drops parts of the envelope:
+// nodes can fall far below.
 //
 // Needs an OpenGL 3.3 core context through EGL (Mesa's surfaceless platform:
 // llvmpipe without a GPU); throws GlError naming what failed when there is
@@ -48,7 +51,8 @@ struct GlClStats {
 };
 
 // Throws std::invalid_argument for a bad spec or tolerance, GlError when no
-// GL context can be made or used.
+// GL context can be made or used. Calls from several threads run one after
+// the other (one EGL display per process).
 ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec& spec,
                           const GlClOptions& options = {}, GlClStats* stats = nullptr);
 
