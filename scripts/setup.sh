@@ -5,7 +5,8 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libboost-dev libserialport-dev libusb-1.0-0-dev
-  libglfw3-dev libgl-dev libegl-dev xvfb
+  libglfw3-dev libgl-dev libegl-dev libopengl-dev xvfb
+  libegl-mesa0 libgl1-mesa-dri  # llvmpipe for the depth-buffer CL engine (src/gl/) without a GPU
   libsqlite3-dev libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   libspdlog-dev libfmt-dev libtbb-dev libpng-dev nettle-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev

@@ -23,6 +23,7 @@ declare -A may_include=(
   [session]="geometry image cam gcode protocol transport"
   [pendant]="geometry image cam gcode protocol transport session"
   [daemon]="geometry image cam gcode jobs protocol transport session pendant"
+  [gl]="geometry image cam"
 )
 # The machine session serves `PORT=sim` with the in-process simulator: it
 # may include cncsim (the simulator never includes it back).

@@ -1,4 +1,5 @@
-// `cncstream clgrid PART.stl --tool SPEC --grid STEP [--bounds ...] [--floor Z] -o OUT.{csv,png,f32}`
+// `cncstream clgrid PART.stl --tool SPEC --grid STEP [--bounds ...] [--floor Z]
+//  [--engine exact|gl [--gl-tolerance T] [--trim]] -o OUT.{csv,png,f32}`
 #include <fmt/core.h>
 
 #include <chrono>
@@ -12,6 +13,7 @@
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/cam/height_field_io.hpp"
 #include "cncstream/cam/raster.hpp"
+#include "cncstream/gl/gl_cl_engine.hpp"
 #include "cncstream/image/height_map.hpp"
 #include "cncstream/jobs/output_file.hpp"
 #include "commands.hpp"
@@ -72,6 +74,37 @@ void write_png_map(const ClEngine& engine, const GridSpec& spec, const std::file
   write_png(out, render_height_map(mg, g.z, {}, ho));
 }
 
+// The GL engine's whole grid, written in the same formats as the exact
+// engine's (same nodes, same CSV and float32 layout).
+void write_grid(const ClGrid& g, const std::string& ext, const std::filesystem::path& out,
+                const std::filesystem::path& final_path, const std::string& title, const std::string& subtitle) {
+  const GridSpec& spec = g.spec;
+  if (ext == ".csv") {
+    std::ofstream f(out, std::ios::binary);
+    if (!f) throw std::runtime_error(out.string() + ": cannot open for writing");
+    f << "x,y,z\n";
+    std::string row;
+    for (std::size_t j = 0; j < spec.ny; ++j) {
+      row.clear();
+      for (std::size_t i = 0; i < spec.nx; ++i)
+        fmt::format_to(std::back_inserter(row), "{:.6f},{:.6f},{:.6f}\n", spec.x(i), spec.y(j), g.at(i, j));
+      f << row;
+    }
+    f.close();
+    if (!f) throw std::runtime_error(out.string() + ": write failed");
+  } else if (ext == ".f32") {
+    write_height_field(out, spec, g.z);
+    if (out != final_path) std::filesystem::rename(height_field_sidecar(out), height_field_sidecar(final_path));
+  } else {
+    MapGrid mg{spec.nx, spec.ny, spec.dx, spec.dy, spec.x0, spec.y0};
+    HeightMapOptions ho;
+    ho.title = title;
+    ho.subtitle = subtitle;
+    ho.max_map_pixels = 1000;
+    write_png(out, render_height_map(mg, g.z, {}, ho));
+  }
+}
+
 }  // namespace
 
 void register_clgrid(CLI::App& app, CommandRegistry& registry) {
@@ -81,6 +114,9 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
     double grid = 0;
     std::optional<double> floor;
     unsigned threads = 0;
+    std::string engine = "exact";
+    std::optional<double> gl_tolerance;
+    bool trim = false;
     ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Opts>();
@@ -92,6 +128,13 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("--bounds", o->bounds, "X0,Y0,X1,Y1 in the STL's coordinates (default: XY box grown by the tool radius)");
   sub->add_option("--floor", o->floor, "Height where the tool touches nothing (default: the mesh's lowest z)");
   sub->add_option("--threads", o->threads, "Worker threads (0: all cores)");
+  sub->add_option("--engine", o->engine,
+                  "exact: the exact CPU engine; gl: the thesis's depth buffer (OpenGL 3.3 through headless EGL)")
+      ->check(CLI::IsMember({"exact", "gl"}));
+  sub->add_option("--gl-tolerance", o->gl_tolerance,
+                  "GL engine: chordal tolerance of the offset tessellation, mm (default 0.05; llvmpipe time grows about as tolerance^-1.5); nodes are at most this below the exact surface")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--trim", o->trim, "GL engine: the thesis's bounding-space trimming (can gouge: shows what it does)");
   sub->add_option("-o,--output", o->out, "Output: .csv, .png or .f32")->required();
   add_progress_option(sub, o->progress);
   registry.add(sub, [o] {
@@ -107,12 +150,34 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
       b = {v[0], v[1], v[2], v[3]};
     }
     const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, o->grid, o->grid);
+    if (o->engine != "gl" && (o->gl_tolerance || o->trim))
+      throw std::invalid_argument("--gl-tolerance and --trim apply to --engine gl only");
+    const std::string title = "CL surface (tool tip) of " + std::filesystem::path(o->part.stl).filename().string();
+    if (o->engine == "gl") {
+      gl::GlClOptions glo;
+      if (o->gl_tolerance) glo.tolerance = *o->gl_tolerance;
+      glo.trim = o->trim;
+      glo.floor = o->floor;
+      gl::GlClStats st;
+      const ClGrid g = gl::compute_cl_grid_gl(*mesh, cutter, spec, glo, &st);
+      std::string subtitle = cutter.description();
+      subtitle.append(", depth buffer, tolerance ");
+      subtitle.append(fmt::format("{:g} mm{}", glo.tolerance, glo.trim ? ", trimmed" : ""));
+      jobs::write_file_atomically(o->out, [&](const std::filesystem::path& file) {
+        write_grid(g, ext, file, o->out, title, subtitle);
+      });
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::cout << "grid " << spec.nx << " x " << spec.ny << " = " << spec.size() << " nodes, step " << o->grid
+                << " mm, floor " << g.floor << "; GL engine (" << st.renderer << "), tolerance " << glo.tolerance
+                << " mm" << (glo.trim ? ", trimmed" : "") << ", " << st.triangles << " triangles in " << st.tiles
+                << " tile(s); wrote " << o->out << " in " << s << " s\n";
+      return 0;
+    }
     ClOptions clo;
     clo.floor = o->floor;
     clo.threads = o->threads;
     LongJob job(o->progress, 0);  // the engine's own --threads
     const jobs::JobControl control = job.control();
-    const std::string title = "CL surface (tool tip) of " + std::filesystem::path(o->part.stl).filename().string();
     double floor_z = 0;
     try {
       if (control.stop.stop_requested()) throw jobs::Cancelled();
