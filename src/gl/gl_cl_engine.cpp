@@ -21,6 +21,12 @@ namespace cncstream::gl {
 
 namespace {
 
+// A vertex attribute's place in the bound buffer: OpenGL takes the byte offset
+// as a pointer (its API's convention since buffer objects replaced arrays).
+const void* buffer_offset(std::size_t floats) {
+  return reinterpret_cast<const void*>(floats * sizeof(float));  // NOLINT(performance-no-int-to-ptr): see above
+}
+
 // ---------------------------------------------------------------- shaders
 
 const char* const kVertexShader = R"(#version 330 core
@@ -140,7 +146,7 @@ bool prism_planes(const Vec3& a, const Vec3& b, const Vec3& c, Planes& out) {
   if (!(std::fabs(area2) > 1e-12 * scale * scale)) return false;
   const Vec3 v[3] = {a, b, c};
   const double sgn = area2 > 0 ? 1.0 : -1.0;
-  for (int k = 0; k < 3; ++k) {
+  for (std::size_t k = 0; k < 3; ++k) {
     const Vec3& p = v[k];
     const Vec3& q = v[(k + 1) % 3];
     double nx = -(q.y - p.y) * sgn, ny = (q.x - p.x) * sgn;
@@ -210,7 +216,7 @@ class Batch {
     glBindBuffer(GL_ARRAY_BUFFER, vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data_.size() * sizeof(float)), data_.data(), GL_STREAM_DRAW);
     const auto st = static_cast<GLsizei>(stride() * sizeof(float));
-    auto at = [](std::size_t floats) { return reinterpret_cast<const void*>(floats * sizeof(float)); };
+    auto at = [](std::size_t floats) { return buffer_offset(floats); };
     glEnableVertexAttribArray(0);
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, st, at(0));
     glEnableVertexAttribArray(5);
@@ -272,7 +278,7 @@ class CapDraw {
     glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(tris.size() * sizeof(float)), tris.data(), GL_STATIC_DRAW);
     const GLsizei st = 10 * sizeof(float);
-    auto at = [](std::size_t floats) { return reinterpret_cast<const void*>(floats * sizeof(float)); };
+    auto at = [](std::size_t floats) { return buffer_offset(floats); };
     glEnableVertexAttribArray(0);
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, st, at(0));
     glEnableVertexAttribArray(5);
@@ -312,9 +318,7 @@ class CapDraw {
     // Instances in chunks: llvmpipe bins a whole draw before rasterizing it.
     const std::size_t n = instances(), chunk = 4096;
     for (std::size_t first = 0; first < n; first += chunk) {
-      auto at = [&](std::size_t floats) {
-        return reinterpret_cast<const void*>((first * stride() + floats) * sizeof(float));
-      };
+      auto at = [&](std::size_t floats) { return buffer_offset(first * stride() + floats); };
       glEnableVertexAttribArray(1);
       glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, st, at(0));
       glVertexAttribDivisor(1, 1);

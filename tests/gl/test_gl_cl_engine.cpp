@@ -97,8 +97,10 @@ class GlClRealMesh : public ::testing::TestWithParam<RealMesh> {};
 
 TEST_P(GlClRealMesh, WithinTheToleranceBelowTheExactGridAndNeverAbove) {
   const Mesh m = load(GetParam());
-  // The plaque's 17,500 vertex offsets at 0.1 mm take llvmpipe over 10 s.
-  const double tol = GetParam().file == "plaque" ? 0.2 : 0.1;
+  // The plaque's 17,500 vertex offsets and the lion's at 0.1 mm take over 10 s
+  // in Release and ten times that under the sanitizers; 0.2 mm halves them.
+  const bool large = GetParam().file == "plaque" || GetParam().file == "lion_head_relief.stl";
+  const double tol = large ? 0.2 : 0.1;
   const Cutter c = parse_cutter_spec(GetParam().tool);
   const XYBounds b = default_bounds(m, c);
   const double step = std::max(b.x1 - b.x0, b.y1 - b.y0) / 100;
@@ -131,10 +133,14 @@ TEST_P(GlClRealMesh, WithinTheToleranceBelowTheExactGridAndNeverAbove) {
   EXPECT_LE(floor_mismatch, r.sliver);
 }
 
+// The plaque with the flat cutter only: its 17,500 vertex caps for the ball
+// and the bull took 52 s and 38 s of the sanitizer build (5 s in Release);
+// the other meshes take all three, and tools/compare_gl_cl.cpp compares the
+// plaque with every cutter on its full 0.1 mm grid (docs/PERFORMANCE.md).
 std::vector<RealMesh> real_meshes() {
-  std::vector<RealMesh> out;
-  for (const RealMesh& m : {RealMesh{"plaque", 1.0, ""}, RealMesh{"gearwheel.bin.stl", 2.5, ""},
-                            RealMesh{"lion_head_relief.stl", 120.0, ""}, RealMesh{"fandisk.stl", 100.0, ""}})
+  std::vector<RealMesh> out{{"plaque", 1.0, "flat:6"}};
+  for (const RealMesh& m : {RealMesh{"gearwheel.bin.stl", 2.5, ""}, RealMesh{"lion_head_relief.stl", 120.0, ""},
+                            RealMesh{"fandisk.stl", 100.0, ""}})
     for (const char* tool : {"flat:6", "ball:6", "bull:6:1"}) {
       RealMesh r = m;
       r.tool = tool;
