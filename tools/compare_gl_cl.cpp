@@ -23,6 +23,7 @@
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/geometry/stl.hpp"
+#include "cncstream/gl/boundary_nodes.hpp"
 #include "cncstream/gl/gl_cl_engine.hpp"
 
 using namespace cncstream;
@@ -48,20 +49,6 @@ struct Errors {
   std::size_t worst_above = 0, worst_below = 0;
 };
 
-// The highest / lowest exact height on a circle of radius r around (x, y);
-// lowest is -inf where a point of the circle touches nothing.
-double exact_around(const ClEngine& e, double x, double y, double r, bool highest) {
-  double best = highest ? -HUGE_VAL : HUGE_VAL;
-  for (int k = 0; k < 32; ++k) {
-    const double th = 2 * M_PI * k / 32;
-    bool untouched = false;
-    double z = e.height_at(x + r * std::cos(th), y + r * std::sin(th), untouched);
-    if (untouched && !highest) z = -HUGE_VAL;  // nothing there: any height is consistent
-    best = highest ? std::max(best, z) : std::min(best, z);
-  }
-  return best;
-}
-
 // Node by node. A node above by more than eps that the exact surface reaches
 // within the rasterizer's snap distance, or below by more than tol + eps
 // that the exact surface drops to within the cap's sliver width, is a
@@ -74,11 +61,12 @@ Errors compare(const ClEngine& engine, const ClGrid& exact, const ClGrid& g, dou
   for (std::size_t k = 0; k < exact.z.size(); ++k) {
     const double d = g.z[k] - exact.z[k];
     const double x = s.x(k % s.nx), y = s.y(k / s.nx);
-    if (classify && d > eps && exact_around(engine, x, y, snap, true) >= g.z[k] - eps) {
+    if (classify && d > eps && gl::exact_height_around(engine, x, y, snap, true) >= g.z[k] - eps) {
       ++e.boundary;
       continue;
     }
-    if (classify && d < -tol - eps && exact_around(engine, x, y, 1.05 * sliver + snap, false) <= g.z[k] + tol + eps) {
+    if (classify && d < -tol - eps &&
+        gl::exact_height_around(engine, x, y, 1.05 * sliver + snap, false) <= g.z[k] + tol + eps) {
       ++e.boundary;
       continue;
     }
