@@ -25,7 +25,7 @@ cmake --build build/asan -j"$jobs"
 lap "ASan+UBSan tests, with clang-tidy beside them at the lowest priority"
 # clang-tidy over src/ and sim/ (.clang-tidy; about 400 CPU-s) takes the CPU
 # time the tests leave idle while they wait on simulated machines and sockets;
-# at nice 19 it gets almost nothing while they are busy. Its own session, so
+# at nice 19 the tests come first (the step still takes longer: docs/PERFORMANCE.md). Its own session, so
 # that a failing step stops it and its children too.
 setsid nice -n 19 bash tools/tidy.sh build/asan >build/asan/tidy.log 2>&1 &
 tidy_pid=$!
