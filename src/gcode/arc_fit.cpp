@@ -10,27 +10,16 @@
 #include <stdexcept>
 #include <string>
 
+#include "cncstream/gcode/arc_segments.hpp"
+
 namespace cncstream {
 
 namespace {
 
 using gcode::Plane;
 
-// A plane's two axes in the order G2/G3 measure turns (G17: X then Y, G18: Z
-// then X, G19: Y then Z), and the axis normal to it. Counter-clockwise in
-// (first, second) is G3 in all three: seen from the normal's positive side.
-struct PlaneAxes {
-  int first, second, normal;
-};
-PlaneAxes axes_of(Plane p) {
-  switch (p) {
-    case Plane::XY: return {0, 1, 2};
-    case Plane::ZX: return {2, 0, 1};
-    default: return {1, 2, 0};
-  }
-}
-double coord(const Vec3& v, int i) { return i == 0 ? v.x : (i == 1 ? v.y : v.z); }
-void set_coord(Vec3& v, int i, double value) { (i == 0 ? v.x : (i == 1 ? v.y : v.z)) = value; }
+using gcode::axes_of;
+using gcode::PlaneAxes;
 
 struct P2 {
   double a = 0, b = 0;
@@ -111,7 +100,7 @@ class Fitter {
     const PlaneAxes ax = axes_of(*plane);
     // A run over material below: the plane must be upright (Z one of its axes).
     if (o_.material_below && *plane == Plane::XY) return std::nullopt;
-    auto at = [&](std::size_t k) { return P2{coord(pts_[k], ax.first), coord(pts_[k], ax.second)}; };
+    auto at = [&](std::size_t k) { return P2{component(pts_[k], ax.first), component(pts_[k], ax.second)}; };
     const P2 A = at(i), B = at(j);
     const double d = len2(B - A);
     if (!(d > 1e-6)) return std::nullopt;
@@ -257,7 +246,7 @@ class Fitter {
   // The arc from i to j about M + t n (rounded as written), if it holds exactly.
   std::optional<FittedMove> arc_with_centre(Plane plane, const PlaneAxes& ax, std::size_t i, std::size_t j, double t,
                                             P2 M, P2 n, bool ccw, Side side) const {
-    auto at = [&](std::size_t k) { return P2{coord(pts_[k], ax.first), coord(pts_[k], ax.second)}; };
+    auto at = [&](std::size_t k) { return P2{component(pts_[k], ax.first), component(pts_[k], ax.second)}; };
     const P2 A = at(i), B = at(j);
     auto direction_angle = [&](P2 c, P2 p) { return ccw ? ccw_angle(A - c, p - c) : ccw_angle(p - c, A - c); };
     // The centre as it will be written: offsets from the start, rounded.
@@ -317,8 +306,8 @@ class Fitter {
     m.to = pts_[j];
     m.plane = plane;
     m.clockwise = !ccw;
-    set_coord(m.center_offset, ax.first, off.a);
-    set_coord(m.center_offset, ax.second, off.b);
+    component(m.center_offset, ax.first) = off.a;
+    component(m.center_offset, ax.second) = off.b;
     m.radius = r;
     m.sweep = sweep;
     return m;
@@ -335,7 +324,7 @@ class Fitter {
                          double margin) const {
     const bool z_first = ax.first == 2;
     auto sz = [&](std::size_t k) {
-      const P2 p{coord(pts_[k], ax.first), coord(pts_[k], ax.second)};
+      const P2 p{component(pts_[k], ax.first), component(pts_[k], ax.second)};
       return z_first ? P2{p.b, p.a} : p;  // (row position, height)
     };
     const P2 c = z_first ? P2{C.b, C.a} : C;

@@ -10,25 +10,14 @@ namespace {
 constexpr double kAngularTravelEpsilon = 5e-7;  // GRBL ARC_ANGULAR_TRAVEL_EPSILON
 constexpr double kMaxArcSegments = 65535;       // GRBL's segment counter is a uint16_t
 
-struct PlaneAxes { int a0, a1, linear; };
-PlaneAxes axes_of(Plane p) {
-  switch (p) {
-    case Plane::XY: return {0, 1, 2};
-    case Plane::ZX: return {2, 0, 1};
-    default: return {1, 2, 0};
-  }
-}
-double get(const Vec3& v, int i) { return i == 0 ? v.x : (i == 1 ? v.y : v.z); }
-void set(Vec3& v, int i, double value) { (i == 0 ? v.x : (i == 1 ? v.y : v.z)) = value; }
-
 }  // namespace
 
 double arc_angular_travel(const ArcMove& arc) {
   const PlaneAxes ax = axes_of(arc.plane);
-  const double r0 = get(arc.from, ax.a0) - get(arc.center, ax.a0);
-  const double r1 = get(arc.from, ax.a1) - get(arc.center, ax.a1);
-  const double t0 = get(arc.to, ax.a0) - get(arc.center, ax.a0);
-  const double t1 = get(arc.to, ax.a1) - get(arc.center, ax.a1);
+  const double r0 = component(arc.from, ax.first) - component(arc.center, ax.first);
+  const double r1 = component(arc.from, ax.second) - component(arc.center, ax.second);
+  const double t0 = component(arc.to, ax.first) - component(arc.center, ax.first);
+  const double t1 = component(arc.to, ax.second) - component(arc.center, ax.second);
   double travel = std::atan2(r0 * t1 - r1 * t0, r0 * t0 + r1 * t1);
   if (arc.clockwise) {
     if (travel >= -kAngularTravelEpsilon) travel -= 2 * std::numbers::pi;
@@ -52,18 +41,18 @@ std::vector<Vec3> segment_arc(const ArcMove& arc, double tolerance) {
   }
   std::vector<Vec3> points;
   points.reserve(segments + 1);
-  const double c0 = get(arc.center, ax.a0), c1 = get(arc.center, ax.a1);
-  const double start_angle = std::atan2(get(arc.from, ax.a1) - c1, get(arc.from, ax.a0) - c0);
-  const double start_radius = std::hypot(get(arc.from, ax.a0) - c0, get(arc.from, ax.a1) - c1);
-  const double lin0 = get(arc.from, ax.linear);
-  const double lin_travel = get(arc.to, ax.linear) - lin0;
+  const double c0 = component(arc.center, ax.first), c1 = component(arc.center, ax.second);
+  const double start_angle = std::atan2(component(arc.from, ax.second) - c1, component(arc.from, ax.first) - c0);
+  const double start_radius = std::hypot(component(arc.from, ax.first) - c0, component(arc.from, ax.second) - c1);
+  const double lin0 = component(arc.from, ax.normal);
+  const double lin_travel = component(arc.to, ax.normal) - lin0;
   for (std::size_t i = 1; i < segments; ++i) {
     const double f = static_cast<double>(i) / static_cast<double>(segments);
     const double a = start_angle + travel * f;
     Vec3 p;
-    set(p, ax.a0, c0 + start_radius * std::cos(a));
-    set(p, ax.a1, c1 + start_radius * std::sin(a));
-    set(p, ax.linear, lin0 + lin_travel * f);
+    component(p, ax.first) = c0 + start_radius * std::cos(a);
+    component(p, ax.second) = c1 + start_radius * std::sin(a);
+    component(p, ax.normal) = lin0 + lin_travel * f;
     points.push_back(p);
   }
   points.push_back(arc.to);

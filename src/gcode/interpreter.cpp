@@ -43,8 +43,6 @@ enum class Flow { Running, Paused, OptionalStop, End2, End30 };
 enum ValueWord : unsigned { kF, kI, kJ, kK, kL, kN, kP, kR, kS, kT, kX, kY, kZ };
 constexpr unsigned bit(unsigned b) { return 1u << b; }
 
-double& axis(Vec3& v, int i) { return i == 0 ? v.x : (i == 1 ? v.y : v.z); }
-double axis(const Vec3& v, int i) { return i == 0 ? v.x : (i == 1 ? v.y : v.z); }
 
 struct Block {
   ModalState modal;
@@ -310,7 +308,7 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
 
   if (b.modal.inches) {
     for (int i = 0; i < 3; ++i)
-      if (axis_words & (1u << i)) axis(b.xyz, i) *= kMmPerInch;
+      if (axis_words & (1u << i)) component(b.xyz, i) *= kMmPerInch;
   }
 
   if (axis_command == AxisCommand::ToolLength && b.modal.tool_length_dynamic) {
@@ -346,10 +344,10 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
       for (int i = 0; i < 3; ++i) {
         if (!(axis_words & (1u << i))) continue;
         if (l == 20) {
-          axis(data, i) = axis(state.position, i) - axis(state.g92, i) - axis(b.xyz, i);
-          if (i == 2) axis(data, i) -= state.tool_length_offset;
+          component(data, i) = component(state.position, i) - component(state.g92, i) - component(b.xyz, i);
+          if (i == 2) component(data, i) -= state.tool_length_offset;
         } else {
-          axis(data, i) = axis(b.xyz, i);
+          component(data, i) = component(b.xyz, i);
         }
       }
       b.ijk = data;
@@ -359,10 +357,10 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
       if (!axis_words) return fail(state, kNoAxisWords);
       for (int i = 0; i < 3; ++i) {
         if (axis_words & (1u << i)) {
-          axis(b.xyz, i) = axis(state.position, i) - axis(block_coord_system, i) - axis(b.xyz, i);
-          if (i == 2) axis(b.xyz, i) -= state.tool_length_offset;
+          component(b.xyz, i) = component(state.position, i) - component(block_coord_system, i) - component(b.xyz, i);
+          if (i == 2) component(b.xyz, i) -= state.tool_length_offset;
         } else {
-          axis(b.xyz, i) = axis(state.g92, i);
+          component(b.xyz, i) = component(state.g92, i);
         }
       }
       break;
@@ -371,13 +369,13 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
       if (axis_command != AxisCommand::ToolLength && axis_words) {
         for (int i = 0; i < 3; ++i) {
           if (!(axis_words & (1u << i))) {
-            axis(b.xyz, i) = axis(state.position, i);
+            component(b.xyz, i) = component(state.position, i);
           } else if (b.non_modal != NonModal::AbsoluteOverride) {
             if (!b.modal.incremental) {
-              axis(b.xyz, i) += axis(block_coord_system, i) + axis(state.g92, i);
-              if (i == 2) axis(b.xyz, i) += state.tool_length_offset;
+              component(b.xyz, i) += component(block_coord_system, i) + component(state.g92, i);
+              if (i == 2) component(b.xyz, i) += state.tool_length_offset;
             } else {
-              axis(b.xyz, i) += axis(state.position, i);
+              component(b.xyz, i) += component(state.position, i);
             }
           }
         }
@@ -388,7 +386,7 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
           Vec3 home = b.non_modal == NonModal::GoHome0 ? state.coords.g28 : state.coords.g30;
           if (axis_words) {
             for (int i = 0; i < 3; ++i)
-              if (!(axis_words & (1u << i))) axis(home, i) = axis(state.position, i);
+              if (!(axis_words & (1u << i))) component(home, i) = component(state.position, i);
           } else {
             axis_command = AxisCommand::None;
           }
@@ -424,8 +422,8 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
           arc_clockwise = b.modal.motion == MotionMode::ArcCW;
           if (!axis_words) return fail(state, kNoAxisWords);
           if (!(axis_words & ((1u << axis0) | (1u << axis1)))) return fail(state, kNoAxisWordsInPlane);
-          double x = axis(b.xyz, axis0) - axis(state.position, axis0);
-          double y = axis(b.xyz, axis1) - axis(state.position, axis1);
+          double x = component(b.xyz, axis0) - component(state.position, axis0);
+          double y = component(b.xyz, axis1) - component(state.position, axis1);
           if (value_words & bit(kR)) {
             value_words &= ~bit(kR);
             // GRBL refuses a target equal to the position; one that differs
@@ -442,20 +440,20 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
               b.r = -b.r;
             }
             b.ijk = Vec3{};
-            axis(b.ijk, axis0) = 0.5 * (x - y * h);
-            axis(b.ijk, axis1) = 0.5 * (y + x * h);
+            component(b.ijk, axis0) = 0.5 * (x - y * h);
+            component(b.ijk, axis1) = 0.5 * (y + x * h);
             arc_radius = b.r;
           } else {
             if (!(ijk_words & ((1u << axis0) | (1u << axis1)))) return fail(state, kNoOffsetsInPlane);
             value_words &= ~(bit(kI) | bit(kJ) | bit(kK));
             if (b.modal.inches) {
               for (int i = 0; i < 3; ++i)
-                if (ijk_words & (1u << i)) axis(b.ijk, i) *= kMmPerInch;
+                if (ijk_words & (1u << i)) component(b.ijk, i) *= kMmPerInch;
             }
-            x -= axis(b.ijk, axis0);
-            y -= axis(b.ijk, axis1);
+            x -= component(b.ijk, axis0);
+            y -= component(b.ijk, axis1);
             const double target_r = std::hypot(x, y);
-            arc_radius = std::hypot(axis(b.ijk, axis0), axis(b.ijk, axis1));
+            arc_radius = std::hypot(component(b.ijk, axis0), component(b.ijk, axis1));
             const double delta_r = std::fabs(target_r - arc_radius);
             if (delta_r > 0.005) {
               if (delta_r > 0.5) return fail(state, kInvalidTarget);
@@ -463,7 +461,7 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
             }
           }
           // Coordinates so large that the arithmetic overflows leave no arc to cut.
-          if (!std::isfinite(arc_radius) || !std::isfinite(axis(b.ijk, axis0)) || !std::isfinite(axis(b.ijk, axis1)))
+          if (!std::isfinite(arc_radius) || !std::isfinite(component(b.ijk, axis0)) || !std::isfinite(component(b.ijk, axis1)))
             return fail(state, kInvalidTarget);
           break;
         }
@@ -593,8 +591,8 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
         arc.from = s.position;
         arc.to = b.xyz;
         arc.center = s.position;
-        axis(arc.center, axis0) += axis(b.ijk, axis0);
-        axis(arc.center, axis1) += axis(b.ijk, axis1);
+        component(arc.center, axis0) += component(b.ijk, axis0);
+        component(arc.center, axis1) += component(b.ijk, axis1);
         arc.radius = arc_radius;
         arc.plane = s.modal.plane;
         arc.clockwise = arc_clockwise;

@@ -10,7 +10,6 @@ namespace {
 constexpr double kHuge = 1e30;
 constexpr double kMinLength = 1e-9;
 
-double component(const Vec3& v, int i) { return i == 0 ? v.x : (i == 1 ? v.y : v.z); }
 
 // Largest value along `unit` that keeps every axis within its own limit.
 double limit_by_axes(const Vec3& per_axis, const Vec3& unit) {

@@ -11,8 +11,6 @@ namespace cncstream::gcode {
 
 namespace {
 
-double coord(const Vec3& p, int axis) { return axis == 0 ? p.x : axis == 1 ? p.y : p.z; }
-
 // What a line says beyond its actions: its axis words, and whether its
 // move goes somewhere not relative to the work.
 struct LineWords {
@@ -89,14 +87,14 @@ ProgramExtent program_extent(const std::vector<std::string>& lines, double arc_t
       for (const Action& action : r.actions) {
         if (const auto* m = std::get_if<LinearMove>(&action)) {
           for (int i = 0; i < 3; ++i)
-            if (axes[i].known) axes[i].add(coord(m->to, i));
+            if (axes[i].known) axes[i].add(component(m->to, i));
         } else if (const auto* arc = std::get_if<ArcMove>(&action)) {
           // Its chords need a known start as well as a known end.
           for (const Vec3& p : arc_chords(*arc, arc_tolerance).points)
             for (int i = 0; i < 3; ++i)
-              if (axes[i].known && known_before[i]) axes[i].add(coord(p, i));
+              if (axes[i].known && known_before[i]) axes[i].add(component(p, i));
           for (int i = 0; i < 3; ++i)
-            if (axes[i].known) axes[i].add(coord(arc->to, i));
+            if (axes[i].known) axes[i].add(component(arc->to, i));
         }
       }
     }

@@ -8,6 +8,21 @@
 
 namespace cncstream::gcode {
 
+// A plane's two axes in the order G2/G3 measure turns (G17: X then Y, G18: Z
+// then X, G19: Y then Z; 0 = X, 1 = Y, 2 = Z), and the axis normal to it.
+// Counter-clockwise in (first, second) is G3 in all three: seen from the
+// normal's positive side.
+struct PlaneAxes {
+  int first, second, normal;
+};
+constexpr PlaneAxes axes_of(Plane p) {
+  switch (p) {
+    case Plane::XY: return {0, 1, 2};
+    case Plane::ZX: return {2, 0, 1};
+    default: return {1, 2, 0};
+  }
+}
+
 // Signed angular travel (radians, negative = clockwise) of an arc.
 double arc_angular_travel(const ArcMove& arc);
 

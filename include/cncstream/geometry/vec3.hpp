@@ -22,6 +22,11 @@ struct Vec3 {
   constexpr bool operator==(const Vec3& o) const = default;
 };
 
+// Coordinate by axis index (0 = X, 1 = Y, 2 = Z), for code that works on
+// whichever axes a plane or a loop names.
+constexpr double component(const Vec3& v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+constexpr double& component(Vec3& v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+
 constexpr Vec3 operator*(double s, const Vec3& v) { return v * s; }
 constexpr double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 constexpr Vec3 cross(const Vec3& a, const Vec3& b) {
