@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 namespace cncstream {
@@ -28,6 +29,17 @@ std::string fmt_num(double v) {
   return o.str();
 }
 }  // namespace
+
+Cutter grown_cutter(const Cutter& c, double leave) {
+  if (!(leave >= 0) || !std::isfinite(leave))
+    throw std::invalid_argument("stock to leave must be a finite length >= 0, got " + fmt_num(leave));
+  if (leave == 0) return c;
+  Cutter g = c;
+  g.radius = c.radius + leave;
+  g.corner_radius = c.corner_radius + leave;
+  g.type = c.type == CutterType::Ball ? CutterType::Ball : CutterType::Bull;
+  return g;
+}
 
 std::string Cutter::spec() const {
   switch (type) {

@@ -106,6 +106,7 @@ double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter&
   check_point(a, "a");
   check_point(b, "b");
   nodes_cut_ = 0;
+  last_max_depth_ = 0;
   const detail::SweptCutter sw(a, b, cutter);
   const double R = sw.radius(), zfloor = sw.lowest_tip_z();
   const GridSpec& g = grid_;
@@ -142,6 +143,7 @@ double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter&
       }
       if (cut < z) {
         dropped += z - cut;
+        last_max_depth_ = std::max(last_max_depth_, z - cut);
         z = cut;
         ++nodes_cut_;
       }

@@ -32,6 +32,15 @@ struct Cutter {
   std::string description() const;  // "6 mm bull-nose, 1 mm corner radius"
 };
 
+// The cutter grown by `leave` all round (its Minkowski sum with a ball of
+// radius leave, the tip moved down by leave): ball R -> ball R + leave, flat
+// R -> bull (R + leave, corner leave), bull (R, r) -> bull (R + leave, r +
+// leave). Where the grown cutter touches a part with its tip at z, the
+// cutter itself, tip at z + leave, keeps at least `leave` from the part in
+// every direction. leave = 0 gives the cutter itself. Throws
+// std::invalid_argument for a negative or non-finite leave.
+Cutter grown_cutter(const Cutter& cutter, double leave);
+
 class CutterSpecError : public std::invalid_argument {
  public:
   using std::invalid_argument::invalid_argument;

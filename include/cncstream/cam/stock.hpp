@@ -44,6 +44,10 @@ class HeightFieldStock {
 
   // Nodes whose height changed in the last cut_segment call (for live views).
   std::size_t nodes_cut() const { return nodes_cut_; }
+  // The largest height drop of a node in the last cut_segment call (mm; 0 if
+  // nothing was cut): the depth the move took off, for checks of a path's
+  // depth of cut per move.
+  double last_max_depth() const { return last_max_depth_; }
 
   // Total volume removed since construction (mm^3).
   double removed_volume() const { return removed_; }
@@ -57,6 +61,7 @@ class HeightFieldStock {
   std::size_t first_row_ = 0;
   std::vector<double> z_;
   std::size_t nodes_cut_ = 0;
+  double last_max_depth_ = 0;
   double removed_ = 0;
 };
 

@@ -1,0 +1,118 @@
+#pragma once
+// Z-level roughing from a stock block. The CL engine is that of the cutter
+// grown by the stock to leave (grown_cutter): its tip height plus `leave` is
+// the lowest the roughing cutter's tip may go at (x, y) and still keep
+// `leave` of material on the part in every direction. At each level z the
+// tip region {grown CL + leave <= z}, limited to the stock's XY box grown by
+// the cutter radius (so the block's sides are cleared), is cleared by
+// contour-parallel loops `stepover` apart (iso-lines of the region's distance
+// transform), ordered inside out (or outside in), the region's own boundary
+// last, in the climb direction for a clockwise spindle. The boundary comes
+// from the CL grid by marching squares refined with exact point queries.
+//
+// Why no move cuts deeper than the level step: the regions shrink as the
+// levels go down, and every level clears its whole region (loops closer than
+// the cutter radius, the boundary followed), so wherever the tip goes at a
+// level, the cutter's footprint was cleared to the level above. Entries ramp
+// along a loop of the region from the level above; links between loops stay
+// down when the straight move lies inside the region, otherwise the tool
+// lifts to just above the level above (when the move over lies over its
+// region) or to the clearance height above the stock.
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "cncstream/cam/checkpoint.hpp"
+#include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/cutter.hpp"
+#include "cncstream/cam/raster.hpp"
+
+namespace cncstream {
+
+// A rectangular block of material in model coordinates, top at `top`.
+struct StockBlock {
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  double top = 0;
+};
+
+enum class ClearingOrder { InsideOut, OutsideIn };
+
+struct RoughingParams {
+  double step_down = 3;      // mm between levels at most (the depth of cut of any move)
+  double stepover = 0;       // mm between loops; 0: 40 % of the diameter (capped so loops overlap)
+  double leave = 0.3;        // mm of stock to leave; the engine's cutter must be grown by it
+  double tolerance = 0.05;   // mm: the region's boundary within this of exact (sets the grid)
+  bool climb = true;         // climb milling for a clockwise spindle (M3)
+  ClearingOrder order = ClearingOrder::InsideOut;
+  double ramp_angle_deg = 3; // entries descend at most this steeply
+  double min_ramp_loop = 0;  // mm: shortest loop to ramp along; 0: pi * R / 2
+  double clearance = 2;      // mm above the stock top (and above a cleared level) for moves over
+  bool flat_levels = true;   // extra levels at the part's flat areas
+  double flat_min_area = 0;  // mm^2 of flat CL for an extra level; 0: the cutter's disc area / 4
+  double grid_step = 0;      // mm; 0: from the radius and tolerance (see zlevel_roughing.cpp)
+  std::optional<double> bottom;  // no level below this tip height
+};
+
+// One cut: lift first (if lift_before: straight up to lift_z, across at
+// lift_z, straight down to points[0]), then the points in order at the feed,
+// the first `entry_points` after points[0] at the plunge feed (the ramp).
+// Without lift_before, the pass follows the previous one by a straight feed
+// move at the level (a link inside the region).
+struct RoughingPass {
+  Polyline points;
+  bool lift_before = false;
+  double lift_z = 0;
+  std::size_t entry_points = 0;
+};
+
+struct RoughingLevel {
+  double z = 0;       // tip height
+  bool flat = false;  // an extra level at a flat area of the part
+  std::vector<RoughingPass> passes;
+};
+
+struct RoughingStats {
+  std::size_t loops = 0;
+  std::size_t passes = 0;
+  std::size_t high_lifts = 0;  // to the clearance height
+  std::size_t low_lifts = 0;   // to just above the level above
+  std::size_t short_entries = 0;  // ramps along a loop shorter than min_ramp_loop
+  std::size_t point_queries = 0;
+  double cut_length = 0;       // mm at feed (ramps and links included)
+};
+
+struct RoughingPath {
+  std::vector<RoughingLevel> levels;  // top down
+  Cutter cutter;                       // the roughing cutter
+  double leave = 0;
+  double stepover = 0;                 // used
+  double clearance_z = 0;              // stock top + clearance
+  // Material left above the part grown by `leave`, measured vertically, is
+  // at most this where the cutter reaches (plus the tolerance): the largest
+  // gap between levels plus the scallop between loops on a round cutter.
+  double terrace_bound = 0;
+  GridSpec grid;                       // of the region computation
+  RoughingStats stats;
+};
+
+// `grown`: the CL engine of grown_cutter(cutter, params.leave). Throws
+// std::invalid_argument for bad parameters, a stock without area, or an
+// engine whose cutter is not the grown cutter. `checkpoint` gets the
+// fraction of levels done.
+RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, const StockBlock& stock,
+                                   const RoughingParams& params, const Checkpoint& checkpoint = {});
+
+// The levels (top down) below a stock top: every step_down from the top, the
+// lowest of `tips` (tip heights: the grown CL plus leave), and (if on) the
+// heights of flat areas: where at least min_flat_area of `flat_tips` (tip
+// heights of nodes whose CL is locally level, one per node of `cell_area`
+// mm^2) lie within tolerance / 5 of each other. Pure; exposed for tests.
+// `flat` marks the extra levels.
+struct LevelPlan {
+  std::vector<double> z;
+  std::vector<bool> flat;
+};
+LevelPlan plan_levels(const std::vector<double>& tips, const std::vector<double>& flat_tips, double cell_area,
+                      double stock_top, const RoughingParams& params, double min_flat_area);
+
+}  // namespace cncstream

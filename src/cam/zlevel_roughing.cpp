@@ -1,0 +1,271 @@
+// Z-level roughing: levels, regions, and the passes that clear them.
+#include "cncstream/cam/zlevel_roughing.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "zlevel_regions.hpp"
+
+namespace cncstream {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+void check(const Cutter& cutter, const ClEngine& grown, const StockBlock& s, const RoughingParams& p) {
+  auto positive = [](double v, const char* what) {
+    if (!(v > 0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string("roughing: ") + what + " must be a positive length, got " + num(v));
+  };
+  positive(cutter.radius, "the cutter radius");
+  positive(p.step_down, "the step down");
+  positive(p.tolerance, "the tolerance");
+  positive(p.clearance, "the clearance");
+  if (!(p.stepover >= 0) || !std::isfinite(p.stepover)) throw std::invalid_argument("roughing: bad stepover " + num(p.stepover));
+  if (!(p.grid_step >= 0) || !std::isfinite(p.grid_step))
+    throw std::invalid_argument("roughing: bad grid step " + num(p.grid_step));
+  if (!(p.ramp_angle_deg > 0 && p.ramp_angle_deg <= 45))
+    throw std::invalid_argument("roughing: the ramp angle must be in (0, 45] degrees, got " + num(p.ramp_angle_deg));
+  if (!(s.x1 > s.x0) || !(s.y1 > s.y0) || !std::isfinite(s.x0 + s.x1 + s.y0 + s.y1 + s.top))
+    throw std::invalid_argument("roughing: the stock block has no area or is not finite");
+  const Cutter want = grown_cutter(cutter, p.leave);  // checks leave
+  const Cutter& got = grown.cutter();
+  if (std::fabs(got.radius - want.radius) > 1e-9 || std::fabs(got.corner_radius - want.corner_radius) > 1e-9)
+    throw std::invalid_argument("roughing: the CL engine's cutter " + got.spec() + " is not " + cutter.spec() +
+                                " grown by the stock to leave (" + want.spec() + ")");
+}
+
+double xy_dist(const Vec3& a, const Vec3& b) { return std::hypot(b.x - a.x, b.y - a.y); }
+
+// The loop rotated to start at its vertex nearest to `from`.
+Polyline rotated_near(const Polyline& loop, const Vec3& from) {
+  std::size_t best = 0;
+  double d = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < loop.size(); ++k)
+    if (const double e = xy_dist(loop[k], from); e < d) d = e, best = k;
+  Polyline out(loop.begin() + static_cast<long>(best), loop.end());
+  out.insert(out.end(), loop.begin(), loop.begin() + static_cast<long>(best));
+  return out;
+}
+
+struct Builder {
+  const ClEngine& grown;
+  const RoughingParams& p;
+  const StockBlock& stock;
+  double R = 0, h = 0, leave = 0;
+  double tx0 = 0, ty0 = 0, tx1 = 0, ty1 = 0;  // the tip box
+  double clearance_z = 0;
+  RoughingPath& path;
+
+  double dbox(double x, double y) const { return std::max({tx0 - x, x - tx1, ty0 - y, y - ty1}); }
+  // <= 0 where the tip may go down to z.
+  double phi(double x, double y, double z) {
+    const double db = dbox(x, y);
+    if (db > 0) return db;
+    ++path.stats.point_queries;
+    return std::max(grown.height_at(x, y) + leave - z, db);
+  }
+  // Whether the tip may go down to z all along the straight move a-b.
+  bool segment_inside(const Vec3& a, const Vec3& b, double z) {
+    const double len = xy_dist(a, b);
+    const auto n = static_cast<std::size_t>(std::ceil(len / (h / 2)));
+    for (std::size_t k = 0; k <= n; ++k) {
+      const double t = n ? static_cast<double>(k) / static_cast<double>(n) : 0.0;
+      if (phi(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, z) > 0) return false;
+    }
+    return true;
+  }
+
+  // A new pass from `from` (if any) to the loop, lifted, ramping down along
+  // the loop from just above z_above to z, then the loop at z.
+  RoughingPass entry(const std::optional<Vec3>& from, const Polyline& loop, double length, double z, double z_above) {
+    RoughingPass pass;
+    pass.lift_before = true;
+    pass.lift_z = clearance_z;
+    const double low = std::min(z_above + std::min(p.clearance, 1.0), clearance_z);
+    if (from && low < clearance_z && segment_inside(*from, loop.front(), z_above)) {
+      pass.lift_z = low;
+      ++path.stats.low_lifts;
+    } else {
+      ++path.stats.high_lifts;
+    }
+    const double top = std::min(z_above + 0.5, pass.lift_z);
+    const double drop = top - z;
+    const double need = drop / std::tan(p.ramp_angle_deg * kPi / 180);
+    const double laps = std::max(1.0, std::ceil(need / std::max(length, 1e-9)));
+    if (length < (p.min_ramp_loop > 0 ? p.min_ramp_loop : kPi * R / 2)) ++path.stats.short_entries;
+    pass.points.push_back({loop.front().x, loop.front().y, top});
+    double s = 0;
+    const double total = laps * length;
+    for (int lap = 0; lap < static_cast<int>(laps); ++lap)
+      for (std::size_t k = 1; k <= loop.size(); ++k) {
+        const Vec3& a = loop[k - 1];
+        const Vec3& b = loop[k % loop.size()];
+        s += xy_dist(a, b);
+        pass.points.push_back({b.x, b.y, top - drop * std::min(1.0, s / total)});
+      }
+    pass.entry_points = pass.points.size() - 1;
+    pass.points.back().z = z;
+    append_loop(pass.points, loop, z, false);
+    return pass;
+  }
+
+  static void append_loop(Polyline& out, const Polyline& loop, double z, bool with_start) {
+    for (std::size_t k = with_start ? 0 : 1; k <= loop.size(); ++k) {
+      const Vec3& v = loop[k % loop.size()];
+      out.push_back({v.x, v.y, z});
+    }
+  }
+
+  void level(const detail::LevelRegion& region, double z, double z_above, RoughingLevel& out,
+             std::optional<Vec3>& at) {
+    // Loops per component, in cutting order.
+    std::vector<std::vector<const detail::RegionLoop*>> parts(region.components);
+    for (const auto& l : region.loops) parts[l.component].push_back(&l);
+    std::vector<std::uint8_t> done(parts.size(), 0);
+    const bool inside_out = p.order == ClearingOrder::InsideOut;
+    for (std::size_t round = 0; round < parts.size(); ++round) {
+      // The nearest component not yet cut.
+      std::size_t pick = parts.size();
+      double best = std::numeric_limits<double>::infinity();
+      for (std::size_t c = 0; c < parts.size(); ++c) {
+        if (done[c] || parts[c].empty()) continue;
+        const double d = at ? xy_dist(*at, parts[c].front()->points.front()) : 0.0;
+        if (d < best) best = d, pick = c;
+      }
+      if (pick == parts.size()) break;
+      done[pick] = 1;
+      auto loops = parts[pick];
+      // Offsets inside out (boundary last) or outside in (boundary last).
+      auto rank = [&](int offset) { return offset == 0 ? -1 : (inside_out ? offset : 1000000 - offset); };
+      std::stable_sort(loops.begin(), loops.end(),
+                       [&](const auto* a, const auto* b) { return rank(a->offset) > rank(b->offset); });
+      // Nearest neighbour within each offset.
+      Vec3 cursor = at ? *at : loops.front()->points.front();
+      for (std::size_t k = 0; k < loops.size(); ++k) {
+        std::size_t best_k = k;
+        double bd = std::numeric_limits<double>::infinity();
+        for (std::size_t m = k; m < loops.size() && loops[m]->offset == loops[k]->offset; ++m)
+          for (const Vec3& v : loops[m]->points)
+            if (const double d = xy_dist(v, cursor); d < bd) bd = d, best_k = m;
+        std::swap(loops[k], loops[best_k]);
+        cursor = rotated_near(loops[k]->points, cursor).front();
+      }
+      // Ramp in along the first loop long enough to ramp on.
+      const double min_loop = p.min_ramp_loop > 0 ? p.min_ramp_loop : kPi * R / 2;
+      auto first = std::find_if(loops.begin(), loops.end(), [&](const auto* l) { return l->length >= min_loop; });
+      if (first == loops.end())
+        first = std::max_element(loops.begin(), loops.end(), [](const auto* a, const auto* b) { return a->length < b->length; });
+      std::rotate(loops.begin(), first, first + 1);
+
+      for (const auto* l : loops) {
+        ++path.stats.loops;
+        const bool material_outside = inside_out || l->offset == 0;
+        Polyline pts = l->points;
+        if (material_outside != p.climb) std::reverse(pts.begin(), pts.end());
+        if (at) pts = rotated_near(pts, *at);
+        for (auto& v : pts) v.z = z;
+        const bool first_of_part = l == loops.front();
+        if (!first_of_part && at && segment_inside(*at, pts.front(), z)) {
+          append_loop(out.passes.back().points, pts, z, true);
+        } else {
+          out.passes.push_back(entry(at, pts, l->length, z, z_above));
+        }
+        at = out.passes.back().points.back();
+      }
+    }
+  }
+};
+
+}  // namespace
+
+RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, const StockBlock& stock,
+                                   const RoughingParams& p, const Checkpoint& checkpoint) {
+  check(cutter, grown, stock, p);
+  RoughingPath path;
+  path.cutter = cutter;
+  path.leave = p.leave;
+  Builder b{grown, p, stock, cutter.radius, 0, p.leave, 0, 0, 0, 0, stock.top + p.clearance, path};
+  // Cells small enough that a chord across one leaves the region (curved at
+  // a radius of at least R where it is concave) by at most tolerance / 2.
+  b.h = p.grid_step > 0 ? p.grid_step : std::min(b.R / 6, std::sqrt(2 * p.tolerance * b.R));
+  // Loops closer than the radius (less the half cell the distance transform
+  // may be off by, twice) overlap, so no material is left between them.
+  const double s_max = b.R - b.h;
+  if (!(s_max > 0)) throw std::invalid_argument("roughing: grid step " + num(b.h) + " is not below the cutter radius");
+  path.stepover = std::min(p.stepover > 0 ? p.stepover : 0.8 * b.R, s_max);
+  path.clearance_z = b.clearance_z;
+  b.tx0 = stock.x0 - b.R, b.ty0 = stock.y0 - b.R, b.tx1 = stock.x1 + b.R, b.ty1 = stock.y1 + b.R;
+  const double margin = 1.5 * b.h;
+  path.grid = GridSpec::covering(b.tx0 - margin, b.ty0 - margin, b.tx1 + margin, b.ty1 + margin, b.h, b.h);
+  const GridSpec& g = path.grid;
+  const ClGrid cl = grown.compute(g);
+  if (checkpoint) checkpoint(0.1);
+
+  std::vector<double> tips(g.size()), in_box, flat;
+  for (std::size_t n = 0; n < g.size(); ++n) tips[n] = cl.z[n] + p.leave;
+  // Flat: the four neighbours level with the node within the flat tolerance.
+  const double flat_tol = p.tolerance / 5;
+  for (std::size_t j = 1; j + 1 < g.ny; ++j)
+    for (std::size_t i = 1; i + 1 < g.nx; ++i) {
+      const std::size_t n = j * g.nx + i;
+      if (b.dbox(g.x(i), g.y(j)) > 0) continue;
+      in_box.push_back(tips[n]);
+      const double t = tips[n];
+      if (std::fabs(tips[n - 1] - t) <= flat_tol && std::fabs(tips[n + 1] - t) <= flat_tol &&
+          std::fabs(tips[n - g.nx] - t) <= flat_tol && std::fabs(tips[n + g.nx] - t) <= flat_tol)
+        flat.push_back(t);
+    }
+  const double min_flat = p.flat_min_area > 0 ? p.flat_min_area : kPi * b.R * b.R / 4;
+  const LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, stock.top, p, min_flat);
+
+  // Material left: the largest gap between levels, and between loops the
+  // cutter's profile at up to a stepover and a cell from a loop.
+  double gap = 0;
+  for (std::size_t k = 0; k < plan.z.size(); ++k) gap = std::max(gap, (k ? plan.z[k - 1] : stock.top) - plan.z[k]);
+  path.terrace_bound = gap + cutter.profile_height(std::min(cutter.radius, path.stepover + b.h));
+
+  std::vector<double> phi(g.size());
+  std::optional<Vec3> at;
+  for (std::size_t k = 0; k < plan.z.size(); ++k) {
+    const double z = plan.z[k], z_above = k ? plan.z[k - 1] : stock.top;
+    for (std::size_t n = 0; n < g.size(); ++n) phi[n] = std::max(tips[n] - z, b.dbox(g.x(n % g.nx), g.y(n / g.nx)));
+    const PointQuery exact = [&b, z](double x, double y) { return b.phi(x, y, z); };
+    detail::RegionInput in;
+    in.grid = &g;
+    in.phi = &phi;
+    in.exact = &exact;
+    in.stepover = path.stepover;
+    in.boundary_tolerance = p.tolerance / 4;
+    in.inner_tolerance = b.h / 4;
+    const detail::LevelRegion region = detail::level_region(in);
+    RoughingLevel lv;
+    lv.z = z;
+    lv.flat = plan.flat[k];
+    b.level(region, z, z_above, lv, at);
+    if (!lv.passes.empty()) path.levels.push_back(std::move(lv));
+    if (checkpoint) checkpoint(0.1 + 0.9 * static_cast<double>(k + 1) / static_cast<double>(plan.z.size()));
+  }
+  for (const auto& lv : path.levels) {
+    path.stats.passes += lv.passes.size();
+    for (std::size_t q = 0; q < lv.passes.size(); ++q) {
+      const Polyline& pts = lv.passes[q].points;
+      if (q > 0 && !lv.passes[q].lift_before) path.stats.cut_length += norm(pts.front() - lv.passes[q - 1].points.back());
+      for (std::size_t k = 1; k < pts.size(); ++k) path.stats.cut_length += norm(pts[k] - pts[k - 1]);
+    }
+  }
+  return path;
+}
+
+}  // namespace cncstream
