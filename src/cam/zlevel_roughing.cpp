@@ -64,11 +64,17 @@ struct Builder {
   const RoughingParams& p;
   const StockBlock& stock;
   double R = 0, h = 0, leave = 0;
-  double tx0 = 0, ty0 = 0, tx1 = 0, ty1 = 0;  // the tip box
+  double sx0 = 0, sy0 = 0, sx1 = 0, sy1 = 0;  // the stock's XY box
   double clearance_z = 0;
   RoughingPath& path;
 
-  double dbox(double x, double y) const { return std::max({tx0 - x, x - tx1, ty0 - y, y - ty1}); }
+  // Signed distance from the stock's XY box grown by the radius (rounded
+  // corners: beyond them the cutter meets no stock).
+  double dbox(double x, double y) const {
+    const double ex = std::max(sx0 - x, x - sx1), ey = std::max(sy0 - y, y - sy1);
+    const double out = std::hypot(std::max(ex, 0.0), std::max(ey, 0.0));
+    return (out > 0 ? out : std::max(ex, ey)) - R;
+  }
   // <= 0 where the tip may go down to z.
   double phi(double x, double y, double z) {
     const double db = dbox(x, y);
@@ -206,9 +212,9 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   if (!(s_max > 0)) throw std::invalid_argument("roughing: grid step " + num(b.h) + " is not below the cutter radius");
   path.stepover = std::min(p.stepover > 0 ? p.stepover : 0.8 * b.R, s_max);
   path.clearance_z = b.clearance_z;
-  b.tx0 = stock.x0 - b.R, b.ty0 = stock.y0 - b.R, b.tx1 = stock.x1 + b.R, b.ty1 = stock.y1 + b.R;
-  const double margin = 1.5 * b.h;
-  path.grid = GridSpec::covering(b.tx0 - margin, b.ty0 - margin, b.tx1 + margin, b.ty1 + margin, b.h, b.h);
+  b.sx0 = stock.x0, b.sy0 = stock.y0, b.sx1 = stock.x1, b.sy1 = stock.y1;
+  const double margin = b.R + 1.5 * b.h;
+  path.grid = GridSpec::covering(stock.x0 - margin, stock.y0 - margin, stock.x1 + margin, stock.y1 + margin, b.h, b.h);
   const GridSpec& g = path.grid;
   const ClGrid cl = grown.compute(g);
   if (checkpoint) checkpoint(0.1);

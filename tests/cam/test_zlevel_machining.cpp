@@ -6,6 +6,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "cncstream/cam/cl_engine.hpp"
@@ -69,8 +71,8 @@ void rough_and_check(const Case& k) {
   std::vector<double> tips(tg.size());
   for (std::size_t n = 0; n < tg.size(); ++n) {
     const double x = tg.x(n % tg.nx), y = tg.y(n / tg.nx);
-    const bool in_box = x >= block.x0 - cutter.radius && x <= block.x1 + cutter.radius &&
-                        y >= block.y0 - cutter.radius && y <= block.y1 + cutter.radius;
+    const double ex = std::max({0.0, block.x0 - x, x - block.x1}), ey = std::max({0.0, block.y0 - y, y - block.y1});
+    const bool in_box = std::hypot(ex, ey) <= cutter.radius;
     tips[n] = in_box ? cl.z[n] + p.leave : std::numeric_limits<double>::infinity();
   }
   // The regions are found on a grid: a part of one narrower than a cell

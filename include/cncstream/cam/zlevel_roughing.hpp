@@ -4,7 +4,8 @@
 // the lowest the roughing cutter's tip may go at (x, y) and still keep
 // `leave` of material on the part in every direction. At each level z the
 // tip region {grown CL + leave <= z}, limited to the stock's XY box grown by
-// the cutter radius (so the block's sides are cleared), is cleared by
+// the cutter radius (round at the corners; so the block's sides are
+// cleared), is cleared by
 // contour-parallel loops `stepover` apart (iso-lines of the region's distance
 // transform), ordered inside out (or outside in), the region's own boundary
 // last, in the climb direction for a clockwise spindle. The boundary comes
