@@ -41,7 +41,7 @@ struct ContourOptions {
   // chord), add the corner where the two neighbouring chords' lines meet,
   // or the farthest point towards it that the exact function puts inside.
   bool sharp_corners = true;
-  double corner_angle_deg = 20;
+  double corner_angle_deg = 30;
 };
 
 struct LevelContour {
