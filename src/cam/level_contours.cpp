@@ -65,7 +65,9 @@ struct Tracer {
       queries += static_cast<std::size_t>(n);
       return ta;
     }
-    while (fa < -opt.z_tolerance && (tb - ta) * len > opt.xy_tolerance && n < opt.max_queries) {
+    // fa_true: f at ta (Illinois scales fa and fb, not the ends' values).
+    double fa_true = fa;
+    while (fa_true < -opt.z_tolerance && (tb - ta) * len > opt.xy_tolerance && n < opt.max_queries) {
       const double width = tb - ta;
       double t = ta + width / 2;
       if (!bisect && std::isfinite(fb) && fb > fa) t = ta + width * (-fa) / (fb - fa);
@@ -73,9 +75,9 @@ struct Tracer {
       const Vec3 at = p + (q - p) * t;
       const double ft = exact(at.x, at.y) - level;
       ++n;
-      if (inside(ft + level, level)) {
+      if (ft <= 0) {  // inside (a NaN is outside)
         ta = t;
-        fa = ft;
+        fa = fa_true = ft;
         if (side == -1 && std::isfinite(fb)) fb /= 2;
         side = -1;
       } else {
