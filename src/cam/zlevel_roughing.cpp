@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <optional>
@@ -82,16 +83,30 @@ struct Builder {
     ++path.stats.point_queries;
     return std::max(grown.height_at(x, y) + leave - z, db);
   }
-  // Whether the tip may go down to z all along the straight move a-b.
-  bool segment_inside(const Vec3& a, const Vec3& b, double z) {
+  // Whether the straight move a-b (both ends on loops of the level) lies in
+  // the tip region of level z (exact queries) and, away from its ends, in
+  // cells whose corners are all inside the region as the grid saw it
+  // (`mask`): inside the loops, so in what the level cleared (or clears) -
+  // not in a sliver of the region too thin for the grid, which no loop
+  // visits.
+  bool segment_inside(const Vec3& a, const Vec3& b, double z, const std::vector<std::uint8_t>& mask) {
+    const GridSpec& g = path.grid;
     const double len = xy_dist(a, b);
     const auto n = static_cast<std::size_t>(std::ceil(len / (h / 2)));
     for (std::size_t k = 0; k <= n; ++k) {
       const double t = n ? static_cast<double>(k) / static_cast<double>(n) : 0.0;
-      if (phi(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, z) > 0) return false;
+      const double x = a.x + (b.x - a.x) * t, y = a.y + (b.y - a.y) * t;
+      if (phi(x, y, z) > 0) return false;
+      if (std::min(t, 1 - t) * len <= 1.5 * h) continue;
+      const auto i = static_cast<std::size_t>(std::floor((x - g.x0) / g.dx));
+      const auto j = static_cast<std::size_t>(std::floor((y - g.y0) / g.dy));
+      if (i + 1 >= g.nx || j + 1 >= g.ny) return false;
+      const std::size_t c = j * g.nx + i;
+      if (!mask[c] || !mask[c + 1] || !mask[c + g.nx] || !mask[c + g.nx + 1]) return false;
     }
     return true;
   }
+  std::vector<std::uint8_t> mask, mask_above;  // nodes inside the region: this level, the level above
 
   // A new pass from `from` (if any) to the loop, lifted, ramping down along
   // the loop from just above z_above to z, then the loop at z.
@@ -100,7 +115,9 @@ struct Builder {
     pass.lift_before = true;
     pass.lift_z = clearance_z;
     const double low = std::min(z_above + std::min(p.clearance, 1.0), clearance_z);
-    if (from && low < clearance_z && segment_inside(*from, loop.front(), z_above)) {
+    // Over the level above's loops, or over the stock's top.
+    const bool over_top = z_above >= stock.top;
+    if (from && low < clearance_z && (over_top || segment_inside(*from, loop.front(), z_above, mask_above))) {
       pass.lift_z = low;
       ++path.stats.low_lifts;
     } else {
@@ -183,7 +200,7 @@ struct Builder {
         if (at) pts = rotated_near(pts, *at);
         for (auto& v : pts) v.z = z;
         const bool first_of_part = l == loops.front();
-        if (!first_of_part && at && segment_inside(*at, pts.front(), z)) {
+        if (!first_of_part && at && segment_inside(*at, pts.front(), z, mask)) {
           append_loop(out.passes.back().points, pts, z, true);
         } else {
           out.passes.push_back(entry(at, pts, l->length, z, z_above));
@@ -202,7 +219,7 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   RoughingPath path;
   path.cutter = cutter;
   path.leave = p.leave;
-  Builder b{grown, p, stock, cutter.radius, 0, p.leave, 0, 0, 0, 0, stock.top + p.clearance, path};
+  Builder b{grown, p, stock, cutter.radius, 0, p.leave, 0, 0, 0, 0, stock.top + p.clearance, path, {}, {}};
   // Cells small enough that a chord across one leaves the region (curved at
   // a radius of at least R where it is concave) by at most tolerance / 2.
   b.h = p.grid_step > 0 ? p.grid_step : std::min(b.R / 6, std::sqrt(2 * p.tolerance * b.R));
@@ -256,6 +273,9 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     in.boundary_tolerance = p.tolerance / 4;
     in.inner_tolerance = b.h / 4;
     const detail::LevelRegion region = detail::level_region(in);
+    b.mask_above.swap(b.mask);
+    b.mask.resize(g.size());
+    for (std::size_t n = 0; n < g.size(); ++n) b.mask[n] = phi[n] <= 0 ? 1 : 0;
     RoughingLevel lv;
     lv.z = z;
     lv.flat = plan.flat[k];
