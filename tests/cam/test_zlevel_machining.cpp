@@ -26,6 +26,8 @@ struct Case {
   const char* cutter;
   double step_down;
   double sim_step;
+  ClearingOrder order = ClearingOrder::InsideOut;
+  bool climb = true;
 };
 
 void rough_and_check(const Case& k) {
@@ -37,6 +39,8 @@ void rough_and_check(const Case& k) {
   p.step_down = k.step_down;
   p.leave = 0.3;
   p.tolerance = 0.05;
+  p.order = k.order;
+  p.climb = k.climb;
   const Box3 box = mesh.bounds();
   const StockBlock block{box.lo.x, box.lo.y, box.hi.x, box.hi.y, box.hi.z + 1};
   const ClEngine grown(mesh, grown_cutter(cutter, p.leave));
@@ -122,5 +126,9 @@ void rough_and_check(const Case& k) {
 TEST(ZLevelMachining, PlaqueFlat6) { rough_and_check({"examples/plaque.stl", false, "flat:6", 3, 0.5}); }
 
 TEST(ZLevelMachining, GearwheelFlat3) { rough_and_check({"gearwheel.bin.stl", true, "flat:3", 2, 0.25}); }
+
+TEST(ZLevelMachining, GearwheelFlat3OutsideInConventional) {
+  rough_and_check({"gearwheel.bin.stl", true, "flat:3", 2, 0.25, ClearingOrder::OutsideIn, false});
+}
 
 TEST(ZLevelMachining, PlaqueBull6) { rough_and_check({"examples/plaque.stl", false, "bull:6:1", 3, 0.5}); }

@@ -110,3 +110,32 @@ TEST(ZLevelPocket, MachinedIsThePocketLessTheStockToLeave) {
       ASSERT_GE(m, 10.3 - 1e-9);
     }
 }
+
+// Known answer: around a hemisphere of radius 10 a ball cutter of radius 3
+// leaving 0.3 may go down to z where its grown ball (radius 3.3) centred at
+// z + 3 touches the sphere: at distance sqrt(13.3^2 - (z + 3)^2) from the axis.
+TEST(ZLevelHemisphere, EveryLevelFollowsTheCircleOfItsHeight) {
+  const Mesh dome = cl_test::hemisphere(10, 48, 192);
+  const Cutter ball = Cutter::ball(6);
+  const ClEngine grown(dome, grown_cutter(ball, 0.3));
+  RoughingParams p;
+  p.leave = 0.3;
+  p.step_down = 3;
+  p.tolerance = 0.02;
+  p.bottom = 0.3;  // the open hemisphere's rim would let the ball below it
+  const RoughingPath path = build_zlevel_roughing(grown, ball, StockBlock{-12, -12, 12, 12, 11}, p);
+  ASSERT_EQ(path.levels.size(), 4u);  // 8, 5, 2 and the floor plus leave
+  for (const auto& lv : path.levels) {
+    if (lv.z < 1) continue;  // the floor level: everywhere
+    const double r = std::sqrt(13.3 * 13.3 - (lv.z + 3) * (lv.z + 3));
+    double nearest = 1e9;
+    for (const auto& ps : lv.passes)
+      for (std::size_t n = ps.entry_points + 1; n < ps.points.size(); ++n) {
+        const double d = std::hypot(ps.points[n].x, ps.points[n].y);
+        // The facets lie inside the sphere by up to 0.006 mm.
+        ASSERT_GE(d, r - 0.01) << "level " << lv.z;
+        nearest = std::min(nearest, d);
+      }
+    EXPECT_LT(nearest, r + p.tolerance) << "level " << lv.z;
+  }
+}
