@@ -1,7 +1,10 @@
 // Z-level roughing: levels, regions, and the passes that clear them.
 #include "cncstream/cam/zlevel_roughing.hpp"
 
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -76,12 +79,15 @@ struct Builder {
     const double out = std::hypot(std::max(ex, 0.0), std::max(ey, 0.0));
     return (out > 0 ? out : std::max(ex, ey)) - R;
   }
-  // <= 0 where the tip may go down to z.
-  double phi(double x, double y, double z) {
+  // <= 0 where the tip may go down to z. Safe to call concurrently.
+  double region_value(double x, double y, double z) const {
     const double db = dbox(x, y);
     if (db > 0) return db;
-    ++path.stats.point_queries;
     return std::max(grown.height_at(x, y) + leave - z, db);
+  }
+  double phi(double x, double y, double z) {
+    ++path.stats.point_queries;
+    return region_value(x, y, z);
   }
   // Whether the straight move a-b (both ends on loops of the level) lies in
   // the tip region of level z (exact queries) and, away from its ends, in
@@ -259,12 +265,14 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   for (std::size_t k = 0; k < plan.z.size(); ++k) gap = std::max(gap, (k ? plan.z[k - 1] : stock.top) - plan.z[k]);
   path.terrace_bound = gap + cutter.profile_height(std::min(cutter.radius, path.stepover + b.h));
 
-  std::vector<double> phi(g.size());
-  std::optional<Vec3> at;
-  for (std::size_t k = 0; k < plan.z.size(); ++k) {
-    const double z = plan.z[k], z_above = k ? plan.z[k - 1] : stock.top;
+  // The regions of all levels at once (independent), then the passes in order.
+  std::vector<detail::LevelRegion> regions(plan.z.size());
+  std::atomic<std::size_t> regions_done{0};
+  tbb::parallel_for(std::size_t{0}, plan.z.size(), [&](std::size_t k) {
+    const double z = plan.z[k];
+    std::vector<double> phi(g.size());
     for (std::size_t n = 0; n < g.size(); ++n) phi[n] = std::max(tips[n] - z, b.dbox(g.x(n % g.nx), g.y(n / g.nx)));
-    const PointQuery exact = [&b, z](double x, double y) { return b.phi(x, y, z); };
+    const PointQuery exact = [&b, z](double x, double y) { return b.region_value(x, y, z); };
     detail::RegionInput in;
     in.grid = &g;
     in.phi = &phi;
@@ -272,17 +280,22 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     in.stepover = path.stepover;
     in.boundary_tolerance = p.tolerance / 4;
     in.inner_tolerance = b.h / 4;
-    const detail::LevelRegion region = detail::level_region(in);
+    regions[k] = detail::level_region(in);
+    if (checkpoint) checkpoint(0.1 + 0.8 * static_cast<double>(++regions_done) / static_cast<double>(plan.z.size()));
+  });
+  std::optional<Vec3> at;
+  for (std::size_t k = 0; k < plan.z.size(); ++k) {
+    const double z = plan.z[k], z_above = k ? plan.z[k - 1] : stock.top;
+    path.stats.point_queries += regions[k].queries;
     b.mask_above.swap(b.mask);
-    b.mask.resize(g.size());
-    for (std::size_t n = 0; n < g.size(); ++n) b.mask[n] = phi[n] <= 0 ? 1 : 0;
+    b.mask = std::move(regions[k].inside);
     RoughingLevel lv;
     lv.z = z;
     lv.flat = plan.flat[k];
-    b.level(region, z, z_above, lv, at);
+    b.level(regions[k], z, z_above, lv, at);
     if (!lv.passes.empty()) path.levels.push_back(std::move(lv));
-    if (checkpoint) checkpoint(0.1 + 0.9 * static_cast<double>(k + 1) / static_cast<double>(plan.z.size()));
   }
+  if (checkpoint) checkpoint(1.0);
   for (const auto& lv : path.levels) {
     path.stats.passes += lv.passes.size();
     for (std::size_t q = 0; q < lv.passes.size(); ++q) {
