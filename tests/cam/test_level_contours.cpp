@@ -155,3 +155,14 @@ TEST(DistanceTransform, DistancesToTheNearestOutsideNode) {
   EXPECT_DOUBLE_EQ(d[6 * g.nx + 20], 0.5);
   EXPECT_THROW(distance_to_outside(g, std::vector<std::uint8_t>(2)), std::invalid_argument);
 }
+
+TEST(DistanceTransform, BeyondTheBorderCanBeInside) {
+  const GridSpec g = GridSpec::covering(0, 0, 10, 10, 0.5, 0.5);
+  std::vector<std::uint8_t> in(g.size(), 1);
+  in[4 * g.nx + 6] = 0;  // (3, 2)
+  const std::vector<double> d = distance_to_outside(g, in, false);
+  EXPECT_NEAR(d[6 * g.nx + 20], std::hypot(7.0, 1.0), 1e-12);  // (10, 3): only the node counts
+  EXPECT_DOUBLE_EQ(d[4 * g.nx + 6], 0.0);
+  const std::vector<double> none = distance_to_outside(g, std::vector<std::uint8_t>(g.size(), 1), false);
+  EXPECT_TRUE(std::isinf(none[0]));
+}

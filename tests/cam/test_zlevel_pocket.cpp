@@ -139,3 +139,53 @@ TEST(ZLevelHemisphere, EveryLevelFollowsTheCircleOfItsHeight) {
     EXPECT_LT(nearest, r + p.tolerance) << "level " << lv.z;
   }
 }
+
+// A stock already machined: a block of top 26 whose left half is down at 21.
+// Levels start at the highest point; above 21 only the right half (and the
+// cutter's reach beside it) is cleared; machined, the result is the same
+// pocket, no move deeper than the step down.
+TEST(ZLevelPocket, MachinedStockIsClearedOnlyWhereMaterialIsAboveTheLevel) {
+  const Mesh mesh = zlevel_test::pocket_block();
+  const Cutter cutter = Cutter::flat(6);
+  const ClEngine grown(mesh, grown_cutter(cutter, 0.3));
+  // The surface covers the block (beyond it: nothing, at 0).
+  const GridSpec g = GridSpec::covering(-30.2127, -25.2089, 30.3, 25.3, 0.25, 0.25);
+  std::vector<double> before(g.size());
+  for (std::size_t n = 0; n < g.size(); ++n) {
+    const double x = g.x(n % g.nx), y = g.y(n / g.nx);
+    before[n] = std::fabs(x) > 30 || std::fabs(y) > 25 ? 0.0 : x < 0 ? 21.0 : 26.0;
+  }
+  const HeightFieldStock surface(g, 26, before);
+  RoughingParams p;
+  p.leave = 0.3;
+  p.step_down = 3;
+  p.tolerance = 0.02;
+  StockBlock block{-30, -25, 30, 25, 30, &surface};  // the block's top is above the surface
+  const RoughingPath path = build_zlevel_roughing(grown, cutter, block, p);
+  ASSERT_FALSE(path.levels.empty());
+  EXPECT_DOUBLE_EQ(path.levels.front().z, 23.0);
+  EXPECT_DOUBLE_EQ(path.clearance_z, 26.0 + p.clearance);
+  // The stock on the roughing grid reaches a cell (and a surface node)
+  // further; the reach is R and two cells.
+  const double reach = 3 + 3 * path.grid.dx + g.dx + p.tolerance;
+  for (const auto& lv : path.levels) {
+    if (lv.z < 21) break;
+    for (const auto& ps : lv.passes)
+      for (const Vec3& v : ps.points) ASSERT_GE(v.x, -reach) << "level " << lv.z;
+  }
+  HeightFieldStock stock(g, 26, before);
+  const zlevel_test::SimResult sim = zlevel_test::machine(stock, path);
+  EXPECT_EQ(sim.rapid_removed, 0.0);
+  EXPECT_LE(sim.deepest_cut, 3 + 1e-9);
+  for (std::size_t j = 0; j < g.ny; ++j)
+    for (std::size_t i = 0; i < g.nx; ++i) {
+      const double x = g.x(i), y = g.y(j), m = stock.at(i, j);
+      const double in = std::min(15 - std::fabs(x), 10 - std::fabs(y));
+      if (std::fabs(x) > 30 || std::fabs(y) > 25) continue;
+      if (in < 0.3 - p.tolerance) {
+        ASSERT_NEAR(m, 20.3, 1e-9) << x << "," << y;  // the block's top, less the stock to leave
+        continue;
+      }
+      ASSERT_GE(m, 10.3 - 1e-9);
+    }
+}
