@@ -65,7 +65,9 @@ struct Tracer {
       queries += static_cast<std::size_t>(n);
       return ta;
     }
-    while (fa < -opt.z_tolerance && (tb - ta) * len > opt.xy_tolerance && n < opt.max_queries) {
+    // fa_true: f at ta (Illinois scales fa and fb, not the ends' values).
+    double fa_true = fa;
+    while (fa_true < -opt.z_tolerance && (tb - ta) * len > opt.xy_tolerance && n < opt.max_queries) {
       const double width = tb - ta;
       double t = ta + width / 2;
       if (!bisect && std::isfinite(fb) && fb > fa) t = ta + width * (-fa) / (fb - fa);
@@ -73,9 +75,9 @@ struct Tracer {
       const Vec3 at = p + (q - p) * t;
       const double ft = exact(at.x, at.y) - level;
       ++n;
-      if (inside(ft + level, level)) {
+      if (ft <= 0) {  // inside (a NaN is outside)
         ta = t;
-        fa = ft;
+        fa = fa_true = ft;
         if (side == -1 && std::isfinite(fb)) fb /= 2;
         side = -1;
       } else {
@@ -90,6 +92,54 @@ struct Tracer {
     return ta;
   }
 };
+
+double cross2(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
+
+// Corners of the region that chords cut off: between b and c of a, b, c, d
+// where a-b and c-d turn left by a corner's angle and meet beyond b-c.
+Polyline add_corners(const Polyline& pts, double level, const PointQuery& exact, const ContourOptions& opt,
+                     double max_chord, std::size_t& queries, std::size_t& corners) {
+  const std::size_t n = pts.size();
+  if (n < 4) return pts;
+  const double min_sin = std::sin(opt.corner_angle_deg * 3.14159265358979323846 / 180);
+  Polyline out;
+  out.reserve(n + 8);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3& a = pts[(k + n - 1) % n];
+    const Vec3& b = pts[k];
+    const Vec3& c = pts[(k + 1) % n];
+    const Vec3& d = pts[(k + 2) % n];
+    out.push_back(b);
+    const Vec3 u = b - a, v = d - c, w = c - b;
+    const double lu = std::hypot(u.x, u.y), lv = std::hypot(v.x, v.y), lw = std::hypot(w.x, w.y);
+    if (lu <= 0 || lv <= 0 || lw <= 0 || lw > max_chord) continue;
+    const double turn = cross2(u.x, u.y, v.x, v.y);
+    if (turn < min_sin * lu * lv) continue;  // not a left turn sharp enough
+    // X = b + s u = c + t v.
+    const double sb = cross2(c.x - b.x, c.y - b.y, v.x, v.y) / turn;
+    if (!(sb > 0)) continue;
+    const Vec3 x{b.x + sb * u.x, b.y + sb * u.y, level};
+    if (cross2(w.x, w.y, x.x - b.x, x.y - b.y) >= 0) continue;  // not beyond the chord
+    const Vec3 m = (b + c) * 0.5;
+    if (std::hypot(x.x - m.x, x.y - m.y) > max_chord) continue;
+    // The farthest point from m towards x that is inside (fixed halvings).
+    double lo = 0, hi = 1;
+    ++queries;
+    if (!inside(exact(x.x, x.y), level)) {
+      for (int it = 0; it < 12 && (hi - lo) * std::hypot(x.x - m.x, x.y - m.y) > opt.xy_tolerance; ++it) {
+        const double t = (lo + hi) / 2;
+        ++queries;
+        (inside(exact(m.x + (x.x - m.x) * t, m.y + (x.y - m.y) * t), level) ? lo : hi) = t;
+      }
+    } else {
+      lo = 1;
+    }
+    if (lo * std::hypot(x.x - m.x, x.y - m.y) <= opt.xy_tolerance) continue;
+    out.push_back({m.x + (x.x - m.x) * lo, m.y + (x.y - m.y) * lo, level});
+    ++corners;
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -180,6 +230,11 @@ LevelContours level_contours(const GridSpec& g, const std::vector<double>& v, do
     if (!used[s] && !ends_at[segs[s].from]) trace(s, false);
   for (std::size_t s = 0; s < segs.size(); ++s)
     if (!used[s]) trace(s, true);
+  if (exact && opt.sharp_corners) {
+    const double max_chord = std::hypot(g.dx, g.dy) * 1.01;
+    for (auto& c : out.contours)
+      if (c.closed) c.points = add_corners(c.points, level, exact, opt, max_chord, tr.queries, out.corners);
+  }
   out.queries = tr.queries;
   out.crossings = static_cast<std::size_t>(std::count(tr.done.begin(), tr.done.end(), std::uint8_t{1}));
   return out;

@@ -122,7 +122,10 @@ LevelRegion level_region(const RegionInput& in) {
   std::vector<std::uint8_t> inside(g.size());
   bool any = false;
   for (std::size_t n = 0; n < g.size(); ++n) any |= (inside[n] = phi[n] <= 0 ? 1 : 0) != 0;
-  if (!any) return out;
+  if (!any) {
+    out.inside = std::move(inside);
+    return out;
+  }
   const std::vector<std::uint32_t> label = label_components(g, inside, out.components);
 
   auto add = [&](Polyline pts, int offset, double tol) {
@@ -160,6 +163,7 @@ LevelRegion level_region(const RegionInput& in) {
     LevelContours ring = level_contours(g, depth, -k * in.stepover);
     for (auto& c : ring.contours) add(std::move(c.points), k, in.inner_tolerance);
   }
+  out.inside = std::move(inside);
   return out;
 }
 

@@ -4,6 +4,7 @@
 // stepover inside), each tagged with the connected part of the region it
 // lies in. Internal to the roughing.
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "cncstream/cam/cl_grid.hpp"
@@ -22,6 +23,7 @@ struct LevelRegion {
   std::vector<RegionLoop> loops;
   std::size_t components = 0;
   std::size_t queries = 0;
+  std::vector<std::uint8_t> inside;  // per node: 1 where phi <= 0
 };
 
 struct RegionInput {

@@ -1,8 +1,12 @@
 // Z-level roughing: levels, regions, and the passes that clear them.
 #include "cncstream/cam/zlevel_roughing.hpp"
 
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <optional>
@@ -10,6 +14,7 @@
 #include <string>
 
 #include "zlevel_regions.hpp"
+#include "zlevel_stock.hpp"
 
 namespace cncstream {
 
@@ -60,32 +65,60 @@ Polyline rotated_near(const Polyline& loop, const Vec3& from) {
 }
 
 struct Builder {
+  Builder(const ClEngine& e, const RoughingParams& params, const StockBlock& s, RoughingPath& out)
+      : grown(e), p(params), stock(s), path(out) {}
   const ClEngine& grown;
   const RoughingParams& p;
   const StockBlock& stock;
-  double R = 0, h = 0, leave = 0;
-  double tx0 = 0, ty0 = 0, tx1 = 0, ty1 = 0;  // the tip box
-  double clearance_z = 0;
   RoughingPath& path;
+  double R = 0, h = 0, leave = 0;
+  double sx0 = 0, sy0 = 0, sx1 = 0, sy1 = 0;  // the stock's XY box
+  double top = 0;                             // the stock's highest point
+  double clearance_z = 0;
 
-  double dbox(double x, double y) const { return std::max({tx0 - x, x - tx1, ty0 - y, y - ty1}); }
-  // <= 0 where the tip may go down to z.
-  double phi(double x, double y, double z) {
-    const double db = dbox(x, y);
-    if (db > 0) return db;
-    ++path.stats.point_queries;
-    return std::max(grown.height_at(x, y) + leave - z, db);
+  // Signed distance from the stock's XY box grown by the radius (rounded
+  // corners: beyond them the cutter meets no stock).
+  double dbox(double x, double y) const {
+    const double ex = std::max(sx0 - x, x - sx1), ey = std::max(sy0 - y, y - sy1);
+    const double out = std::hypot(std::max(ex, 0.0), std::max(ey, 0.0));
+    return (out > 0 ? out : std::max(ex, ey)) - R;
   }
-  // Whether the tip may go down to z all along the straight move a-b.
-  bool segment_inside(const Vec3& a, const Vec3& b, double z) {
+  // <= 0 where the tip may go down to z (and, given `reach`, is within
+  // reach of material above z). Safe to call concurrently.
+  double region_value(double x, double y, double z, const std::vector<double>* reach = nullptr) const {
+    double v = dbox(x, y);
+    if (reach) v = std::max(v, detail::interpolate(path.grid, *reach, x, y));
+    if (v > 0) return v;
+    return std::max(grown.height_at(x, y) + leave - z, v);
+  }
+  double phi(double x, double y, double z) {
+    ++path.stats.point_queries;
+    return region_value(x, y, z);
+  }
+  // Whether the straight move a-b (both ends on loops of the level) lies in
+  // the tip region of level z (exact queries) and, away from its ends, in
+  // cells whose corners are all inside the region as the grid saw it
+  // (`mask`): inside the loops, so in what the level cleared (or clears) -
+  // not in a sliver of the region too thin for the grid, which no loop
+  // visits.
+  bool segment_inside(const Vec3& a, const Vec3& b, double z, const std::vector<std::uint8_t>& mask) {
+    const GridSpec& g = path.grid;
     const double len = xy_dist(a, b);
     const auto n = static_cast<std::size_t>(std::ceil(len / (h / 2)));
     for (std::size_t k = 0; k <= n; ++k) {
       const double t = n ? static_cast<double>(k) / static_cast<double>(n) : 0.0;
-      if (phi(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, z) > 0) return false;
+      const double x = a.x + (b.x - a.x) * t, y = a.y + (b.y - a.y) * t;
+      if (phi(x, y, z) > 0) return false;
+      if (std::min(t, 1 - t) * len <= 1.5 * h) continue;
+      const auto i = static_cast<std::size_t>(std::floor((x - g.x0) / g.dx));
+      const auto j = static_cast<std::size_t>(std::floor((y - g.y0) / g.dy));
+      if (i + 1 >= g.nx || j + 1 >= g.ny) return false;
+      const std::size_t c = j * g.nx + i;
+      if (!mask[c] || !mask[c + 1] || !mask[c + g.nx] || !mask[c + g.nx + 1]) return false;
     }
     return true;
   }
+  std::vector<std::uint8_t> mask, mask_above;  // nodes inside the region: this level, the level above
 
   // A new pass from `from` (if any) to the loop, lifted, ramping down along
   // the loop from just above z_above to z, then the loop at z.
@@ -94,7 +127,9 @@ struct Builder {
     pass.lift_before = true;
     pass.lift_z = clearance_z;
     const double low = std::min(z_above + std::min(p.clearance, 1.0), clearance_z);
-    if (from && low < clearance_z && segment_inside(*from, loop.front(), z_above)) {
+    // Over the level above's loops, or over the stock's top.
+    const bool over_top = z_above >= top;
+    if (from && low < clearance_z && (over_top || segment_inside(*from, loop.front(), z_above, mask_above))) {
       pass.lift_z = low;
       ++path.stats.low_lifts;
     } else {
@@ -177,7 +212,7 @@ struct Builder {
         if (at) pts = rotated_near(pts, *at);
         for (auto& v : pts) v.z = z;
         const bool first_of_part = l == loops.front();
-        if (!first_of_part && at && segment_inside(*at, pts.front(), z)) {
+        if (!first_of_part && at && segment_inside(*at, pts.front(), z, mask)) {
           append_loop(out.passes.back().points, pts, z, true);
         } else {
           out.passes.push_back(entry(at, pts, l->length, z, z_above));
@@ -196,7 +231,9 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   RoughingPath path;
   path.cutter = cutter;
   path.leave = p.leave;
-  Builder b{grown, p, stock, cutter.radius, 0, p.leave, 0, 0, 0, 0, stock.top + p.clearance, path};
+  Builder b(grown, p, stock, path);
+  b.R = cutter.radius;
+  b.leave = p.leave;
   // Cells small enough that a chord across one leaves the region (curved at
   // a radius of at least R where it is concave) by at most tolerance / 2.
   b.h = p.grid_step > 0 ? p.grid_step : std::min(b.R / 6, std::sqrt(2 * p.tolerance * b.R));
@@ -205,13 +242,21 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   const double s_max = b.R - b.h;
   if (!(s_max > 0)) throw std::invalid_argument("roughing: grid step " + num(b.h) + " is not below the cutter radius");
   path.stepover = std::min(p.stepover > 0 ? p.stepover : 0.8 * b.R, s_max);
-  path.clearance_z = b.clearance_z;
-  b.tx0 = stock.x0 - b.R, b.ty0 = stock.y0 - b.R, b.tx1 = stock.x1 + b.R, b.ty1 = stock.y1 + b.R;
-  const double margin = 1.5 * b.h;
-  path.grid = GridSpec::covering(b.tx0 - margin, b.ty0 - margin, b.tx1 + margin, b.ty1 + margin, b.h, b.h);
+  b.sx0 = stock.x0, b.sy0 = stock.y0, b.sx1 = stock.x1, b.sy1 = stock.y1;
+  const double margin = b.R + 1.5 * b.h;
+  path.grid = GridSpec::covering(stock.x0 - margin, stock.y0 - margin, stock.x1 + margin, stock.y1 + margin, b.h, b.h);
   const GridSpec& g = path.grid;
   const ClGrid cl = grown.compute(g);
   if (checkpoint) checkpoint(0.1);
+  // A machined stock: its top on the grid, and levels from its highest point.
+  std::vector<double> stock_top;
+  b.top = stock.top;
+  if (stock.surface) {
+    stock_top = detail::stock_top_on_grid(g, stock);
+    b.top = -std::numeric_limits<double>::infinity();
+    for (double t : stock_top) b.top = std::max(b.top, t);
+  }
+  b.clearance_z = path.clearance_z = b.top + p.clearance;
 
   std::vector<double> tips(g.size()), in_box, flat;
   for (std::size_t n = 0; n < g.size(); ++n) tips[n] = cl.z[n] + p.leave;
@@ -228,20 +273,31 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
         flat.push_back(t);
     }
   const double min_flat = p.flat_min_area > 0 ? p.flat_min_area : kPi * b.R * b.R / 4;
-  const LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, stock.top, p, min_flat);
+  const LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, b.top, p, min_flat);
 
   // Material left: the largest gap between levels, and between loops the
   // cutter's profile at up to a stepover and a cell from a loop.
   double gap = 0;
-  for (std::size_t k = 0; k < plan.z.size(); ++k) gap = std::max(gap, (k ? plan.z[k - 1] : stock.top) - plan.z[k]);
+  for (std::size_t k = 0; k < plan.z.size(); ++k) gap = std::max(gap, (k ? plan.z[k - 1] : b.top) - plan.z[k]);
   path.terrace_bound = gap + cutter.profile_height(std::min(cutter.radius, path.stepover + b.h));
 
-  std::vector<double> phi(g.size());
-  std::optional<Vec3> at;
-  for (std::size_t k = 0; k < plan.z.size(); ++k) {
-    const double z = plan.z[k], z_above = k ? plan.z[k - 1] : stock.top;
-    for (std::size_t n = 0; n < g.size(); ++n) phi[n] = std::max(tips[n] - z, b.dbox(g.x(n % g.nx), g.y(n / g.nx)));
-    const PointQuery exact = [&b, z](double x, double y) { return b.phi(x, y, z); };
+  // The regions of all levels at once (independent), then the passes in order.
+  std::vector<detail::LevelRegion> regions(plan.z.size());
+  std::atomic<std::size_t> regions_done{0};
+  tbb::parallel_for(std::size_t{0}, plan.z.size(), [&](std::size_t k) {
+    const double z = plan.z[k];
+    std::vector<double> phi(g.size()), reach;
+    // Within reach of material above z: the radius and two cells (the
+    // stock's top on the grid is the highest within a cell of each node, and
+    // the distance is between nodes), so a tip left out has no material
+    // above z under the cutter.
+    if (stock.surface) reach = detail::material_reach(g, stock_top, z, b.R + 2 * b.h);
+    for (std::size_t n = 0; n < g.size(); ++n) {
+      phi[n] = std::max(tips[n] - z, b.dbox(g.x(n % g.nx), g.y(n / g.nx)));
+      if (stock.surface) phi[n] = std::max(phi[n], reach[n]);
+    }
+    const std::vector<double>* within = stock.surface ? &reach : nullptr;
+    const PointQuery exact = [&b, z, within](double x, double y) { return b.region_value(x, y, z, within); };
     detail::RegionInput in;
     in.grid = &g;
     in.phi = &phi;
@@ -249,14 +305,22 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     in.stepover = path.stepover;
     in.boundary_tolerance = p.tolerance / 4;
     in.inner_tolerance = b.h / 4;
-    const detail::LevelRegion region = detail::level_region(in);
+    regions[k] = detail::level_region(in);
+    if (checkpoint) checkpoint(0.1 + 0.8 * static_cast<double>(++regions_done) / static_cast<double>(plan.z.size()));
+  });
+  std::optional<Vec3> at;
+  for (std::size_t k = 0; k < plan.z.size(); ++k) {
+    const double z = plan.z[k], z_above = k ? plan.z[k - 1] : b.top;
+    path.stats.point_queries += regions[k].queries;
+    b.mask_above.swap(b.mask);
+    b.mask = std::move(regions[k].inside);
     RoughingLevel lv;
     lv.z = z;
     lv.flat = plan.flat[k];
-    b.level(region, z, z_above, lv, at);
+    b.level(regions[k], z, z_above, lv, at);
     if (!lv.passes.empty()) path.levels.push_back(std::move(lv));
-    if (checkpoint) checkpoint(0.1 + 0.9 * static_cast<double>(k + 1) / static_cast<double>(plan.z.size()));
   }
+  if (checkpoint) checkpoint(1.0);
   for (const auto& lv : path.levels) {
     path.stats.passes += lv.passes.size();
     for (std::size_t q = 0; q < lv.passes.size(); ++q) {

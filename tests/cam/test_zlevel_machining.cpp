@@ -6,6 +6,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "cncstream/cam/cl_engine.hpp"
@@ -24,6 +26,8 @@ struct Case {
   const char* cutter;
   double step_down;
   double sim_step;
+  ClearingOrder order = ClearingOrder::InsideOut;
+  bool climb = true;
 };
 
 void rough_and_check(const Case& k) {
@@ -35,6 +39,8 @@ void rough_and_check(const Case& k) {
   p.step_down = k.step_down;
   p.leave = 0.3;
   p.tolerance = 0.05;
+  p.order = k.order;
+  p.climb = k.climb;
   const Box3 box = mesh.bounds();
   const StockBlock block{box.lo.x, box.lo.y, box.hi.x, box.hi.y, box.hi.z + 1};
   const ClEngine grown(mesh, grown_cutter(cutter, p.leave));
@@ -69,8 +75,8 @@ void rough_and_check(const Case& k) {
   std::vector<double> tips(tg.size());
   for (std::size_t n = 0; n < tg.size(); ++n) {
     const double x = tg.x(n % tg.nx), y = tg.y(n / tg.nx);
-    const bool in_box = x >= block.x0 - cutter.radius && x <= block.x1 + cutter.radius &&
-                        y >= block.y0 - cutter.radius && y <= block.y1 + cutter.radius;
+    const double ex = std::max({0.0, block.x0 - x, x - block.x1}), ey = std::max({0.0, block.y0 - y, y - block.y1});
+    const bool in_box = std::hypot(ex, ey) <= cutter.radius;
     tips[n] = in_box ? cl.z[n] + p.leave : std::numeric_limits<double>::infinity();
   }
   // The regions are found on a grid: a part of one narrower than a cell
@@ -120,5 +126,9 @@ void rough_and_check(const Case& k) {
 TEST(ZLevelMachining, PlaqueFlat6) { rough_and_check({"examples/plaque.stl", false, "flat:6", 3, 0.5}); }
 
 TEST(ZLevelMachining, GearwheelFlat3) { rough_and_check({"gearwheel.bin.stl", true, "flat:3", 2, 0.25}); }
+
+TEST(ZLevelMachining, GearwheelFlat3OutsideInConventional) {
+  rough_and_check({"gearwheel.bin.stl", true, "flat:3", 2, 0.25, ClearingOrder::OutsideIn, false});
+}
 
 TEST(ZLevelMachining, PlaqueBull6) { rough_and_check({"examples/plaque.stl", false, "bull:6:1", 3, 0.5}); }

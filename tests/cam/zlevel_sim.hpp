@@ -9,6 +9,7 @@
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/cam/stock.hpp"
 #include "cncstream/cam/zlevel_roughing.hpp"
+#include "cam/cl_test_meshes.hpp"
 
 namespace zlevel_test {
 
@@ -71,6 +72,37 @@ inline std::vector<double> ideal_surface(const GridSpec& grid, std::size_t pad, 
       s[j * grid.nx + i] = best;
     }
   return s;
+}
+
+// A block [-30, 30] x [-25, 25] x [0, 20] with a pocket [-15, 15] x
+// [-10, 10] down to z = 10, vertical walls.
+inline Mesh pocket_block() {
+  std::vector<std::array<Vec3, 3>> t;
+  auto quad = [&](Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+    t.push_back({a, b, c});
+    t.push_back({a, c, d});
+  };
+  auto top = [&](double x0, double y0, double x1, double y1, double z) {
+    quad({x0, y0, z}, {x1, y0, z}, {x1, y1, z}, {x0, y1, z});
+  };
+  top(-30, -25, 30, 25, 0);
+  top(-30, -25, -15, 25, 20);
+  top(15, -25, 30, 25, 20);
+  top(-15, -25, 15, -10, 20);
+  top(-15, 10, 15, 25, 20);
+  top(-15, -10, 15, 10, 10);
+  auto wall = [&](double x0, double y0, double x1, double y1, double z0, double z1) {
+    quad({x0, y0, z0}, {x1, y1, z0}, {x1, y1, z1}, {x0, y0, z1});
+  };
+  wall(-30, -25, 30, -25, 0, 20);
+  wall(30, -25, 30, 25, 0, 20);
+  wall(30, 25, -30, 25, 0, 20);
+  wall(-30, 25, -30, -25, 0, 20);
+  wall(-15, -10, 15, -10, 10, 20);
+  wall(15, -10, 15, 10, 10, 20);
+  wall(15, 10, -15, 10, 10, 20);
+  wall(-15, 10, -15, -10, 10, 20);
+  return cl_test::welded(t);
 }
 
 }  // namespace zlevel_test

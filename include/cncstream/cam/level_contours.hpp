@@ -36,6 +36,12 @@ struct ContourOptions {
   // of a lower level never pokes out of a higher one's (Z-level roughing
   // relies on it where walls are vertical).
   bool nested = false;
+  // With the exact function: where the contour turns by more than
+  // `corner_angle_deg` within one cell (a corner of the region cut off by a
+  // chord), add the corner where the two neighbouring chords' lines meet,
+  // or the farthest point towards it that the exact function puts inside.
+  bool sharp_corners = true;
+  double corner_angle_deg = 30;
 };
 
 struct LevelContour {
@@ -47,6 +53,7 @@ struct LevelContours {
   std::vector<LevelContour> contours;
   std::size_t queries = 0;    // point queries spent on refinement
   std::size_t crossings = 0;  // cell edges crossed
+  std::size_t corners = 0;    // sharp corners added
 };
 
 // `values`: grid.size() samples, node (i, j) at index j * nx + i; a NaN

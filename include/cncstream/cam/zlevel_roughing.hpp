@@ -4,7 +4,8 @@
 // the lowest the roughing cutter's tip may go at (x, y) and still keep
 // `leave` of material on the part in every direction. At each level z the
 // tip region {grown CL + leave <= z}, limited to the stock's XY box grown by
-// the cutter radius (so the block's sides are cleared), is cleared by
+// the cutter radius (round at the corners; so the block's sides are
+// cleared), is cleared by
 // contour-parallel loops `stepover` apart (iso-lines of the region's distance
 // transform), ordered inside out (or outside in), the region's own boundary
 // last, in the climb direction for a clockwise spindle. The boundary comes
@@ -29,10 +30,17 @@
 
 namespace cncstream {
 
-// A rectangular block of material in model coordinates, top at `top`.
+class HeightFieldStock;
+
+// A rectangular block of material in model coordinates, top at `top`. With
+// a surface (an earlier operation's result; it must outlive the call), the
+// stock's top is that surface where it lies lower than `top` (beyond the
+// surface's grid: `top`): levels start below its highest point and each
+// level clears only within reach of material above it.
 struct StockBlock {
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   double top = 0;
+  const HeightFieldStock* surface = nullptr;
 };
 
 enum class ClearingOrder { InsideOut, OutsideIn };
@@ -86,7 +94,7 @@ struct RoughingPath {
   Cutter cutter;                       // the roughing cutter
   double leave = 0;
   double stepover = 0;                 // used
-  double clearance_z = 0;              // stock top + clearance
+  double clearance_z = 0;              // highest stock top + clearance
   // Material left above the part grown by `leave`, measured vertically, is
   // at most this where the cutter reaches (plus the tolerance): the largest
   // gap between levels plus the scallop between loops on a round cutter.
