@@ -74,6 +74,7 @@ struct Builder {
   double R = 0, h = 0, leave = 0;
   double sx0 = 0, sy0 = 0, sx1 = 0, sy1 = 0;  // the stock's XY box
   double top = 0;                             // the stock's highest point
+  double scallop = 0;                         // left between loops above a level
   double clearance_z = 0;
 
   // Signed distance from the stock's XY box grown by the radius (rounded
@@ -120,27 +121,31 @@ struct Builder {
   }
   std::vector<std::uint8_t> mask, mask_above;  // nodes inside the region: this level, the level above
 
+  bool k_first_level(double z_above) const { return z_above >= top; }  // above: the stock itself
+
   // A new pass from `from` (if any) to the loop, lifted, ramping down along
   // the loop from just above z_above to z, then the loop at z.
   RoughingPass entry(const std::optional<Vec3>& from, const Polyline& loop, double length, double z, double z_above) {
     RoughingPass pass;
     pass.lift_before = true;
     pass.lift_z = clearance_z;
-    const double low = std::min(z_above + std::min(p.clearance, 1.0), clearance_z);
+    // Over a cleared level: above its scallops.
+    const double above = k_first_level(z_above) ? 0.0 : scallop;
+    const double low = std::min(z_above + above + std::min(p.clearance, 1.0), clearance_z);
     // Over the level above's loops, or over the stock's top.
-    const bool over_top = z_above >= top;
+    const bool over_top = k_first_level(z_above);
     if (from && low < clearance_z && (over_top || segment_inside(*from, loop.front(), z_above, mask_above))) {
       pass.lift_z = low;
       ++path.stats.low_lifts;
     } else {
       ++path.stats.high_lifts;
     }
-    const double top = std::min(z_above + 0.5, pass.lift_z);
-    const double drop = top - z;
+    const double ramp_top = std::min(z_above + above + 0.5, pass.lift_z);
+    const double drop = ramp_top - z;
     const double need = drop / std::tan(p.ramp_angle_deg * kPi / 180);
     const double laps = std::max(1.0, std::ceil(need / std::max(length, 1e-9)));
     if (length < (p.min_ramp_loop > 0 ? p.min_ramp_loop : kPi * R / 2)) ++path.stats.short_entries;
-    pass.points.push_back({loop.front().x, loop.front().y, top});
+    pass.points.push_back({loop.front().x, loop.front().y, ramp_top});
     double s = 0;
     const double total = laps * length;
     for (int lap = 0; lap < static_cast<int>(laps); ++lap)
@@ -148,7 +153,7 @@ struct Builder {
         const Vec3& a = loop[k - 1];
         const Vec3& b = loop[k % loop.size()];
         s += xy_dist(a, b);
-        pass.points.push_back({b.x, b.y, top - drop * std::min(1.0, s / total)});
+        pass.points.push_back({b.x, b.y, ramp_top - drop * std::min(1.0, s / total)});
       }
     pass.entry_points = pass.points.size() - 1;
     pass.points.back().z = z;
@@ -273,13 +278,23 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
         flat.push_back(t);
     }
   const double min_flat = p.flat_min_area > 0 ? p.flat_min_area : kPi * b.R * b.R / 4;
-  const LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, b.top, p, min_flat);
+  // A round cutter leaves scallops between its loops, up to its profile at
+  // the farthest a point is from a loop (a stepover and a cell); the next
+  // level cuts them too, so the levels are that much closer than the step
+  // down and no move cuts deeper.
+  const double scallop = b.scallop = cutter.profile_height(std::min(cutter.radius, path.stepover + b.h));
+  RoughingParams spaced = p;
+  spaced.step_down = p.step_down - scallop;
+  if (!(spaced.step_down > 0.1 * p.step_down))
+    throw std::invalid_argument("roughing: the scallop between loops of " + cutter.spec() + " at stepover " +
+                                num(path.stepover) + " (" + num(scallop) + " mm) leaves no room in the step down " +
+                                num(p.step_down) + "; use a smaller stepover");
+  const LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, b.top, spaced, min_flat);
 
-  // Material left: the largest gap between levels, and between loops the
-  // cutter's profile at up to a stepover and a cell from a loop.
+  // Material left: the largest gap between levels and the scallop.
   double gap = 0;
   for (std::size_t k = 0; k < plan.z.size(); ++k) gap = std::max(gap, (k ? plan.z[k - 1] : b.top) - plan.z[k]);
-  path.terrace_bound = gap + cutter.profile_height(std::min(cutter.radius, path.stepover + b.h));
+  path.terrace_bound = gap + scallop;
 
   // The regions of all levels at once (independent), then the passes in order.
   std::vector<detail::LevelRegion> regions(plan.z.size());

@@ -58,7 +58,7 @@ void rough_and_check(const Case& k) {
   const GridSpec g = GridSpec::covering(block.x0 + 0.0373, block.y0 + 0.0411, block.x1, block.y1, k.sim_step, k.sim_step);
   HeightFieldStock stock(g, block.top);
   const zlevel_test::SimResult sim = zlevel_test::machine(stock, path);
-  EXPECT_EQ(sim.rapid_removed, 0.0) << "a move over or a descent cut material";
+  EXPECT_LE(sim.rapid_removed, 1e-9) << "a move over or a descent cut material";  // rounding only
   EXPECT_LE(sim.deepest_cut, p.step_down + 1e-6);
 
   // The stock to leave: nowhere closer to the part than leave - tolerance

@@ -11,10 +11,11 @@
 // last, in the climb direction for a clockwise spindle. The boundary comes
 // from the CL grid by marching squares refined with exact point queries.
 //
-// Why no move cuts deeper than the level step: the regions shrink as the
+// Why no move cuts deeper than the step down: the regions shrink as the
 // levels go down, and every level clears its whole region (loops closer than
 // the cutter radius, the boundary followed), so wherever the tip goes at a
-// level, the cutter's footprint was cleared to the level above. Entries ramp
+// level, the cutter's footprint was cleared to the level above (a round
+// cutter to its scallop above it: its levels are closer by that much). Entries ramp
 // along a loop of the region from the level above; links between loops stay
 // down when the straight move lies inside the region, otherwise the tool
 // lifts to just above the level above (when the move over lies over its
@@ -97,7 +98,8 @@ struct RoughingPath {
   double clearance_z = 0;              // highest stock top + clearance
   // Material left above the part grown by `leave`, measured vertically, is
   // at most this where the cutter reaches (plus the tolerance): the largest
-  // gap between levels plus the scallop between loops on a round cutter.
+  // gap between levels plus the scallop between loops on a round cutter
+  // (at most step_down: a round cutter's levels are closer by the scallop).
   double terrace_bound = 0;
   GridSpec grid;                       // of the region computation
   RoughingStats stats;
