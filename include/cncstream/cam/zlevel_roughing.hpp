@@ -20,6 +20,11 @@
 // down when the straight move lies inside the region, otherwise the tool
 // lifts to just above the level above (when the move over lies over its
 // region) or to the clearance height above the stock.
+//
+// The regions come from a grid (cells of min(R / 6, sqrt(2 * tolerance *
+// R)), so a chord leaves a region by at most tolerance / 2): a part of a
+// region narrower than a cell (the far end of a narrow bay) can be missed,
+// and is then left uncut, never gouged.
 #include <cstddef>
 #include <optional>
 #include <vector>
