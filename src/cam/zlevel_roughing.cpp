@@ -24,7 +24,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 std::string num(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
+  (void)std::snprintf(buf, sizeof buf, "%g", v);
   return buf;
 }
 
