@@ -96,13 +96,15 @@ struct Builder {
     ++path.stats.point_queries;
     return region_value(x, y, z);
   }
-  // Whether the straight move a-b (both ends on loops of the level) lies in
-  // the tip region of level z (exact queries) and, away from its ends, in
-  // cells whose corners are all inside the region as the grid saw it
-  // (`mask`): inside the loops, so in what the level cleared (or clears) -
-  // not in a sliver of the region too thin for the grid, which no loop
-  // visits.
-  bool segment_inside(const Vec3& a, const Vec3& b, double z, const std::vector<std::uint8_t>& mask) {
+  // Whether the straight move a-b (both ends on loops) lies in the tip
+  // region of level z (exact queries) and in what the loops of the level
+  // above cleared (`cleared`, its boundary loops; empty: all, the stock's
+  // top): away from the ends in cells whose corners are all inside as the
+  // grid saw it (`mask`, of loops inside `cleared`), near the ends inside
+  // `cleared` itself - not in a sliver of the region too thin for the grid,
+  // which no loop visited.
+  bool segment_inside(const Vec3& a, const Vec3& b, double z, const std::vector<std::uint8_t>& mask,
+                      const std::vector<Polyline>* cleared) {
     const GridSpec& g = path.grid;
     const double len = xy_dist(a, b);
     const auto n = static_cast<std::size_t>(std::ceil(len / (h / 2)));
@@ -110,7 +112,10 @@ struct Builder {
       const double t = n ? static_cast<double>(k) / static_cast<double>(n) : 0.0;
       const double x = a.x + (b.x - a.x) * t, y = a.y + (b.y - a.y) * t;
       if (phi(x, y, z) > 0) return false;
-      if (std::min(t, 1 - t) * len <= 1.5 * h) continue;
+      if (std::min(t, 1 - t) * len <= 1.5 * h) {
+        if (cleared && k > 0 && k < n && !detail::inside_loops({x, y, z}, *cleared)) return false;
+        continue;
+      }
       const auto i = static_cast<std::size_t>(std::floor((x - g.x0) / g.dx));
       const auto j = static_cast<std::size_t>(std::floor((y - g.y0) / g.dy));
       if (i + 1 >= g.nx || j + 1 >= g.ny) return false;
@@ -120,6 +125,7 @@ struct Builder {
     return true;
   }
   std::vector<std::uint8_t> mask, mask_above;  // nodes inside the region: this level, the level above
+  std::vector<Polyline> boundary_above;  // the boundary loops of the level above
 
   bool k_first_level(double z_above) const { return z_above >= top; }  // above: the stock itself
 
@@ -134,7 +140,9 @@ struct Builder {
     const double low = std::min(z_above + above + std::min(p.clearance, 1.0), clearance_z);
     // Over the level above's loops, or over the stock's top.
     const bool over_top = k_first_level(z_above);
-    if (from && low < clearance_z && (over_top || segment_inside(*from, loop.front(), z_above, mask_above))) {
+    const std::vector<Polyline>* cleared = &boundary_above;
+    if (from && low < clearance_z &&
+        (over_top || segment_inside(*from, loop.front(), z_above, mask_above, cleared))) {
       pass.lift_z = low;
       ++path.stats.low_lifts;
     } else {
@@ -217,7 +225,8 @@ struct Builder {
         if (at) pts = rotated_near(pts, *at);
         for (auto& v : pts) v.z = z;
         const bool first_of_part = l == loops.front();
-        if (!first_of_part && at && segment_inside(*at, pts.front(), z, mask)) {
+        const std::vector<Polyline>* cleared = k_first_level(z_above) ? nullptr : &boundary_above;
+        if (!first_of_part && at && segment_inside(*at, pts.front(), z, mask, cleared)) {
           append_loop(out.passes.back().points, pts, z, true);
         } else {
           out.passes.push_back(entry(at, pts, l->length, z, z_above));
@@ -327,12 +336,16 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   for (std::size_t k = 0; k < plan.z.size(); ++k) {
     const double z = plan.z[k], z_above = k ? plan.z[k - 1] : b.top;
     path.stats.point_queries += regions[k].queries;
+    path.stats.corners_dropped += detail::settle_boundary(regions[k], k > 0 ? &b.boundary_above : nullptr);
     b.mask_above.swap(b.mask);
     b.mask = std::move(regions[k].inside);
     RoughingLevel lv;
     lv.z = z;
     lv.flat = plan.flat[k];
     b.level(regions[k], z, z_above, lv, at);
+    b.boundary_above.clear();
+    for (const auto& l : regions[k].loops)
+      if (l.offset == 0) b.boundary_above.push_back(l.points);
     if (!lv.passes.empty()) path.levels.push_back(std::move(lv));
   }
   if (checkpoint) checkpoint(1.0);

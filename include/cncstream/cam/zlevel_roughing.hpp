@@ -92,6 +92,7 @@ struct RoughingStats {
   std::size_t low_lifts = 0;   // to just above the level above
   std::size_t short_entries = 0;  // ramps along a loop shorter than min_ramp_loop
   std::size_t point_queries = 0;
+  std::size_t corners_dropped = 0;  // sharp corners outside the level above's boundary
   double cut_length = 0;       // mm at feed (ramps and links included)
 };
 
