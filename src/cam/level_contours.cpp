@@ -98,7 +98,7 @@ double cross2(double ax, double ay, double bx, double by) { return ax * by - ay 
 // Corners of the region that chords cut off: between b and c of a, b, c, d
 // where a-b and c-d turn left by a corner's angle and meet beyond b-c.
 Polyline add_corners(const Polyline& pts, double level, const PointQuery& exact, const ContourOptions& opt,
-                     double max_chord, std::size_t& queries, std::size_t& corners) {
+                     double max_chord, std::size_t& queries, std::vector<Vec3>& corners) {
   const std::size_t n = pts.size();
   if (n < 4) return pts;
   const double min_sin = std::sin(opt.corner_angle_deg * 3.14159265358979323846 / 180);
@@ -136,7 +136,7 @@ Polyline add_corners(const Polyline& pts, double level, const PointQuery& exact,
     }
     if (lo * std::hypot(x.x - m.x, x.y - m.y) <= opt.xy_tolerance) continue;
     out.push_back({m.x + (x.x - m.x) * lo, m.y + (x.y - m.y) * lo, level});
-    ++corners;
+    corners.push_back(out.back());
   }
   return out;
 }
@@ -233,7 +233,7 @@ LevelContours level_contours(const GridSpec& g, const std::vector<double>& v, do
   if (exact && opt.sharp_corners) {
     const double max_chord = std::hypot(g.dx, g.dy) * 1.01;
     for (auto& c : out.contours)
-      if (c.closed) c.points = add_corners(c.points, level, exact, opt, max_chord, tr.queries, out.corners);
+      if (c.closed) c.points = add_corners(c.points, level, exact, opt, max_chord, tr.queries, out.corner_points);
   }
   out.queries = tr.queries;
   out.crossings = static_cast<std::size_t>(std::count(tr.done.begin(), tr.done.end(), std::uint8_t{1}));

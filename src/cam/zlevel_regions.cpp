@@ -84,6 +84,45 @@ std::size_t component_at(const GridSpec& g, const std::vector<std::uint32_t>& la
 
 }  // namespace
 
+bool inside_loops(const Vec3& p, const std::vector<Polyline>& loops) {
+  int winding = 0;
+  for (const Polyline& l : loops)
+    for (std::size_t k = 0; k < l.size(); ++k) {
+      const Vec3& a = l[k];
+      const Vec3& b = l[(k + 1) % l.size()];
+      if (seg_dist(p, a, b) <= 1e-9) return true;
+      const double side = (b.x - a.x) * (p.y - a.y) - (p.x - a.x) * (b.y - a.y);
+      if (a.y <= p.y) {
+        if (b.y > p.y && side > 0) ++winding;
+      } else if (b.y <= p.y && side < 0) {
+        --winding;
+      }
+    }
+  return winding != 0;
+}
+
+std::size_t settle_boundary(LevelRegion& region, const std::vector<Polyline>* above) {
+  std::vector<Vec3> out;
+  if (above)
+    for (const Vec3& c : region.corners)
+      if (!inside_loops(c, *above)) out.push_back(c);
+  std::size_t dropped = 0;
+  for (RegionLoop& l : region.loops) {
+    if (l.offset != 0) continue;
+    const std::size_t before = l.points.size();
+    if (!out.empty())
+      std::erase_if(l.points, [&](const Vec3& v) {
+        return std::any_of(out.begin(), out.end(), [&](const Vec3& c) { return c.x == v.x && c.y == v.y; });
+      });
+    dropped += before - l.points.size();
+    // Then only exactly collinear points go (a corner lies on the lines of
+    // its neighbouring chords, so they go with it only after this).
+    l.points = simplify_closed(l.points, 1e-9);
+    l.length = closed_length(l.points);
+  }
+  return dropped;
+}
+
 double closed_length(const Polyline& loop) {
   double l = 0;
   for (std::size_t k = 0; k < loop.size(); ++k) {
@@ -130,7 +169,7 @@ LevelRegion level_region(const RegionInput& in) {
 
   auto add = [&](Polyline pts, int offset, double tol) {
     if (pts.size() < 2) return;
-    pts = simplify_closed(pts, tol);
+    if (tol > 0) pts = simplify_closed(pts, tol);
     RegionLoop l;
     l.component = component_at(g, label, pts.front());
     l.offset = offset;
@@ -144,10 +183,9 @@ LevelRegion level_region(const RegionInput& in) {
   co.nested = true;
   LevelContours boundary = level_contours(g, phi, 0.0, *in.exact, co);
   out.queries += boundary.queries;
-  // Only exactly collinear points go: a simplified boundary could poke out
-  // of the level above's by its tolerance, and the cutter there would meet
-  // a sliver of uncut material the whole height of the levels above.
-  for (auto& c : boundary.contours) add(std::move(c.points), 0, 1e-9);
+  out.corners = std::move(boundary.corner_points);
+  // Not simplified here: see settle_boundary.
+  for (auto& c : boundary.contours) add(std::move(c.points), 0, 0);
 
   // Inner loops: iso-lines of the distance to the boundary. A node's
   // distance to the nearest outside node overestimates its distance to the

@@ -24,6 +24,7 @@ struct LevelRegion {
   std::size_t components = 0;
   std::size_t queries = 0;
   std::vector<std::uint8_t> inside;  // per node: 1 where phi <= 0
+  std::vector<Vec3> corners;         // boundary points added at sharp corners
 };
 
 struct RegionInput {
@@ -36,6 +37,21 @@ struct RegionInput {
 };
 
 LevelRegion level_region(const RegionInput& in);
+
+// Drops from the boundary loops of `region` the sharp corners that lie
+// outside `above` (the boundary loops of the level above, if any), then
+// drops exactly collinear points. Crossings on the grid's edges are nested
+// level to level (nested bisection), corners are not: one poking out of the
+// level above's loops would reach material no loop of that level cleared.
+// Only exactly collinear points go: a boundary simplified within a tolerance
+// could poke out of the level above's by it, the cutter there meeting a
+// sliver of uncut material the whole height of the levels above. Returns
+// the number of corners dropped.
+std::size_t settle_boundary(LevelRegion& region, const std::vector<Polyline>* above);
+
+// Whether p is inside closed loops with the region on their left (winding
+// number), or within 1e-9 of one.
+bool inside_loops(const Vec3& p, const std::vector<Polyline>& loops);
 
 // Length of a closed loop.
 double closed_length(const Polyline& loop);

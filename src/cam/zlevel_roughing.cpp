@@ -24,7 +24,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 std::string num(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
+  (void)std::snprintf(buf, sizeof buf, "%g", v);
   return buf;
 }
 
@@ -74,6 +74,7 @@ struct Builder {
   double R = 0, h = 0, leave = 0;
   double sx0 = 0, sy0 = 0, sx1 = 0, sy1 = 0;  // the stock's XY box
   double top = 0;                             // the stock's highest point
+  double scallop = 0;                         // left between loops above a level
   double clearance_z = 0;
 
   // Signed distance from the stock's XY box grown by the radius (rounded
@@ -95,13 +96,15 @@ struct Builder {
     ++path.stats.point_queries;
     return region_value(x, y, z);
   }
-  // Whether the straight move a-b (both ends on loops of the level) lies in
-  // the tip region of level z (exact queries) and, away from its ends, in
-  // cells whose corners are all inside the region as the grid saw it
-  // (`mask`): inside the loops, so in what the level cleared (or clears) -
-  // not in a sliver of the region too thin for the grid, which no loop
-  // visits.
-  bool segment_inside(const Vec3& a, const Vec3& b, double z, const std::vector<std::uint8_t>& mask) {
+  // Whether the straight move a-b (both ends on loops) lies in the tip
+  // region of level z (exact queries) and in what the loops of the level
+  // above cleared (`cleared`, its boundary loops; empty: all, the stock's
+  // top): away from the ends in cells whose corners are all inside as the
+  // grid saw it (`mask`, of loops inside `cleared`), near the ends inside
+  // `cleared` itself - not in a sliver of the region too thin for the grid,
+  // which no loop visited.
+  bool segment_inside(const Vec3& a, const Vec3& b, double z, const std::vector<std::uint8_t>& mask,
+                      const std::vector<Polyline>* cleared) {
     const GridSpec& g = path.grid;
     const double len = xy_dist(a, b);
     const auto n = static_cast<std::size_t>(std::ceil(len / (h / 2)));
@@ -109,7 +112,10 @@ struct Builder {
       const double t = n ? static_cast<double>(k) / static_cast<double>(n) : 0.0;
       const double x = a.x + (b.x - a.x) * t, y = a.y + (b.y - a.y) * t;
       if (phi(x, y, z) > 0) return false;
-      if (std::min(t, 1 - t) * len <= 1.5 * h) continue;
+      if (std::min(t, 1 - t) * len <= 1.5 * h) {
+        if (cleared && k > 0 && k < n && !detail::inside_loops({x, y, z}, *cleared)) return false;
+        continue;
+      }
       const auto i = static_cast<std::size_t>(std::floor((x - g.x0) / g.dx));
       const auto j = static_cast<std::size_t>(std::floor((y - g.y0) / g.dy));
       if (i + 1 >= g.nx || j + 1 >= g.ny) return false;
@@ -119,6 +125,9 @@ struct Builder {
     return true;
   }
   std::vector<std::uint8_t> mask, mask_above;  // nodes inside the region: this level, the level above
+  std::vector<Polyline> boundary_above;  // the boundary loops of the level above
+
+  bool k_first_level(double z_above) const { return z_above >= top; }  // above: the stock itself
 
   // A new pass from `from` (if any) to the loop, lifted, ramping down along
   // the loop from just above z_above to z, then the loop at z.
@@ -126,21 +135,25 @@ struct Builder {
     RoughingPass pass;
     pass.lift_before = true;
     pass.lift_z = clearance_z;
-    const double low = std::min(z_above + std::min(p.clearance, 1.0), clearance_z);
+    // Over a cleared level: above its scallops.
+    const double above = k_first_level(z_above) ? 0.0 : scallop;
+    const double low = std::min(z_above + above + std::min(p.clearance, 1.0), clearance_z);
     // Over the level above's loops, or over the stock's top.
-    const bool over_top = z_above >= top;
-    if (from && low < clearance_z && (over_top || segment_inside(*from, loop.front(), z_above, mask_above))) {
+    const bool over_top = k_first_level(z_above);
+    const std::vector<Polyline>* cleared = &boundary_above;
+    if (from && low < clearance_z &&
+        (over_top || segment_inside(*from, loop.front(), z_above, mask_above, cleared))) {
       pass.lift_z = low;
       ++path.stats.low_lifts;
     } else {
       ++path.stats.high_lifts;
     }
-    const double top = std::min(z_above + 0.5, pass.lift_z);
-    const double drop = top - z;
+    const double ramp_top = std::min(z_above + above + 0.5, pass.lift_z);
+    const double drop = ramp_top - z;
     const double need = drop / std::tan(p.ramp_angle_deg * kPi / 180);
     const double laps = std::max(1.0, std::ceil(need / std::max(length, 1e-9)));
     if (length < (p.min_ramp_loop > 0 ? p.min_ramp_loop : kPi * R / 2)) ++path.stats.short_entries;
-    pass.points.push_back({loop.front().x, loop.front().y, top});
+    pass.points.push_back({loop.front().x, loop.front().y, ramp_top});
     double s = 0;
     const double total = laps * length;
     for (int lap = 0; lap < static_cast<int>(laps); ++lap)
@@ -148,7 +161,7 @@ struct Builder {
         const Vec3& a = loop[k - 1];
         const Vec3& b = loop[k % loop.size()];
         s += xy_dist(a, b);
-        pass.points.push_back({b.x, b.y, top - drop * std::min(1.0, s / total)});
+        pass.points.push_back({b.x, b.y, ramp_top - drop * std::min(1.0, s / total)});
       }
     pass.entry_points = pass.points.size() - 1;
     pass.points.back().z = z;
@@ -212,7 +225,8 @@ struct Builder {
         if (at) pts = rotated_near(pts, *at);
         for (auto& v : pts) v.z = z;
         const bool first_of_part = l == loops.front();
-        if (!first_of_part && at && segment_inside(*at, pts.front(), z, mask)) {
+        const std::vector<Polyline>* cleared = k_first_level(z_above) ? nullptr : &boundary_above;
+        if (!first_of_part && at && segment_inside(*at, pts.front(), z, mask, cleared)) {
           append_loop(out.passes.back().points, pts, z, true);
         } else {
           out.passes.push_back(entry(at, pts, l->length, z, z_above));
@@ -273,13 +287,23 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
         flat.push_back(t);
     }
   const double min_flat = p.flat_min_area > 0 ? p.flat_min_area : kPi * b.R * b.R / 4;
-  const LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, b.top, p, min_flat);
+  // A round cutter leaves scallops between its loops, up to its profile at
+  // the farthest a point is from a loop (a stepover and a cell); the next
+  // level cuts them too, so the levels are that much closer than the step
+  // down and no move cuts deeper.
+  const double scallop = b.scallop = cutter.profile_height(std::min(cutter.radius, path.stepover + b.h));
+  RoughingParams spaced = p;
+  spaced.step_down = p.step_down - scallop;
+  if (!(spaced.step_down > 0.1 * p.step_down))
+    throw std::invalid_argument("roughing: the scallop between loops of " + cutter.spec() + " at stepover " +
+                                num(path.stepover) + " (" + num(scallop) + " mm) leaves no room in the step down " +
+                                num(p.step_down) + "; use a smaller stepover");
+  const LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, b.top, spaced, min_flat);
 
-  // Material left: the largest gap between levels, and between loops the
-  // cutter's profile at up to a stepover and a cell from a loop.
+  // Material left: the largest gap between levels and the scallop.
   double gap = 0;
   for (std::size_t k = 0; k < plan.z.size(); ++k) gap = std::max(gap, (k ? plan.z[k - 1] : b.top) - plan.z[k]);
-  path.terrace_bound = gap + cutter.profile_height(std::min(cutter.radius, path.stepover + b.h));
+  path.terrace_bound = gap + scallop;
 
   // The regions of all levels at once (independent), then the passes in order.
   std::vector<detail::LevelRegion> regions(plan.z.size());
@@ -312,12 +336,16 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   for (std::size_t k = 0; k < plan.z.size(); ++k) {
     const double z = plan.z[k], z_above = k ? plan.z[k - 1] : b.top;
     path.stats.point_queries += regions[k].queries;
+    path.stats.corners_dropped += detail::settle_boundary(regions[k], k > 0 ? &b.boundary_above : nullptr);
     b.mask_above.swap(b.mask);
     b.mask = std::move(regions[k].inside);
     RoughingLevel lv;
     lv.z = z;
     lv.flat = plan.flat[k];
     b.level(regions[k], z, z_above, lv, at);
+    b.boundary_above.clear();
+    for (const auto& l : regions[k].loops)
+      if (l.offset == 0) b.boundary_above.push_back(l.points);
     if (!lv.passes.empty()) path.levels.push_back(std::move(lv));
   }
   if (checkpoint) checkpoint(1.0);

@@ -12,7 +12,7 @@
 namespace cncstream::detail {
 
 std::vector<double> stock_top_on_grid(const GridSpec& g, const StockBlock& s) {
-  constexpr double none = -std::numeric_limits<double>::infinity();
+  constexpr double none = std::numeric_limits<double>::lowest();  // no stock
   std::vector<double> top(g.size(), none);
   const HeightFieldStock* surf = s.surface;
   for (std::size_t j = 0; j < g.ny; ++j)

@@ -10,7 +10,7 @@
 namespace cncstream::detail {
 
 // Per node of `g`: the highest stock top within a cell of the node (the
-// block's top where the surface does not reach; -inf outside the block), so
+// block's top where the surface does not reach; lowest() outside the block), so
 // material between nodes is never missed.
 std::vector<double> stock_top_on_grid(const GridSpec& g, const StockBlock& stock);
 

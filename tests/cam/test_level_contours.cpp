@@ -109,7 +109,7 @@ TEST(LevelContours, SharpCornerOfASquareIsRecovered) {
   o.xy_tolerance = 1e-4;
   const LevelContours c = level_contours(kGrid, sample(kGrid, square), 0.5, square, o);
   ASSERT_EQ(c.contours.size(), 1u);
-  EXPECT_EQ(c.corners, 4u);
+  EXPECT_EQ(c.corner_points.size(), 4u);
   for (const double sx : {-1.0, 1.0})
     for (const double sy : {-1.0, 1.0}) {
       double best = 1e9;

@@ -90,7 +90,7 @@ TEST(ZLevelPocket, MachinedIsThePocketLessTheStockToLeave) {
   const GridSpec g = GridSpec::covering(-29.9627, -24.9589, 30, 25, 0.25, 0.25);
   HeightFieldStock stock(g, 20);
   const zlevel_test::SimResult sim = zlevel_test::machine(stock, k.path);
-  EXPECT_EQ(sim.rapid_removed, 0.0);
+  EXPECT_LE(sim.rapid_removed, 1e-9);
   EXPECT_LE(sim.deepest_cut, 3 + 1e-9);
   const double leave = 0.3, tol = k.params.tolerance;
   for (std::size_t j = 0; j < g.ny; ++j)
@@ -124,7 +124,9 @@ TEST(ZLevelHemisphere, EveryLevelFollowsTheCircleOfItsHeight) {
   p.tolerance = 0.02;
   p.bottom = 0.3;  // the open hemisphere's rim would let the ball below it
   const RoughingPath path = build_zlevel_roughing(grown, ball, StockBlock{-12, -12, 12, 12, 11}, p);
-  ASSERT_EQ(path.levels.size(), 4u);  // 8, 5, 2 and the floor plus leave
+  // Levels closer than the step down by the ball's scallop between loops.
+  ASSERT_GE(path.levels.size(), 5u);
+  EXPECT_NEAR(path.terrace_bound, 3.0, 1e-9);
   for (const auto& lv : path.levels) {
     if (lv.z < 1) continue;  // the floor level: everywhere
     const double r = std::sqrt(13.3 * 13.3 - (lv.z + 3) * (lv.z + 3));
@@ -175,7 +177,7 @@ TEST(ZLevelPocket, MachinedStockIsClearedOnlyWhereMaterialIsAboveTheLevel) {
   }
   HeightFieldStock stock(g, 26, before);
   const zlevel_test::SimResult sim = zlevel_test::machine(stock, path);
-  EXPECT_EQ(sim.rapid_removed, 0.0);
+  EXPECT_LE(sim.rapid_removed, 1e-9);
   EXPECT_LE(sim.deepest_cut, 3 + 1e-9);
   for (std::size_t j = 0; j < g.ny; ++j)
     for (std::size_t i = 0; i < g.nx; ++i) {

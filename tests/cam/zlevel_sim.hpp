@@ -17,7 +17,7 @@ using namespace cncstream;
 
 struct SimResult {
   double deepest_cut = 0;          // largest height drop of one feed move
-  double rapid_removed = 0;        // material removed by lifts, moves over and descents
+  double rapid_removed = 0;        // deepest cut of a lift, move over or descent
   std::size_t moves = 0;
 };
 
@@ -28,7 +28,7 @@ inline SimResult machine(HeightFieldStock& stock, const RoughingPath& path) {
   auto move = [&](const Vec3& to, bool rapid) {
     stock.cut_segment(at, to, path.cutter);
     ++r.moves;
-    if (rapid) r.rapid_removed += stock.last_max_depth();
+    if (rapid) r.rapid_removed = std::max(r.rapid_removed, stock.last_max_depth());
     else r.deepest_cut = std::max(r.deepest_cut, stock.last_max_depth());
     at = to;
   };

@@ -53,7 +53,7 @@ struct LevelContours {
   std::vector<LevelContour> contours;
   std::size_t queries = 0;    // point queries spent on refinement
   std::size_t crossings = 0;  // cell edges crossed
-  std::size_t corners = 0;    // sharp corners added
+  std::vector<Vec3> corner_points;  // sharp corners added (points of the contours)
 };
 
 // `values`: grid.size() samples, node (i, j) at index j * nx + i; a NaN

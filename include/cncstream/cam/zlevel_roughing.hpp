@@ -11,14 +11,20 @@
 // last, in the climb direction for a clockwise spindle. The boundary comes
 // from the CL grid by marching squares refined with exact point queries.
 //
-// Why no move cuts deeper than the level step: the regions shrink as the
+// Why no move cuts deeper than the step down: the regions shrink as the
 // levels go down, and every level clears its whole region (loops closer than
 // the cutter radius, the boundary followed), so wherever the tip goes at a
-// level, the cutter's footprint was cleared to the level above. Entries ramp
+// level, the cutter's footprint was cleared to the level above (a round
+// cutter to its scallop above it: its levels are closer by that much). Entries ramp
 // along a loop of the region from the level above; links between loops stay
 // down when the straight move lies inside the region, otherwise the tool
 // lifts to just above the level above (when the move over lies over its
 // region) or to the clearance height above the stock.
+//
+// The regions come from a grid (cells of min(R / 6, sqrt(2 * tolerance *
+// R)), so a chord leaves a region by at most tolerance / 2): a part of a
+// region narrower than a cell (the far end of a narrow bay) can be missed,
+// and is then left uncut, never gouged.
 #include <cstddef>
 #include <optional>
 #include <vector>
@@ -86,6 +92,7 @@ struct RoughingStats {
   std::size_t low_lifts = 0;   // to just above the level above
   std::size_t short_entries = 0;  // ramps along a loop shorter than min_ramp_loop
   std::size_t point_queries = 0;
+  std::size_t corners_dropped = 0;  // sharp corners outside the level above's boundary
   double cut_length = 0;       // mm at feed (ramps and links included)
 };
 
@@ -97,7 +104,8 @@ struct RoughingPath {
   double clearance_z = 0;              // highest stock top + clearance
   // Material left above the part grown by `leave`, measured vertically, is
   // at most this where the cutter reaches (plus the tolerance): the largest
-  // gap between levels plus the scallop between loops on a round cutter.
+  // gap between levels plus the scallop between loops on a round cutter
+  // (at most step_down: a round cutter's levels are closer by the scallop).
   double terrace_bound = 0;
   GridSpec grid;                       // of the region computation
   RoughingStats stats;
