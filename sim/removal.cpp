@@ -90,6 +90,7 @@ ToolTable parse_tool_table(const std::string& text) {
 void MaterialRemoval::attach(Machine& machine) {
   machine.set_motion_observer([this](const Vec3& a, const Vec3& b, bool) { cut(a, b); });
   machine.set_tool_observer([this](int tool) {
+    tool_ = tool;
     if (tools_.empty()) return;  // one cutter for the whole run
     if (const auto it = tools_.find(tool); it != tools_.end()) cutter_ = it->second;
     else unknown_tools_.insert(tool);
@@ -101,6 +102,8 @@ void MaterialRemoval::cut(const Vec3& from, const Vec3& to) {
   if (std::min(from.z, to.z) >= stock_.top()) return;
   stock_.cut_segment(from, to, cutter_);
   ++segments_;
+  double& deepest = deepest_[tool_];
+  deepest = std::max(deepest, stock_.last_max_depth());
 }
 
 std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path& path) const {

@@ -162,7 +162,21 @@ json JobManager::to_json(const DaemonJob& j) const {
            {"seconds", j.program ? json(j.program->seconds) : json(nullptr)}};
   json prog = nullptr;
   const EtaTable* et = eta_table(j);
-  if (j.program) prog = {{"lines", j.program->lines.size()}, {"estimated_s", et ? json(et->estimated_s) : json(nullptr)}};
+  if (j.program) {
+    json ops = json::array();
+    for (const auto& op : j.program->operations)
+      ops.push_back({{"name", op.name},
+                     {"tool", op.tool},
+                     {"cutter", op.cutter.spec()},
+                     {"detail", op.detail},
+                     {"first_line", op.first_line},
+                     {"lines", op.lines},
+                     {"feed_time_s", op.feed_time_s}});
+    prog = {{"lines", j.program->lines.size()},
+            {"estimated_s", et ? json(et->estimated_s) : json(nullptr)},
+            {"operations", ops},
+            {"notes", j.program->notes}};
+  }
   json progress = {{"lines_sent", j.progress.lines_sent},
                    {"lines_answered", j.progress.lines_answered},
                    {"last_answered_line", std::max<std::int64_t>(r.last_line, j.progress.last_answered_line)},
@@ -455,6 +469,10 @@ void JobManager::kick_generation(DaemonJob& j) {
         prog = make_program(text, programs_dir_);
         prog->work_mesh = std::move(r.work_mesh);
         prog->cutter = r.cutter;
+        if (r.operations.size() > 1)
+          for (const auto& op : r.operations) prog->tools[op.tool] = op.cutter;
+        prog->operations = r.operations;
+        prog->notes = r.notes;
         prog->height = std::make_shared<const jobs::HeightPreview>(std::move(r.preview));
       } else {
         text = read_all(file);
@@ -569,9 +587,11 @@ json JobManager::start(std::int64_t id, const std::string& client) {
   }
   std::optional<Mesh> design;
   std::optional<Cutter> cutter;
+  std::map<int, Cutter> tools;
   if (!j.resume && j.program->work_mesh && j.program->cutter) {
     design = j.program->work_mesh;
     cutter = j.program->cutter;
+    tools = j.program->tools;
   }
   // Marked running before the call: a session that starts at once reports
   // JobStarted from inside start_job.
@@ -579,7 +599,7 @@ json JobManager::start(std::int64_t id, const std::string& client) {
   last_run_[j.row.machine] = id;
   j.progress = {};
   j.verify.reset();
-  const auto r = machines_.start_job(m, std::move(in), std::move(design), cutter);
+  const auto r = machines_.start_job(m, std::move(in), std::move(design), cutter, std::move(tools));
   if (!r) {
     running_.erase(j.row.machine);
     throw ApiError{409, "refused", r.reason};

@@ -68,6 +68,10 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   if (p.step != 0 && p.step < 0.005) bad("step", "must be 0 (automatic) or >= 0.005 mm");
   const std::string dir = choice(j, "direction", "x", {"x", "y"});
   p.direction = dir == "y" ? RasterDirection::Y : RasterDirection::X;
+  const std::string strategy = choice(j, "strategy", "steep-shallow", {"steep-shallow", "raster"});
+  p.strategy = strategy == "raster" ? jobs::FinishStrategy::Raster : jobs::FinishStrategy::SteepShallow;
+  p.steep_angle = number(j, "steep_angle", 45, 1, 89);
+  p.scallop = opt_number(j, "scallop", 0.001, 10);
   p.feed = number(j, "feed", 1000, 0, 100000, true);
   p.plunge_feed = number(j, "plunge_feed", 300, 0, 100000, true);
   p.rpm = number(j, "rpm", 18000, 0, 100000);
@@ -98,6 +102,46 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
     p.bounds = XYBounds{v[0], v[1], v[2], v[3]};
     bounds = json::array({v[0], v[1], v[2], v[3]});
   }
+  // Stock and depth of cut, as the CLI's options (toolpath_params).
+  const std::string stock = j.contains("stock") && !j.at("stock").is_null()
+                                ? (j.at("stock").is_string() ? j.at("stock").get<std::string>()
+                                                             : (bad("stock", "expected a string"), std::string()))
+                                : std::string("auto");
+  if (stock.size() > 200) bad("stock", "too long");
+  if (stock != "none") {
+    try {
+      p.stock = jobs::parse_stock_spec(stock);
+    } catch (const std::exception&) {
+      bad("stock", "expected none, auto, auto:MARGIN or a block X0,Y0,Z0:X1,Y1,Z1 (work coordinates)");
+    }
+    // A height map is a file on the daemon's host: not named over the API.
+    if (p.stock->kind == jobs::StockSpec::Kind::HeightMap)
+      bad("stock", "expected none, auto, auto:MARGIN or a block X0,Y0,Z0:X1,Y1,Z1 (work coordinates)");
+  }
+  p.max_depth = opt_number(j, "max_depth", 0.01, 100);
+  std::string rough;
+  if (j.contains("rough") && !j.at("rough").is_null()) {
+    if (!j.at("rough").is_string() || j.at("rough").get<std::string>().size() > 64)
+      bad("rough", "expected a cutter such as flat:6");
+    rough = j.at("rough").get<std::string>();
+    try {
+      p.rough = parse_cutter_spec(rough);
+    } catch (const std::exception& e) {
+      bad("rough", e.what());
+    }
+    if (!(p.rough->diameter() > 0 && p.rough->diameter() <= 50)) bad("rough", "the diameter must be > 0 and <= 50 mm");
+  }
+  p.rough_max_depth = opt_number(j, "rough_max_depth", 0.01, 100);
+  p.leave = number(j, "leave", 0.3, 0, 10);
+  p.step_down = opt_number(j, "step_down", 0.01, 100);
+  p.rough_stepover = number(j, "rough_stepover", 0, 0, 50);
+  p.rough_feed = opt_number(j, "rough_feed", 0.1, 100000);
+  const std::string tool_change = choice(j, "tool_change", "m0", {"m0", "m6"});
+  p.tool_change = tool_change == "m6" ? ToolChangeCode::M6 : ToolChangeCode::PauseM0;
+  if (!p.stock && (p.rough || p.max_depth || p.step_down))
+    bad("stock", "none finishes from the part's top without a depth check: rough, max_depth and step_down need a stock");
+  auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+
   // The grid the CL engine samples: rows across, samples along.
   const double to_mm = (units == "in" ? 25.4 : 1.0) * p.part.scale;
   double w = 0, h = 0;
@@ -121,7 +165,14 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
                    {"controller_arc_tolerance", p.controller_arc_tolerance}, {"bounds", bounds},
                    {"floor", p.floor ? json(*p.floor) : json(nullptr)},
                    {"origin", origin},   {"z_zero", zz},                 {"units", units},
-                   {"scale", p.part.scale}};
+                   {"scale", p.part.scale},
+                   {"strategy", strategy}, {"steep_angle", p.steep_angle},
+                   {"scallop", p.scallop ? json(*p.scallop) : json(nullptr)},
+                   {"stock", stock},     {"max_depth", opt(p.max_depth)},
+                   {"rough", rough.empty() ? json(nullptr) : json(rough)},
+                   {"rough_max_depth", opt(p.rough_max_depth)}, {"leave", p.leave},
+                   {"step_down", opt(p.step_down)}, {"rough_stepover", p.rough_stepover},
+                   {"rough_feed", opt(p.rough_feed)}, {"tool_change", tool_change}};
   return out;
 }
 

@@ -85,9 +85,12 @@ void SimMachinePort::opened() {
   if (current_) current_->opened();
 }
 
-void SimMachinePort::set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter) {
+void SimMachinePort::set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter,
+                                     std::map<int, Cutter> tools) {
   base_.design = std::move(design);
   base_.cutter = cutter;
+  base_.tools.reset();
+  if (!tools.empty()) base_.tools = cncsim::ToolTable(tools.begin(), tools.end());
 }
 
 std::shared_ptr<session::SimulatorPort> SimMachinePort::retire() { return std::exchange(current_, nullptr); }
@@ -310,7 +313,7 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
 }
 
 session::CommandResult Machines::start_job(Machine& m, session::JobInput job, std::optional<Mesh> design,
-                                           std::optional<Cutter> cutter) {
+                                           std::optional<Cutter> cutter, std::map<int, Cutter> tools) {
   if (!(m.sim && m.config.sim_verify && design && cutter)) return m.session->start_job(std::move(job));
   auto& s = *m.session;
   if (!s.ready()) return session::CommandResult::refused(cat({"the machine is not connected (", to_string(s.link()), ")"}));
@@ -322,7 +325,7 @@ session::CommandResult Machines::start_job(Machine& m, session::JobInput job, st
   if (auto r = s.close(); !r) return r;
   auto old = m.sim->retire();
   boost::asio::post(pool_, [old] {});  // its thread is joined off the event loop
-  m.sim->set_next_design(std::move(design), cutter);
+  m.sim->set_next_design(std::move(design), cutter, std::move(tools));
   m.pending_start = std::move(job);
   m.verifying = true;
   try {

@@ -98,8 +98,10 @@ class Fitter {
     const std::optional<Plane> plane = plane_of(i, j);
     if (!plane) return std::nullopt;
     const PlaneAxes ax = axes_of(*plane);
-    // A run over material below: the plane must be upright (Z one of its axes).
-    if (o_.material_below && *plane == Plane::XY) return std::nullopt;
+    // A run over material below: the plane must be upright (Z one of its
+    // axes), unless it is a level run beside material on its right.
+    const bool level_sided = o_.material_right && *plane == Plane::XY;
+    if (o_.material_below && *plane == Plane::XY && !level_sided) return std::nullopt;
     auto at = [&](std::size_t k) { return P2{component(pts_[k], ax.first), component(pts_[k], ax.second)}; };
     const P2 A = at(i), B = at(j);
     const double d = len2(B - A);
@@ -127,7 +129,13 @@ class Fitter {
     // the bulge; with n to the left of A->B, a bulge to the left turns clockwise.
     const bool ccw = bulge < 0;
     Side side = Side::Both;
-    if (o_.material_below) {
+    if (level_sided) {
+      // Material on the right: outside the circle of an arc turning left
+      // (counter-clockwise), inside one turning right. The cut must stay on
+      // the free side of the points: inside the circle's ring of points for
+      // the first (as over a concave row), outside for the second (convex).
+      side = ccw ? Side::Concave : Side::Convex;
+    } else if (o_.material_below) {
       // Which way the points bulge in Z: up over a centre below (convex),
       // down under a centre above (concave).
       const double bulge_z = (ax.first == 2 ? n.a : n.b) * bulge;
@@ -173,7 +181,9 @@ class Fitter {
         const P2 q = at(k) - M;
         const P2 pk = at(k);
         const double rho = len2(pk - c);
-        const double uz = side == Side::Both || !(rho > 0) ? 1.0 : std::fabs((ax.first == 2 ? pk.a - c.a : pk.b - c.b) / rho);
+        const double uz = side == Side::Both || level_sided || !(rho > 0)
+                              ? 1.0
+                              : std::fabs((ax.first == 2 ? pk.a - c.a : pk.b - c.b) / rho);
         const auto [glo, ghi] = window(side, r, chords.lowest_radius(direction_angle(c, pk)), 0, uz);
         if (!(ghi >= glo)) return std::nullopt;
         // g = r - rho in [glo, ghi]  <=>  rho^2 - r^2 = alpha - beta t in [flo, fhi].
@@ -216,8 +226,9 @@ class Fitter {
             const double w = parts == 1 ? 0.5 : double(f) / parts;
             const P2 pw{p0.a + w * (p1.a - p0.a), p0.b + w * (p1.b - p0.b)};
             const double rho = len2(pw - c);
-            const double uz =
-                side == Side::Both || !(rho > 0) ? 1.0 : std::fabs((ax.first == 2 ? pw.a - c.a : pw.b - c.b) / rho);
+            const double uz = side == Side::Both || level_sided || !(rho > 0)
+                                  ? 1.0
+                                  : std::fabs((ax.first == 2 ? pw.a - c.a : pw.b - c.b) / rho);
             const double tol = o_.tolerance * uz, flo = -2 * r * tol + tol * tol;
             const P2 q = pw - M;
             const double alpha = dot2(q, q) - 0.25 * d * d, beta = 2 * dot2(q, n);
@@ -236,16 +247,18 @@ class Fitter {
       // The centre stays on the far side of the chord (under half a turn).
       if ((t > 0) == (bulge > 0) || t == 0) return std::nullopt;
     }
-    if (auto m = arc_with_centre(*plane, ax, i, j, std::clamp(t_ls, tl, th), M, n, ccw, side)) return m;
-    return arc_with_centre(*plane, ax, i, j, t, M, n, ccw, side);
+    if (auto m = arc_with_centre(*plane, ax, i, j, std::clamp(t_ls, tl, th), M, n, ccw, side, level_sided)) return m;
+    return arc_with_centre(*plane, ax, i, j, t, M, n, ccw, side, level_sided);
   }
 
  private:
   enum class Side { Both, Convex, Concave };
 
   // The arc from i to j about M + t n (rounded as written), if it holds exactly.
+  // `level`: a one-sided run in its own plane (material_right): the window
+  // is radial both ways, no vertical check.
   std::optional<FittedMove> arc_with_centre(Plane plane, const PlaneAxes& ax, std::size_t i, std::size_t j, double t,
-                                            P2 M, P2 n, bool ccw, Side side) const {
+                                            P2 M, P2 n, bool ccw, Side side, bool level) const {
     auto at = [&](std::size_t k) { return P2{component(pts_[k], ax.first), component(pts_[k], ax.second)}; };
     const P2 A = at(i), B = at(j);
     auto direction_angle = [&](P2 c, P2 p) { return ccw ? ccw_angle(A - c, p - c) : ccw_angle(p - c, A - c); };
@@ -274,32 +287,36 @@ class Fitter {
       const auto [glo, ghi] = window(side, r, chords.lowest_radius(phi), margin);
       const double g = r - len2(q - C);
       // Over material only the floor is radial; the ceiling is vertical, below.
-      if (!(g >= glo) || (side == Side::Both && !(g <= ghi))) return std::nullopt;
+      // Beside it (level) both are radial.
+      if (!(g >= glo) || ((side == Side::Both || level) && !(g <= ghi))) return std::nullopt;
     }
     // Every segment between the points within the tolerance of the arc:
-    // its point nearest the centre no further inside the circle.
-    if (side == Side::Both)
+    // its point nearest the centre no further inside the circle. (Concave:
+    // the segments are outside the circle, checked below; a straight
+    // segment is nearest the circle's ring at an end, and the ends are
+    // within the tolerance.)
+    if (side == Side::Both || (level && side == Side::Convex))
       for (std::size_t k = i; k < j; ++k)
         if (r - distance_to_segment(C, at(k), at(k + 1)) > o_.tolerance - margin) return std::nullopt;
-    if (side != Side::Both && !within_vertically(ax, i, j, C, r, sweep, side, margin)) return std::nullopt;
-    if (side != Side::Both) {
+    if (side != Side::Both && !level && !within_vertically(ax, i, j, C, r, sweep, side, margin)) return std::nullopt;
+    if (side != Side::Both && !level) {
       // The arc must stay on one half of its circle (a graph over the row):
       // the upper half over a centre below all points, the lower half under one above.
       const double cz = ax.first == 2 ? C.a : C.b;
       for (std::size_t k = i; k <= j; ++k)
         if (side == Side::Convex ? pts_[k].z < cz : pts_[k].z > cz) return std::nullopt;
-      // Convex: every point under the chord path, which with the centre bounds
-      // a convex polygon, so the segments between them are under it too.
-      // Concave: the segments must pass outside the circle (under the arc);
-      // the chords run above the arc.
-      // The first and last segments touch the circle where the cut starts and
-      // ends exactly; they must only not enter it.
-      if (side == Side::Concave)
-        for (std::size_t k = i; k < j; ++k) {
-          const double need = k == i ? r - 1e-9 : k + 1 == j ? std::min(r, r - dr) - 1e-9 : r + margin;
-          if (distance_to_segment(C, at(k), at(k + 1)) < need) return std::nullopt;
-        }
     }
+    // Convex: every point under (inside) the chord path, which with the
+    // centre bounds a convex polygon, so the segments between them are too.
+    // Concave: the segments must pass outside the circle (under the arc);
+    // the chords run above (inside) the arc. The first and last segments
+    // touch the circle where the cut starts and ends exactly; they must only
+    // not enter it.
+    if (side == Side::Concave)
+      for (std::size_t k = i; k < j; ++k) {
+        const double need = k == i ? r - 1e-9 : k + 1 == j ? std::min(r, r - dr) - 1e-9 : r + margin;
+        if (distance_to_segment(C, at(k), at(k + 1)) < need) return std::nullopt;
+      }
 
     FittedMove m;
     m.arc = true;

@@ -22,41 +22,35 @@ Vec3 work_offset(const Box3& part, XYOrigin xy, ZZero z) {
   return o;
 }
 
-std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& p,
-                              ProgramStats* stats) {
-  // One continuous cut: row, link, row, ...
+std::vector<Polyline> raster_as_one_cut(const RasterPath& path) {
   Polyline all;
   for (std::size_t r = 0; r < path.rows.size(); ++r) {
     all.insert(all.end(), path.rows[r].begin(), path.rows[r].end());
     if (r < path.links.size()) all.insert(all.end(), path.links[r].begin(), path.links[r].end());
   }
-  return pieces_program({all}, offset, p, stats);
+  return {all};
 }
 
-std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
-                           ProgramStats* stats) {
+std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& p,
+                              ProgramStats* stats) {
+  return pieces_program(raster_as_one_cut(path), offset, p, stats);
+}
+
+namespace {
+
+void check_feeds(const MachiningParams& p) {
   // Feeds are written with one decimal: anything below 0.1 mm/min would print as F0, which GRBL rejects.
   if (!(p.feed >= 0.1) || !(p.plunge_feed >= 0.1) || !std::isfinite(p.feed) || !std::isfinite(p.plunge_feed))
     throw std::invalid_argument("feed " + format_gcode_number(p.feed, 6) + " and plunge feed " +
                                 format_gcode_number(p.plunge_feed, 6) + " mm/min must each be at least 0.1");
+}
+
+}  // namespace
+
+std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
+                           ProgramStats* stats) {
+  check_feeds(p);
   if (!(p.rpm >= 0)) throw std::invalid_argument("spindle speed must not be negative");
-
-  // Z is rounded up to the output resolution so rounding never gouges.
-  const double q = std::pow(10.0, p.decimals);
-  auto place = [&](const Vec3& v) {
-    Vec3 w = v + offset;
-    w.z = std::ceil(w.z * q - 1e-6) / q;
-    return w;
-  };
-
-  ProgramStats st;
-  for (const auto& pl : pieces)
-    for (const auto& v : pl) st.work_bounds.add(place(v));
-  if (st.work_bounds.empty()) throw std::invalid_argument("tool path is empty");
-  if (!(p.safe_z > st.work_bounds.hi.z + 0.5))
-    throw std::invalid_argument("safe Z " + format_gcode_number(p.safe_z) + " is not at least 0.5 mm above the highest cut point Z" +
-                                format_gcode_number(st.work_bounds.hi.z) + " (work coordinates)");
-
   GcodeWriter w(p.decimals);
   for (const auto& c : p.header_comments) w.comment(c);
   w.line("G21 G90 G17 G94");  // mm, absolute, XY plane, units/min feed
@@ -65,6 +59,37 @@ std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offs
     w.line("M3 S" + format_gcode_number(p.rpm, 0));
     if (p.dwell_s > 0) w.line("G4 P" + format_gcode_number(p.dwell_s, 2));
   }
+  ProgramStats st;
+  write_pieces(w, pieces, offset, p, st);
+  if (p.rpm > 0) w.line("M5");
+  w.line("M2");
+  st.lines = w.lines().size();
+  st.motion_lines = w.motion_lines();
+  if (stats) *stats = st;
+  return w.text();
+}
+
+void write_pieces(GcodeWriter& w, const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
+                  ProgramStats& st) {
+  check_feeds(p);
+  // Z is rounded up to the output resolution so rounding never gouges.
+  const double q = std::pow(10.0, p.decimals);
+  auto place = [&](const Vec3& v) {
+    Vec3 w = v + offset;
+    w.z = std::ceil(w.z * q - 1e-6) / q;
+    return w;
+  };
+
+  Box3 bounds;
+  for (const auto& pl : pieces)
+    for (const auto& v : pl) bounds.add(place(v));
+  if (bounds.empty()) throw std::invalid_argument("tool path is empty");
+  if (!(p.safe_z > bounds.hi.z + 0.5))
+    throw std::invalid_argument("safe Z " + format_gcode_number(p.safe_z) + " is not at least 0.5 mm above the highest cut point Z" +
+                                format_gcode_number(bounds.hi.z) + " (work coordinates)");
+  st.work_bounds.add(bounds.lo);
+  st.work_bounds.add(bounds.hi);
+
   Vec3 at;
   bool have_at = false;
   auto rapid_to = [&](std::optional<double> x, std::optional<double> y, std::optional<double> z) {
@@ -81,7 +106,6 @@ std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offs
     }
     at = to;
   };
-
   w.rapid(std::nullopt, std::nullopt, p.safe_z);
   at.z = p.safe_z;
   // Each piece: over its start at the safe Z, plunge, cut, retract.
@@ -121,13 +145,6 @@ std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offs
     }
     rapid_to(std::nullopt, std::nullopt, p.safe_z);
   }
-  if (p.rpm > 0) w.line("M5");
-  w.line("M2");
-
-  st.lines = w.lines().size();
-  st.motion_lines = w.motion_lines();
-  if (stats) *stats = st;
-  return w.text();
 }
 
 }  // namespace cncstream

@@ -32,6 +32,10 @@ Checkpoint JobRun::checkpoint() {
   return [this](double fraction) { within(fraction); };
 }
 
+Checkpoint JobRun::nested_checkpoint(double from, double to) {
+  return [this, from, to](double fraction) { within(from + (to - from) * std::clamp(fraction, 0.0, 1.0)); };
+}
+
 JobControl JobRun::nested(double from, double to) {
   JobControl c;
   c.stop = control_.stop;

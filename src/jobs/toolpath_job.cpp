@@ -9,6 +9,8 @@
 #include "cncstream/gcode/gcode_writer.hpp"
 #include "cncstream/jobs/output_file.hpp"
 #include "cncstream/jobs/work_setup.hpp"
+#include "finishing_stage.hpp"
+#include "job_operations.hpp"
 #include "job_run.hpp"
 #include "job_text.hpp"
 
@@ -17,10 +19,13 @@ namespace cncstream::jobs {
 namespace {
 
 // Share of the whole job at the start of each stage (measured on the plaque:
-// the CL grid and the rows take most of it).
-constexpr double kPathFrom = 0.05, kGcodeFrom = 0.85, kWriteFrom = 0.97;
+// the CL grid and the rows take most of it; roughing, when there is one,
+// about as much again).
+constexpr double kPathFrom = 0.05, kRoughFrom = 0.5, kGcodeFrom = 0.85, kWriteFrom = 0.97;
 
 }  // namespace
+
+double default_max_depth(const Cutter& c) { return c.type == CutterType::Flat ? c.diameter() / 4 : c.radius; }
 
 ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& control) {
   ToolpathProgram r;
@@ -34,16 +39,17 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     r.facets = mesh->triangles.size();
     r.seconds_load = seconds_since(t0);
 
-    run.stage("tool path", kPathFrom, kGcodeFrom);
+    run.stage("tool path", kPathFrom, p.stock ? kRoughFrom : kGcodeFrom);
     t0 = std::chrono::steady_clock::now();
     ClOptions clo;
     clo.floor = p.floor;
     const ClEngine engine(*mesh, r.cutter, clo);
     const Box3 box = mesh->bounds();
     const WorkSetup work = work_setup(box, p.origin, p.z_zero);
+    const FinishSpacing spacing = finish_spacing(p);
     RasterOptions ro;
-    ro.stepover = p.stepover;
-    ro.step = p.step;
+    ro.stepover = spacing.stepover;
+    ro.step = spacing.step;
     ro.direction = p.direction;
     ro.tolerance = p.tolerance;
     ro.lattice = work.lattice;
@@ -51,15 +57,30 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     const XYBounds region = p.bounds.value_or(default_bounds(*mesh, r.cutter));
     {
       // Rows across, points along (the raster's default step), before any is made.
-      const double step = p.step > 0 ? p.step : std::min(p.stepover / 4, 0.1);
+      const double step = spacing.step > 0 ? spacing.step : std::min(spacing.stepover / 4, 0.1);
       const bool along_x = p.direction != RasterDirection::Y;
       const double w = region.x1 - region.x0, h = region.y1 - region.y0;
-      check_grid_memory((along_x ? w : h) / step + 1, (along_x ? h : w) / p.stepover + 1, 48, step, "the tool path");
+      check_grid_memory((along_x ? w : h) / step + 1, (along_x ? h : w) / spacing.stepover + 1, 48, step,
+                        "the tool path");
     }
-    r.path = build_raster(engine, region, ro, run.checkpoint());
+    const bool steep_shallow = p.strategy == FinishStrategy::SteepShallow;
+    r.path = build_raster(engine, region, ro, steep_shallow ? run.nested_checkpoint(0, 0.6) : run.checkpoint());
     r.preview = height_preview_from_grid(r.path.grid, r.path.bounds, work.offset);
     r.path.grid = ClGrid{};
+    if (steep_shallow) {
+      add_waterlines(r, p, engine, region, spacing, run.nested_checkpoint(0.6, 1.0));
+    } else {
+      r.finish_pieces = raster_as_one_cut(r.path);
+    }
     r.seconds_path = seconds_since(t0);
+
+    std::optional<RoughingStage> rough;
+    if (p.stock) {
+      run.stage("roughing", kRoughFrom, kGcodeFrom);
+      t0 = std::chrono::steady_clock::now();
+      rough = plan_roughing(p, *mesh, r.finish_pieces, work.offset, run.checkpoint());
+      r.seconds_rough = seconds_since(t0);
+    }
 
     run.stage("G-code", kGcodeFrom, end_of_gcode);
     t0 = std::chrono::steady_clock::now();
@@ -76,12 +97,14 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
       arcs.tolerance = p.tolerance;
       arcs.controller_arc_tolerance = p.controller_arc_tolerance;
       arcs.material_below = true;
+      // Waterlines keep the part on their right (climb milling with M3).
+      arcs.material_right = true;
       mp.arcs = arcs;
     }
     const XYOrigin xy = p.origin;
     const ZZero zz = p.z_zero;
     mp.header_comments = {
-        "cncstream raster finishing",
+        steep_shallow ? "cncstream steep-and-shallow finishing" : "cncstream raster finishing",
         "part: " + p.part.stl + " (" + std::to_string(r.facets) + " facets)",
         "tool: " + r.cutter.description() + " [" + r.cutter.spec() + "]",
         "stepover " + format_gcode_number(r.path.stepover, 4) + " mm along " +
@@ -95,7 +118,12 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
             (xy == XYOrigin::PartMin ? "part minimum" : xy == XYOrigin::PartCenter ? "part centre" : "model origin") +
             ", Z0 at " + (zz == ZZero::PartTop ? "part top" : zz == ZZero::PartBottom ? "part bottom" : "model origin"),
     };
-    r.gcode = finishing_program(r.path, work.offset, mp, &r.stats);
+    if (!rough) {
+      r.gcode = pieces_program(r.finish_pieces, work.offset, mp, &r.stats);
+      r.operations.push_back(finishing_summary(r, p, r.stats));
+    } else {
+      compose_job(r, p, *rough, mp);
+    }
     r.seconds_gcode = seconds_since(t0);
 
     if (!p.output.empty()) {

@@ -331,3 +331,74 @@ TEST(ArcFit, MaterialBelowNeverGoesUnderTheProfile) {
   }
   EXPECT_GT(arcs, 200);
 }
+
+namespace {
+
+// Winding test: whether p lies inside the closed polygon (x, y).
+bool inside_polygon(const Vec3& p, const std::vector<Vec3>& poly) {
+  bool in = false;
+  for (std::size_t k = 0, m = poly.size() - 1; k < poly.size(); m = k++) {
+    const Vec3 &a = poly[k], &b = poly[m];
+    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
+  }
+  return in;
+}
+
+double distance_to_polygon(const Vec3& p, const std::vector<Vec3>& poly) {
+  double best = HUGE_VAL;
+  for (std::size_t k = 0; k < poly.size(); ++k)
+    best = std::min(best, distance_to_segment(p, poly[k], poly[(k + 1) % poly.size()]));
+  return best;
+}
+
+}  // namespace
+
+// Waterlines: wavy level loops round a boss (clockwise: the boss on the
+// right) and round a pocket (counter-clockwise: its walls on the right),
+// bulging both ways. The controller's cut never enters the material and
+// passes every point within the tolerance; runs off the level stay lines.
+TEST(ArcFit, MaterialRightNeverCrossesIntoTheWall) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int arcs = 0;
+  for (int trial = 0; trial < 24; ++trial) {
+    const bool boss = trial % 2 == 0;
+    const double tol = 0.003 + 0.02 * unit(rng);
+    const double r0 = 4 + 6 * unit(rng), a1 = 0.3 + 0.8 * unit(rng), a2 = 0.3 * unit(rng);
+    const int k1 = 2 + int(4 * unit(rng)), k2 = 5 + int(5 * unit(rng));
+    std::vector<Vec3> loop;
+    const int n = int(std::ceil(2 * std::numbers::pi * r0 / 0.05));
+    for (int k = 0; k < n; ++k) {
+      // Boss: clockwise (angle decreasing); pocket: counter-clockwise.
+      const double t = (boss ? -1.0 : 1.0) * 2 * std::numbers::pi * k / n;
+      const double r = r0 + a1 * std::sin(k1 * t) + a2 * std::cos(k2 * t + 1);
+      loop.push_back({std::round(r * std::cos(t) * 1e6) / 1e6, std::round(r * std::sin(t) * 1e6) / 1e6, -2.5});
+    }
+    std::vector<Vec3> pts = loop;
+    pts.push_back(loop.front());
+    ArcFitOptions o = two_sided(tol);
+    o.material_below = true;  // as the finishing program sets it: rows are G18/G19, waterlines G17
+    o.material_right = true;
+    const auto moves = fit_arcs(pts, o);
+    int trial_arcs = 0;
+    const auto path = cut_path(gcode_of(pts, moves), kDollar12, &trial_arcs);
+    arcs += trial_arcs;
+    SCOPED_TRACE(trial);
+    for (const auto& m : moves)
+      if (m.arc) {
+        EXPECT_EQ(m.plane, Plane::XY);
+      }
+    // The material: inside the loop round a boss, outside it round a pocket.
+    double worst_in = 0;
+    for (std::size_t k = 0; k + 1 < path.size(); ++k)
+      for (int f = 0; f <= 8; ++f) {
+        const Vec3 q = path[k] + (path[k + 1] - path[k]) * (f / 8.0);
+        if (inside_polygon(q, loop) == boss) worst_in = std::max(worst_in, distance_to_polygon(q, loop));
+      }
+    double worst_far = 0;
+    for (const Vec3& p : pts) worst_far = std::max(worst_far, distance_to_path(p, path));
+    EXPECT_LE(worst_in, 1e-6);
+    EXPECT_LE(worst_far, tol + 1e-9);
+  }
+  EXPECT_GT(arcs, 100);
+}

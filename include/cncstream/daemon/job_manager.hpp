@@ -25,6 +25,7 @@
 #include "cncstream/gcode/program_extent.hpp"
 #include "cncstream/jobs/height_preview.hpp"
 #include "cncstream/jobs/resume_job.hpp"
+#include "cncstream/jobs/toolpath_job.hpp"
 #include "cncstream/transport/journal.hpp"
 
 namespace cncstream::daemon {
@@ -38,6 +39,9 @@ struct Program {
   std::filesystem::path path;      // written under <data>/programs/ (the journal's `file`)
   std::optional<Mesh> work_mesh;   // STL jobs: the part in work coordinates (the simulator's verify)
   std::optional<Cutter> cutter;
+  std::map<int, Cutter> tools;     // T number -> cutter, for a program of several tools
+  std::vector<jobs::OperationSummary> operations;  // STL jobs: roughing, finishing ...
+  std::vector<std::string> notes;  // what the plan decided and why
   double seconds = 0;              // generation time
   gcode::ProgramExtent extent;     // for the travel check, traced off the event loop
   // The tool-tip heights for the preview (work coordinates): an STL

@@ -36,8 +36,9 @@ class SimMachinePort final : public session::MachinePort {
   std::string path() override;
   void opened() override;
   std::string describe() override { return "the built-in simulator"; }
-  // The next simulator cuts a stock and verifies it against `design` (work = machine coordinates).
-  void set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter);
+  // The next simulator cuts a stock and verifies it against `design` (work = machine coordinates),
+  // with `cutter`, or the cutter of `tools` each T word selects.
+  void set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter, std::map<int, Cutter> tools = {});
   // Hands over the current simulator (to be finished or dropped off the event loop).
   std::shared_ptr<session::SimulatorPort> retire();
 
@@ -98,8 +99,9 @@ class Machines {
 
   // Starts a job's lines. `verify`: on a sim machine, cut a fresh stock
   // and check it against this design (work coordinates) with this cutter.
+  // `tools`: T number -> cutter for a program of several tools.
   session::CommandResult start_job(Machine& m, session::JobInput job, std::optional<Mesh> design,
-                                   std::optional<Cutter> cutter);
+                                   std::optional<Cutter> cutter, std::map<int, Cutter> tools = {});
 
   // Control: throws ApiError (428 no client id, 409 held by another / nobody holds it).
   void require_control(Machine& m, const std::string& client_id);

@@ -33,6 +33,13 @@ struct ArcFitOptions {
   // below the cut path (never a gouge) and at most `tolerance` below it.
   // Without it: two-sided, every replaced point within `tolerance` of the path.
   bool material_below = false;
+  // One-sided, for level paths beside material on their right (a waterline
+  // climb-milling around a part with a clockwise spindle): arcs in G17 only
+  // are made one-sided, the controller's cut (arc and chords) never crossing
+  // a replaced point or segment towards the right and at most `tolerance`
+  // from them to the left. Runs in G18/G19 follow material_below (or are
+  // two-sided without it).
+  bool material_right = false;
 };
 
 struct FittedMove {

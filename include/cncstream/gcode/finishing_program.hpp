@@ -49,9 +49,21 @@ struct ProgramStats {
 std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& params,
                               ProgramStats* stats = nullptr);
 
+// The raster as one continuous cut: row, link, row, ...
+std::vector<Polyline> raster_as_one_cut(const RasterPath& path);
+
 // Separate cuts (e.g. clean-up pieces): for each, a rapid over its start at
 // the safe Z, a plunge at the plunge feed, the cut, a retract.
 std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& params,
                            ProgramStats* stats = nullptr);
+
+class GcodeWriter;
+// The body of pieces_program, for a program of several operations
+// (job_program.hpp): from the safe Z over each piece's start, plunge at the
+// plunge feed, cut (arcs where p.arcs), retract to the safe Z. Uses p's
+// feeds, decimals, safe_z and arcs; adds to `stats` (not lines). Throws as
+// pieces_program.
+void write_pieces(GcodeWriter& w, const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
+                  ProgramStats& stats);
 
 }  // namespace cncstream

@@ -6,16 +6,24 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/gcode/finishing_program.hpp"
+#include "cncstream/gcode/job_program.hpp"
 #include "cncstream/geometry/mesh.hpp"
 #include "cncstream/jobs/height_preview.hpp"
 #include "cncstream/jobs/job_control.hpp"
 #include "cncstream/jobs/part_source.hpp"
+#include "cncstream/jobs/stock_spec.hpp"
 
 namespace cncstream::jobs {
+
+// Raster: rows over the whole part. Steep and shallow: rows where the
+// surface is gentler than the steep angle, waterlines (constant-Z contours)
+// where it is steeper, with a small overlap.
+enum class FinishStrategy { Raster, SteepShallow };
 
 struct ToolpathParams {
   PartSource part;
@@ -23,6 +31,12 @@ struct ToolpathParams {
   double stepover = 0.4;
   double step = 0;  // along a row; 0: min(stepover / 4, 0.1)
   RasterDirection direction = RasterDirection::X;
+  FinishStrategy strategy = FinishStrategy::Raster;
+  double steep_angle = 45;  // degrees from the horizontal
+  // Set: the scallop height to keep (mm): the row stepover and the waterline
+  // step follow from it, the cutter's corner radius and the steep angle
+  // (stepover and step are then ignored). A ball or bull-nose cutter only.
+  std::optional<double> scallop;
   double feed = 1000, plunge_feed = 300;  // mm/min
   double rpm = 18000;                     // 0: no spindle commands
   std::optional<double> safe_z;           // work coordinates; default 5 mm above the part's top
@@ -36,15 +50,56 @@ struct ToolpathParams {
   std::optional<double> floor;            // lowest tip height, model coordinates; default: the part's lowest z
   XYOrigin origin = XYOrigin::PartMin;
   ZZero z_zero = ZZero::PartTop;
+  // Depth of cut. With a stock, no pass of the program removes more than a
+  // cutter's maximum depth: where the finishing pass alone would, the job
+  // roughs first (Z-level, with `rough`, else the finishing cutter) and the
+  // program holds both operations, a tool change between them when the
+  // cutters differ. Without one (the default here; the CLI's and the
+  // daemon's default is `auto`), the finishing pass runs alone from the
+  // part's top.
+  std::optional<StockSpec> stock;
+  std::optional<double> max_depth;        // the finishing cutter's; default: default_max_depth(cutter)
+  std::optional<Cutter> rough;            // roughing cutter
+  std::optional<double> rough_max_depth;  // the roughing cutter's; default: default_max_depth(rough)
+  double leave = 0.3;                     // mm of stock the roughing leaves on the part
+  std::optional<double> step_down;        // default: the largest that keeps every pass within both depths
+  double rough_stepover = 0;              // mm; 0: 40 % of the roughing cutter's diameter
+  std::optional<double> rough_feed;       // mm/min; default: feed
+  ToolChangeCode tool_change = ToolChangeCode::PauseM0;
   // Not empty: the program is written there (whole or not at all) as the
   // job's last stage.
   std::filesystem::path output;
 };
 
+// One operation of the program, for the plan shown before cutting.
+struct OperationSummary {
+  std::string name;  // "roughing", "finishing"
+  int tool = 1;
+  Cutter cutter;
+  std::string detail;      // levels, stepover ... in words
+  std::size_t first_line = 1;  // of the program (1-based): its tool change or first line
+  std::size_t lines = 0;       // of the program's lines, those of this operation
+  double cut_length = 0;   // mm at feed
+  double feed_time_s = 0;  // cut length / feed
+  double max_depth = 0;    // the deepest any pass of it may cut, mm
+};
+
+// The default maximum depth of cut of a cutter: half its diameter for a
+// ball or bull-nose, a quarter for a flat end mill.
+double default_max_depth(const Cutter& cutter);
+
 struct ToolpathProgram {
   std::string gcode;
   ProgramStats stats;
   RasterPath path;
+  // What the finishing operation cuts, in order (the program retracts
+  // between pieces): the raster as one piece, or the waterlines then the
+  // raster with its steep stretches bridged.
+  std::vector<Polyline> finish_pieces;
+  std::size_t waterline_pieces = 0;  // the first pieces of finish_pieces
+  std::size_t waterline_levels = 0;
+  double waterline_step = 0;         // mm between levels
+  std::size_t steep_bridges = 0;     // raster stretches left to the waterlines
   Cutter cutter;
   std::size_t facets = 0;
   Vec3 work_offset;  // model -> work coordinates
@@ -53,7 +108,13 @@ struct ToolpathProgram {
   // kPreviewSideMax nodes a side) in work coordinates, for a preview; the
   // full grid is not kept (path.grid is empty).
   HeightPreview preview;
-  double seconds_load = 0, seconds_path = 0, seconds_gcode = 0;
+  // In program order; one (finishing) without a stock.
+  std::vector<OperationSummary> operations;
+  std::optional<Box3> stock;  // work coordinates, when the job had one
+  // What the plan decided and why ("the finishing pass would cut 11.5 mm in
+  // one pass, more than ... : roughing first").
+  std::vector<std::string> notes;
+  double seconds_load = 0, seconds_path = 0, seconds_rough = 0, seconds_gcode = 0;
 };
 
 // Stages: "load", "tool path", "G-code", "write" (with an output), "done".

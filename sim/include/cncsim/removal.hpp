@@ -51,6 +51,10 @@ class MaterialRemoval {
   // A tool change: later moves cut with this cutter.
   void set_cutter(const cncstream::Cutter& cutter) { cutter_ = cutter; }
   std::size_t segments() const { return segments_; }
+  // The deepest any one move cut (the largest height drop of a node in one
+  // straight piece of motion), per tool number selected when it ran (0
+  // before any T word): the depth of cut a program asks of each cutter.
+  const std::map<int, double>& deepest_cut_by_tool() const { return deepest_; }
 
   // Writes the machined surface as a height field (<path> + <path>.txt) and
   // as a closed STL solid down to the stock's bottom (<path> with .stl).
@@ -64,6 +68,8 @@ class MaterialRemoval {
   std::size_t segments_ = 0;
   ToolTable tools_;
   std::set<int> unknown_tools_;
+  int tool_ = 0;
+  std::map<int, double> deepest_;
 };
 
 // Rebuilds a stock whose surface equals `heights` (a result file read back):

@@ -64,7 +64,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
   add_toolpath_options(sub, o->tp, /*tool_required=*/false);
   for (auto* opt : sub->get_options())
     if (opt->get_group() == "Options" && opt->get_name().rfind("--", 0) == 0 &&
-        std::string("--units --scale --tool --stepover --step --direction --feed --plunge-feed --rpm --safe-z "
+        std::string("--units --scale --tool --stepover --step --direction --strategy --steep-angle --scallop --feed --plunge-feed --rpm --safe-z "
                     "--tolerance --arcs --controller-arc-tolerance --bounds --floor --origin --z-zero --threads ")
                 .find(opt->get_name() + " ") != std::string::npos)
       opt->group("Tool path (STL input)");
@@ -120,11 +120,10 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       const jobs::ToolpathProgram& r = *program;
       job = session::job_from_file(out);
       EtaEstimator eta = estimate_job(job, limits);
-      std::cout << "plan for " << o->file << ":\n"
-                << "  tool: " << r.cutter.description() << " [" << r.cutter.spec() << "]\n"
-                << "  rows: " << r.path.rows.size() << " at " << format_gcode_number(r.path.stepover, 4)
-                << " mm stepover along " << (o->tp.direction == "y" ? "Y" : "X") << ", feed "
-                << format_gcode_number(o->tp.feed) << " mm/min\n"
+      std::cout << "plan for " << o->file << ":\n";
+      if (r.stock)
+        std::cout << "  stock in work coordinates: " << bounds_text(*r.stock) << "\n";
+      std::cout << operations_text(r, &eta)
                 << "  tool tip in work coordinates: " << bounds_text(r.stats.work_bounds) << "\n"
                 << "  work origin: XY at the part's " << o->tp.origin << ", Z0 at the part's " << o->tp.z_zero
                 << " (set G54 there before cutting)\n"
@@ -132,7 +131,10 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
                 << "  estimated machining time: " << format_duration(eta.total()) << " (" << limits_note << ")\n"
                 << std::flush;
       if (!confirm("Start machining on " + c.port + "?", c.yes)) return 2;
-      verify = VerifyTarget{r.work_mesh, r.cutter};
+      verify = VerifyTarget{r.work_mesh, r.cutter, {}};
+      // The simulator cuts each operation with its own cutter.
+      if (r.operations.size() > 1)
+        for (const auto& op : r.operations) verify->tools[op.tool] = op.cutter;
       return run_session(c, o->sim, job, verify, std::move(eta));
     }
     job = session::job_from_file(o->file);

@@ -126,6 +126,9 @@ json job_params_from(const ToolpathOptions& tp) {
   p["stepover"] = tp.stepover;
   p["step"] = tp.step;
   p["direction"] = tp.direction;
+  p["strategy"] = tp.strategy;
+  p["steep_angle"] = tp.steep_angle;
+  p["scallop"] = tp.scallop ? json(*tp.scallop) : json(nullptr);
   p["feed"] = tp.feed;
   p["plunge_feed"] = tp.plunge_feed;
   p["rpm"] = tp.rpm;
@@ -149,6 +152,16 @@ json job_params_from(const ToolpathOptions& tp) {
     p["units"] = tp.part.units;
     p["scale"] = tp.part.scale;
   }
+  auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  p["stock"] = tp.stock;
+  p["max_depth"] = opt(tp.max_depth);
+  p["rough"] = tp.rough.empty() ? json(nullptr) : json(tp.rough);
+  p["rough_max_depth"] = opt(tp.rough_max_depth);
+  p["leave"] = tp.leave;
+  p["step_down"] = opt(tp.step_down);
+  p["rough_stepover"] = tp.rough_stepover;
+  p["rough_feed"] = opt(tp.rough_feed);
+  p["tool_change"] = tp.tool_change;
   return p;
 }
 
@@ -274,10 +287,18 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
     const bool cached = gen.contains("cached") && gen["cached"].is_boolean() && gen["cached"].get<bool>();
     std::cout << "plan for " << job.file << " (tool path by the daemon at " << daemon.address.url()
               << (cached ? ", from its cache" : "") << "):\n"
-              << "  tool: " << cutter.description() << " [" << cutter.spec() << "]\n"
-              << "  rows: " << format_gcode_number(job.tp.stepover, 4) << " mm stepover along "
-              << (job.tp.direction == "y" ? "Y" : "X") << ", feed " << format_gcode_number(job.tp.feed) << " mm/min\n"
-              << "  work origin: XY at the part's " << job.tp.origin << ", Z0 at the part's " << job.tp.z_zero
+              << "  tool: " << cutter.description() << " [" << cutter.spec() << "]\n";
+    // The daemon's operations (roughing, finishing ...) and why.
+    if (program.contains("operations") && program["operations"].is_array())
+      for (const auto& op : program["operations"])
+        if (op.is_object())
+          std::cout << "  " << str_or(op, "name") << ": T" << static_cast<long>(num_or(op, "tool", 0)) << " "
+                    << str_or(op, "cutter") << ", " << static_cast<long>(num_or(op, "lines", 0)) << " lines, "
+                    << str_or(op, "detail") << "\n";
+    if (program.contains("notes") && program["notes"].is_array())
+      for (const auto& n : program["notes"])
+        if (n.is_string()) std::cout << "  " << n.get<std::string>() << "\n";
+    std::cout << "  work origin: XY at the part's " << job.tp.origin << ", Z0 at the part's " << job.tp.z_zero
               << " (set G54 there before cutting)\n"
               << "  program: daemon job #" << job_id << ", " << total_lines << " lines\n"
               << "  estimated machining time: " << est_text << " (the daemon's estimate for machine '" << machine

@@ -100,6 +100,11 @@ EtaEstimator::EtaEstimator(std::vector<double> end_by_line) : end_(std::move(end
   for (std::size_t i = 1; i < end_.size(); ++i) end_[i] = std::max(end_[i], end_[i - 1]);
 }
 
+double EtaEstimator::at_line(long line) const {
+  if (end_.empty()) return 0;
+  return end_[static_cast<std::size_t>(std::clamp<long>(line, 0, long(end_.size()) - 1))];
+}
+
 std::optional<double> EtaEstimator::remaining(long last_answered_line, double elapsed_s) const {
   if (end_.empty()) return std::nullopt;
   const std::size_t k = static_cast<std::size_t>(std::clamp<long>(last_answered_line, 0, long(end_.size()) - 1));

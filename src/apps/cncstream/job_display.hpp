@@ -46,6 +46,9 @@ class EtaEstimator {
   explicit EtaEstimator(std::vector<double> end_by_line);
   double total() const { return end_.empty() ? 0 : end_.back(); }
   bool empty() const { return end_.empty(); }
+  // Estimated seconds from the start until file line `line` is done (clamped
+  // to the file's lines).
+  double at_line(long line) const;
   std::optional<double> remaining(long last_answered_line, double elapsed_s) const;
 
  private:

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -11,6 +12,7 @@
 
 #include "cncsim/settings.hpp"
 #include "cncstream/gcode/program.hpp"
+#include "cncstream/gcode/program_pause.hpp"
 #include "cncstream/geometry/stl.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/protocol/grbl_settings.hpp"
@@ -151,7 +153,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     session::SimulatorOptions so = simulator_options(s);
     if (!s.design.empty()) {
       if (s.tool.empty()) throw std::invalid_argument("--sim-design needs --sim-tool (the cutter that cuts it)");
-      verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool)};
+      verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool), {}};
     }
     if (verify && !s.no_verify) {
       so.design = verify->design;
@@ -159,7 +161,11 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
       so.resolution = s.resolution;
       so.tolerance = s.tolerance;
       so.png = s.png;
-      if (!s.tool_table.empty()) so.tools = cncsim::parse_tool_table(s.tool_table);
+      if (!s.tool_table.empty()) {
+        so.tools = cncsim::parse_tool_table(s.tool_table);
+      } else if (!verify->tools.empty()) {
+        so.tools = cncsim::ToolTable(verify->tools.begin(), verify->tools.end());
+      }
       so.result = s.result;
     } else if (!s.tool_table.empty() || !s.result.empty()) {
       throw std::invalid_argument("--sim-tool-table and --sim-result need a cut to simulate: an STL job, or --sim-design "
@@ -244,7 +250,38 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
   JobView view;
   view.title = title;
   view.total_lines = job.total_lines;
+  // A program pause (M0, a tool change) holds the machine until cycle start:
+  // say what the program asks of the operator, once per pause.
+  long announced_pause = 0;
+  auto announce_pause = [&](const session::MachineSnapshot& snap) {
+    const long line = snap.progress.last_answered_line;
+    if (!snap.status || snap.status->state != protocol::MachineState::Hold ||
+        snap.progress.state != protocol::JobState::Running || line <= 0 || line == announced_pause)
+      return;
+    std::size_t index = static_cast<std::size_t>(line - 1);
+    if (!job.source_lines.empty()) {
+      const auto it = std::find(job.source_lines.begin(), job.source_lines.end(), line);
+      if (it == job.source_lines.end()) return;
+      index = static_cast<std::size_t>(it - job.source_lines.begin());
+    }
+    const auto note = gcode::program_pause_note(job.lines, index);
+    if (!note) return;
+    announced_pause = line;
+    const std::string what = note->empty() ? std::string("program pause (M0)") : *note;
+    if (interactive) {
+      panel.message("PAUSED at line " + std::to_string(line) + ": " + what + "\n  (space resumes, s or Ctrl-C stops)");
+    } else if (sim) {
+      // The simulator's operator changes the tool at once (its tool table
+      // follows the T word).
+      panel.message("PAUSED at line " + std::to_string(line) + ": " + what + "\n  (simulator: resuming at once)");
+      runner_ptr->request_toggle_pause();
+    } else {
+      panel.message("PAUSED at line " + std::to_string(line) + ": " + what +
+                    "\n  (no terminal: the machine stays paused until cycle start on the controller or a pendant)");
+    }
+  };
   ro.on_tick = [&](const session::MachineSnapshot& snap) {
+    announce_pause(snap);
     view.title = title + " (" + snap.profile + ")";
     view.job_state = protocol::to_string(snap.progress.state);
     view.line = snap.progress.last_answered_line;

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -64,6 +65,7 @@ std::optional<std::string> device_path(const std::string& port);
 struct VerifyTarget {
   Mesh design;  // in work = machine coordinates of the sim
   Cutter cutter;
+  std::map<int, Cutter> tools;  // T number -> cutter, for a program of several tools (else `cutter` throughout)
 };
 
 // Motion limits for a plan shown before connecting: the simulator's settings

@@ -1,5 +1,8 @@
 #include "toolpath_options.hpp"
 
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <sstream>
 
 #include "cncstream/gcode/gcode_writer.hpp"
@@ -14,6 +17,16 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
   sub->add_option("--stepover", o.stepover, "Distance between rows, mm")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--step", o.step, "Sampling step along a row, mm (default: min(stepover/4, 0.1))")->check(CLI::NonNegativeNumber);
   sub->add_option("--direction", o.direction, "Row direction: x or y")->check(CLI::IsMember({"x", "y"}))->capture_default_str();
+  sub->add_option("--strategy", o.strategy,
+                  "Finishing: steep-shallow (rows where gentle, waterlines where steeper than --steep-angle) or raster "
+                  "(rows over everything)")
+      ->check(CLI::IsMember({"steep-shallow", "raster"}))->capture_default_str();
+  sub->add_option("--steep-angle", o.steep_angle, "Where steep-shallow changes from rows to waterlines, degrees")
+      ->check(CLI::Range(1.0, 89.0))->capture_default_str();
+  sub->add_option("--scallop", o.scallop,
+                  "Scallop height to keep, mm: sets the row stepover and the waterline step (ball or bull-nose; "
+                  "replaces --stepover)")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--feed", o.feed, "Cutting feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--plunge-feed", o.plunge_feed, "Plunge feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--rpm", o.rpm, "Spindle speed (0: no spindle commands)")->check(CLI::NonNegativeNumber)->capture_default_str();
@@ -34,6 +47,32 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
       ->check(CLI::IsMember({"top", "bottom", "model"}))->capture_default_str();
   // A oneTBB task arena of N slots for the whole job; 0: the shared pool.
   sub->add_option("--threads", o.threads, "Worker threads (0: all cores)");
+
+  const char* group = "Stock and depth of cut";
+  sub->add_option("--stock", o.stock,
+                  "The stock: auto (the part's box grown by 1 mm at the sides and top), auto:MARGIN, a block "
+                  "X0,Y0,Z0:X1,Y1,Z1 in work coordinates, a height map from `cncsim --result` (FILE.f32), or none "
+                  "(finish only, from the part's top, no depth check)")
+      ->capture_default_str()->group(group);
+  sub->add_option("--max-depth", o.max_depth,
+                  "Deepest cut the finishing cutter takes in one pass, mm (default: half the diameter for ball and "
+                  "bull, a quarter for flat); deeper, the job roughs first")
+      ->check(CLI::PositiveNumber)->group(group);
+  sub->add_option("--rough", o.rough, "Roughing cutter (default: the finishing cutter), e.g. flat:6")->group(group);
+  sub->add_option("--rough-max-depth", o.rough_max_depth, "Deepest cut of the roughing cutter, mm (default as --max-depth)")
+      ->check(CLI::PositiveNumber)->group(group);
+  sub->add_option("--leave", o.leave, "Stock the roughing leaves on the part, mm")
+      ->check(CLI::NonNegativeNumber)->capture_default_str()->group(group);
+  sub->add_option("--step-down", o.step_down,
+                  "Roughing levels at most this far apart, mm (default: within both cutters' depths)")
+      ->check(CLI::PositiveNumber)->group(group);
+  sub->add_option("--rough-stepover", o.rough_stepover, "Roughing stepover, mm (default: 40 % of its diameter)")
+      ->check(CLI::NonNegativeNumber)->group(group);
+  sub->add_option("--rough-feed", o.rough_feed, "Roughing feed, mm/min (default: --feed)")
+      ->check(CLI::PositiveNumber)->group(group);
+  sub->add_option("--tool-change", o.tool_change,
+                  "How the program pauses for a tool change: m0 (GRBL: a pause and a comment) or m6")
+      ->check(CLI::IsMember({"m0", "m6"}))->capture_default_str()->group(group);
 }
 
 jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
@@ -43,6 +82,9 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   p.stepover = o.stepover;
   p.step = o.step;
   p.direction = o.direction == "y" ? RasterDirection::Y : RasterDirection::X;
+  p.strategy = o.strategy == "raster" ? jobs::FinishStrategy::Raster : jobs::FinishStrategy::SteepShallow;
+  p.steep_angle = o.steep_angle;
+  p.scallop = o.scallop;
   p.feed = o.feed;
   p.plunge_feed = o.plunge_feed;
   p.rpm = o.rpm;
@@ -57,7 +99,35 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   p.floor = o.floor;
   p.origin = o.origin == "center" ? XYOrigin::PartCenter : o.origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
   p.z_zero = o.z_zero == "bottom" ? ZZero::PartBottom : o.z_zero == "model" ? ZZero::Model : ZZero::PartTop;
+  if (o.stock != "none") p.stock = jobs::parse_stock_spec(o.stock);
+  p.max_depth = o.max_depth;
+  if (!o.rough.empty()) p.rough = parse_cutter_spec(o.rough);
+  p.rough_max_depth = o.rough_max_depth;
+  p.leave = o.leave;
+  p.step_down = o.step_down;
+  p.rough_stepover = o.rough_stepover;
+  p.rough_feed = o.rough_feed;
+  p.tool_change = o.tool_change == "m6" ? ToolChangeCode::M6 : ToolChangeCode::PauseM0;
+  if (!p.stock && (p.rough || p.max_depth || p.step_down))
+    throw std::invalid_argument("--stock none finishes from the part's top without a depth check: --rough, "
+                                "--max-depth and --step-down need a stock");
   return p;
+}
+
+std::string operations_text(const jobs::ToolpathProgram& r, const EtaEstimator* eta) {
+  std::ostringstream o;
+  for (std::size_t k = 0; k < r.operations.size(); ++k) {
+    const auto& op = r.operations[k];
+    // From its first line to the next one's (the last: to the program's end).
+    const long first = k == 0 ? 1 : static_cast<long>(op.first_line);
+    const long last = k + 1 < r.operations.size() ? static_cast<long>(r.operations[k + 1].first_line) - 1
+                                                   : static_cast<long>(r.stats.lines);
+    const double seconds = eta ? eta->at_line(last) - eta->at_line(first - 1) : op.feed_time_s;
+    o << fmt::format("  {}. {:<10} T{} {:<14} {:>9} lines  {:>9}{}  {}\n", k + 1, op.name, op.tool, op.cutter.spec(),
+                     last - first + 1, format_duration(seconds), eta ? "" : " at feed", op.detail);
+  }
+  for (const auto& n : r.notes) o << "  " << n << "\n";
+  return o.str();
 }
 
 std::string toolpath_report(const jobs::ToolpathProgram& r) {
@@ -75,13 +145,15 @@ std::string toolpath_report(const jobs::ToolpathProgram& r) {
     o << format_gcode_number(100.0 * (1.0 - double(path.points_after_merge) / double(path.points_before_merge)), 1)
       << " % fewer lines";
   o << ")\n";
+  if (r.operations.size() > 1 || !r.notes.empty()) o << "operations:\n" << operations_text(r);
   o << "G-code: " << stats.lines << " lines (" << stats.arcs << " arcs), cut " << format_gcode_number(stats.cut_length / 1000, 2) << " m, feed time "
     << format_duration(stats.feed_time_s) << " (no acceleration)\n";
   o << "tool tip in work coordinates: X " << format_gcode_number(b.lo.x) << " .. " << format_gcode_number(b.hi.x) << ", Y "
     << format_gcode_number(b.lo.y) << " .. " << format_gcode_number(b.hi.y) << ", Z " << format_gcode_number(b.lo.z) << " .. "
     << format_gcode_number(b.hi.z) << "\n";
-  o << "time: load " << format_gcode_number(r.seconds_load, 3) << " s, CL + path " << format_gcode_number(r.seconds_path, 3)
-    << " s, G-code " << format_gcode_number(r.seconds_gcode, 3) << " s\n";
+  o << "time: load " << format_gcode_number(r.seconds_load, 3) << " s, CL + path " << format_gcode_number(r.seconds_path, 3);
+  if (r.seconds_rough > 0) o << " s, roughing " << format_gcode_number(r.seconds_rough, 3);
+  o << " s, G-code " << format_gcode_number(r.seconds_gcode, 3) << " s\n";
   return o.str();
 }
 

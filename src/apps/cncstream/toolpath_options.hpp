@@ -8,6 +8,7 @@
 #include <string>
 
 #include "cli_common.hpp"
+#include "job_display.hpp"
 #include "cncstream/jobs/job_control.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 
@@ -19,6 +20,9 @@ struct ToolpathOptions {
   double stepover = 0.4;
   double step = 0;
   std::string direction = "x";
+  std::string strategy = "steep-shallow";
+  double steep_angle = 45;
+  std::optional<double> scallop;
   double feed = 1000;
   double plunge_feed = 300;
   double rpm = 18000;
@@ -31,13 +35,29 @@ struct ToolpathOptions {
   std::string origin = "min";
   std::string z_zero = "top";
   unsigned threads = 0;
+  // Stock and depth of cut (roughing first where the finishing pass would cut too deep).
+  std::string stock = "auto";
+  std::optional<double> max_depth;
+  std::string rough;
+  std::optional<double> rough_max_depth;
+  double leave = 0.3;
+  std::optional<double> step_down;
+  double rough_stepover = 0;
+  std::optional<double> rough_feed;
+  std::string tool_change = "m0";
 };
+
 
 // `tool_required`: false where a G-code file may be given instead of an STL.
 void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required = true);
 
 // Throws for a bad cutter spec or bounds (before the part is read).
 jobs::ToolpathParams toolpath_params(const ToolpathOptions& o);
+
+// The program's operations, a line each (tool, operation, lines, time),
+// then the plan's notes. `eta` (the planner's estimate per file line) gives
+// each operation's time; without it, its feed time (no acceleration).
+std::string operations_text(const jobs::ToolpathProgram& r, const EtaEstimator* eta = nullptr);
 
 // Human-readable summary of a finished tool path.
 std::string toolpath_report(const jobs::ToolpathProgram& r);

@@ -1,0 +1,52 @@
+#pragma once
+// Waterline finishing of the steep parts of a surface: at each level the
+// contour of the CL surface (where the tip, at that height, touches the part),
+// kept where the surface is at least `steep_angle` steep. Contours come from
+// the CL grid by marching squares refined with exact point queries; between
+// two contour points the CL is queried again along the chord and the path is
+// raised wherever it would dip into it, so a waterline never gouges (it
+// stays level within the chord's sag, a few microns).
+//
+// Each contour keeps the region the tip may go down to on its left: the part
+// is on the cutter's right, climb milling for a clockwise spindle (M3).
+// Levels run from the top down; pieces of one level are taken nearest first;
+// a piece close to the last one is joined to it by a bridge (up, across,
+// down) above every CL point under it, otherwise it is a separate piece (the
+// program retracts between pieces).
+#include <cstddef>
+#include <vector>
+
+#include "cncstream/cam/checkpoint.hpp"
+#include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/raster.hpp"
+#include "cncstream/cam/slope_map.hpp"
+
+namespace cncstream {
+
+struct WaterlineOptions {
+  double z_step = 0.5;            // between levels, mm
+  double steep_angle_deg = 45;    // contours where the surface is at least this steep
+  double tolerance = 0.002;       // mm: contour points within this of the exact contour
+  // mm: points are merged where the straight move stays within this of
+  // them on the free side (0: every contour point is kept, for arcs).
+  double simplify_tolerance = 0;
+  double sample_step = 0.05;      // mm: the CL is queried this often along every chord
+  double bridge_max = 0;          // mm: join pieces closer than this by a bridge; 0: 4 cutter radii
+  double top = HUGE_VAL;          // highest level (tip height); default: the grid's highest CL
+  double bottom = -HUGE_VAL;      // lowest level; default: the grid's lowest CL
+};
+
+struct WaterlinePath {
+  std::vector<Polyline> pieces;  // in cutting order; the program retracts between them
+  std::vector<double> levels;    // the levels used, top down
+  std::size_t contours = 0;      // contours traced (before the steepness split)
+  std::size_t point_queries = 0;
+};
+
+// `grid`: a CL grid of `engine` (any uniform spacing: it places the
+// contours; the engine makes them exact); `slope`: the slope map of the same
+// grid. Throws std::invalid_argument for a non-positive step or tolerance.
+WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const SlopeMap& slope,
+                              const WaterlineOptions& options, const Checkpoint& checkpoint = {});
+
+}  // namespace cncstream

@@ -1,0 +1,315 @@
+#include "cncstream/cam/waterline.hpp"
+
+#include <oneapi/tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+#include "cncstream/cam/level_contours.hpp"
+
+namespace cncstream {
+
+namespace {
+
+double xy_dist(const Vec3& a, const Vec3& b) { return std::hypot(a.x - b.x, a.y - b.y); }
+
+// The chord a -> b (a at the level) sampled every `step` with the exact CL;
+// samples the CL rises above are lifted onto it. Appends the points after a.
+// The last resort of keep_level below.
+void append_lifted(const ClEngine& engine, const Vec3& a, const Vec3& b, double level, double step, Polyline& out,
+                   std::size_t& queries) {
+  const double len = xy_dist(a, b);
+  const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / step)));
+  for (std::size_t k = 1; k < n; ++k) {
+    const double t = double(k) / double(n);
+    Vec3 p{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, level};
+    const double cl = engine.height_at(p.x, p.y);
+    ++queries;
+    if (cl > p.z) {
+      p.z = cl;
+      out.push_back(p);
+    }
+  }
+  out.push_back(b);
+}
+
+// How far the chord a -> b must move to its left (the free side) for the CL
+// to stay at or below the level at every sample; 0 if it does already.
+double push_needed(const ClEngine& engine, const Vec3& a, const Vec3& b, double level, double step,
+                   std::size_t& queries) {
+  const double len = xy_dist(a, b);
+  if (!(len > 0)) return 0;
+  const double nx = -(b.y - a.y) / len, ny = (b.x - a.x) / len;  // left normal
+  const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / step)));
+  double need = 0;
+  for (std::size_t k = 1; k < n; ++k) {
+    const double t = double(k) / double(n);
+    const double x = a.x + (b.x - a.x) * t, y = a.y + (b.y - a.y) * t;
+    ++queries;
+    if (engine.height_at(x + need * nx, y + need * ny) <= level) continue;
+    // Out to where the CL is at or below the level, then back in by halves.
+    double lo = need, hi = std::max(need, 1e-4);
+    while (engine.height_at(x + hi * nx, y + hi * ny) > level) {
+      ++queries;
+      lo = hi;
+      hi *= 2;
+      if (hi > step * 4) return HUGE_VAL;  // not a chord's sag: leave it to the lift
+    }
+    for (int it = 0; it < 12; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      ++queries;
+      (engine.height_at(x + mid * nx, y + mid * ny) > level ? lo : hi) = mid;
+    }
+    need = hi;
+  }
+  return need;
+}
+
+// A level run whose chords stay out of the CL: where the region is concave a
+// chord between two contour points cuts into the part by its sag, so its
+// points move sideways into the free region by what the exact CL says
+// (microns), which keeps the run level (an arc fits it) and leaves at most
+// that much. What a few rounds of that cannot clear is lifted instead.
+Polyline keep_level(const ClEngine& engine, Polyline pts, bool closed, double level, double step,
+                    std::size_t& queries) {
+  const std::size_t n = pts.size();
+  if (n < 2) return pts;
+  const std::size_t chords = closed ? n : n - 1;
+  for (int round = 0; round < 4; ++round) {
+    std::vector<double> need(chords, 0);
+    bool any = false, hopeless = false;
+    for (std::size_t c = 0; c < chords; ++c) {
+      need[c] = push_needed(engine, pts[c], pts[(c + 1) % n], level, step, queries);
+      any = any || need[c] > 0;
+      hopeless = hopeless || !std::isfinite(need[c]);
+    }
+    if (!any || hopeless) break;
+    // Each point moves along the bisector of its chords' left normals, far
+    // enough for both.
+    Polyline moved = pts;
+    for (std::size_t k = 0; k < n; ++k) {
+      const bool has_prev = closed || k > 0, has_next = closed || k + 1 < n;
+      const std::size_t cp = (k + chords - 1) % chords, cn = k % chords;
+      const double dp = has_prev ? need[cp] : 0, dn = has_next ? need[cn] : 0;
+      if (!(std::max(dp, dn) > 0)) continue;
+      auto normal = [&](std::size_t c) {
+        const Vec3 &a = pts[c], &b = pts[(c + 1) % n];
+        const double len = xy_dist(a, b);
+        return len > 0 ? std::pair{-(b.y - a.y) / len, (b.x - a.x) / len} : std::pair{0.0, 0.0};
+      };
+      auto [px, py] = has_prev ? normal(cp) : normal(cn);
+      auto [qx, qy] = has_next ? normal(cn) : normal(cp);
+      double bx = px + qx, by = py + qy;
+      const double bl = std::hypot(bx, by);
+      if (!(bl > 1e-9)) continue;
+      bx /= bl;
+      by /= bl;
+      const double c = std::max(0.5, bx * px + by * py);
+      const double d = std::max(dp, dn) / c;
+      moved[k].x += d * bx;
+      moved[k].y += d * by;
+    }
+    pts = std::move(moved);
+  }
+  // Whatever still dips into the CL is lifted onto it.
+  Polyline out{pts.front()};
+  for (std::size_t c = 0; c < chords; ++c) append_lifted(engine, pts[c], pts[(c + 1) % n], level, step, out, queries);
+  return out;
+}
+
+// Keeps a subset of a level run's points so that every chord between kept
+// points passes on the free side (left) of the points it replaces, within
+// `tolerance` of them: the part is on the right of the run, so a chord left
+// of the old points is left of the old segments too (they are convex
+// combinations of points right of the chord's line), and never cuts deeper.
+Polyline simplify_level_run(const Polyline& p, double tolerance) {
+  if (p.size() < 3 || !(tolerance > 0)) return p;
+  constexpr std::size_t kWindow = 400;
+  Polyline out{p.front()};
+  std::size_t i = 0;
+  while (i + 1 < p.size()) {
+    std::size_t j = i + 1;
+    while (j + 1 < p.size() && j + 1 - i <= kWindow) {
+      const Vec3 &a = p[i], &b = p[j + 1];
+      const double len = xy_dist(a, b);
+      if (!(len > 0) || b.z != a.z) break;
+      bool ok = true;
+      for (std::size_t k = i + 1; k <= j && ok; ++k) {
+        if (p[k].z != a.z) ok = false;
+        // Left of the chord's direction: positive.
+        const double side = ((b.x - a.x) * (p[k].y - a.y) - (b.y - a.y) * (p[k].x - a.x)) / len;
+        ok = ok && side <= 1e-9 && side >= -tolerance;
+        // ... and beside the chord, not beyond its ends.
+        const double along = ((p[k].x - a.x) * (b.x - a.x) + (p[k].y - a.y) * (b.y - a.y)) / len;
+        ok = ok && along >= 0 && along <= len;
+      }
+      if (!ok) break;
+      ++j;
+    }
+    out.push_back(p[j]);
+    i = j;
+  }
+  return out;
+}
+
+struct Run {
+  Polyline points;
+  bool closed = false;  // a whole loop: may start at any of its points
+};
+
+// The contour's steep runs, in its own direction.
+std::vector<Run> steep_runs(const LevelContour& c, const SlopeMap& slope, double angle) {
+  const Polyline& p = c.points;
+  const std::size_t n = p.size();
+  std::vector<Run> out;
+  if (n < 2) return out;
+  std::vector<char> steep(n);
+  std::size_t first_gentle = n;
+  for (std::size_t k = 0; k < n; ++k) {
+    steep[k] = slope.max_near(p[k].x, p[k].y) >= angle;
+    if (!steep[k] && first_gentle == n) first_gentle = k;
+  }
+  if (c.closed && first_gentle == n) {
+    out.push_back({p, true});
+    return out;
+  }
+  // Walk from a gentle point (closed: all the way round) and cut at gentle points.
+  const std::size_t start = c.closed ? first_gentle : 0;
+  const std::size_t count = c.closed ? n + 1 : n;
+  Polyline cur;
+  for (std::size_t m = 0; m < count; ++m) {
+    const std::size_t k = (start + m) % n;
+    if (steep[k]) {
+      // The run begins and ends at the gentle points beside it (the overlap).
+      if (cur.empty() && m > 0) cur.push_back(p[(start + m - 1) % n]);
+      cur.push_back(p[k]);
+    } else if (!cur.empty()) {
+      cur.push_back(p[k]);
+      out.push_back({std::move(cur), false});
+      cur.clear();
+    }
+  }
+  if (cur.size() >= 2) out.push_back({std::move(cur), false});
+  return out;
+}
+
+struct LevelPieces {
+  std::vector<Run> runs;
+  std::size_t contours = 0;
+  std::size_t queries = 0;
+};
+
+}  // namespace
+
+WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const SlopeMap& slope,
+                              const WaterlineOptions& o, const Checkpoint& checkpoint) {
+  if (!(o.z_step > 0) || !(o.sample_step > 0) || !(o.tolerance >= 0))
+    throw std::invalid_argument("waterline: the level step and the sample step must be positive");
+  WaterlinePath out;
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (const double z : grid.z) {
+    lo = std::min(lo, z);
+    hi = std::max(hi, z);
+  }
+  if (!(hi > lo)) return out;
+  // Levels from the foot of the walls (just above the lowest CL) upwards.
+  const double bottom = std::max(o.bottom, lo + 1e-3);
+  const double top = std::min(o.top, hi);
+  for (double z = bottom; z < top; z += o.z_step) out.levels.push_back(z);
+  std::reverse(out.levels.begin(), out.levels.end());
+  if (out.levels.empty()) return out;
+
+  const double angle = o.steep_angle_deg * std::numbers::pi / 180;
+  const PointQuery exact = [&engine](double x, double y) { return engine.height_at(x, y); };
+  ContourOptions co;
+  co.xy_tolerance = std::min(1e-3, o.tolerance > 0 ? o.tolerance : 1e-3);
+  co.z_tolerance = co.xy_tolerance;
+
+  std::vector<LevelPieces> levels(out.levels.size());
+  std::atomic<std::size_t> done{0};
+  tbb::parallel_for(std::size_t{0}, levels.size(), [&](std::size_t li) {
+    const double z = out.levels[li];
+    LevelPieces& lp = levels[li];
+    const LevelContours lc = level_contours(grid, z, exact, co);
+    lp.contours = lc.contours.size();
+    lp.queries = lc.queries;
+    for (const LevelContour& c : lc.contours)
+      for (Run& r : steep_runs(c, slope, angle)) {
+        // Every chord checked against the exact CL (closed loops: the closing
+        // chord too; the loop then repeats its first point at its end).
+        r.points = simplify_level_run(keep_level(engine, std::move(r.points), r.closed, z, o.sample_step, lp.queries),
+                                      o.simplify_tolerance);
+        lp.runs.push_back(std::move(r));
+      }
+    if (checkpoint) checkpoint(0.9 * double(++done) / double(levels.size()));
+  });
+
+  // Nearest first within a level, top level first; close pieces bridged.
+  const double bridge_max = o.bridge_max > 0 ? o.bridge_max : 4 * engine.cutter().radius;
+  bool have = false;
+  Vec3 at;
+  for (LevelPieces& lp : levels) {
+    out.contours += lp.contours;
+    out.point_queries += lp.queries;
+    std::vector<char> used(lp.runs.size(), 0);
+    for (std::size_t taken = 0; taken < lp.runs.size(); ++taken) {
+      std::size_t best = 0, best_at = 0;
+      double best_d = HUGE_VAL;
+      for (std::size_t r = 0; r < lp.runs.size(); ++r) {
+        if (used[r]) continue;
+        const Polyline& p = lp.runs[r].points;
+        // A closed loop (its last point repeats its first) may start at any point.
+        const std::size_t starts = lp.runs[r].closed ? p.size() - 1 : 1;
+        for (std::size_t s = 0; s < starts; ++s) {
+          const double d = have ? xy_dist(at, p[s]) + std::fabs(at.z - p[s].z) : 0;
+          if (d < best_d) {
+            best_d = d;
+            best = r;
+            best_at = s;
+          }
+        }
+      }
+      used[best] = 1;
+      Polyline piece;
+      const Polyline& p = lp.runs[best].points;
+      if (lp.runs[best].closed) {
+        for (std::size_t k = 0; k + 1 < p.size(); ++k) piece.push_back(p[(best_at + k) % (p.size() - 1)]);
+        piece.push_back(p[best_at]);
+      } else {
+        piece = p;
+      }
+      if (have && xy_dist(at, piece.front()) <= bridge_max && !out.pieces.empty()) {
+        // Up, across, down, above every CL sample under the bridge.
+        const Vec3 from = at, to = piece.front();
+        double zb = std::max(from.z, to.z);
+        const double len = xy_dist(from, to);
+        const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / o.sample_step)));
+        for (std::size_t k = 0; k <= n; ++k) {
+          const double t = double(k) / double(n);
+          zb = std::max(zb, engine.height_at(from.x + (to.x - from.x) * t, from.y + (to.y - from.y) * t));
+          ++out.point_queries;
+        }
+        // Between samples a round cutter's CL sags at most step^2 / (8 rk)
+        // under its chord; a flat one's gets a fixed margin.
+        const double rk = engine.cutter().corner_radius;
+        zb += rk > 0 ? o.sample_step * o.sample_step / (8 * rk) + 1e-3 : 0.05;
+        Polyline& last = out.pieces.back();
+        if (zb > from.z) last.push_back({from.x, from.y, zb});
+        if (zb > to.z) last.push_back({to.x, to.y, zb});
+        last.insert(last.end(), piece.begin(), piece.end());
+      } else {
+        out.pieces.push_back(std::move(piece));
+      }
+      at = out.pieces.back().back();
+      have = true;
+    }
+  }
+  if (checkpoint) checkpoint(1.0);
+  return out;
+}
+
+}  // namespace cncstream

@@ -1,0 +1,211 @@
+#include "job_operations.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/gcode/roughing_program.hpp"
+
+namespace cncstream::jobs {
+
+namespace {
+
+// The deepest the pass cuts below the stock's top: over its points whose
+// cutter reaches over the stock (work coordinates).
+double depth_below_stock(const std::vector<Polyline>& pieces, const Vec3& offset, const WorkStock& stock,
+                         double radius) {
+  double deepest = 0;
+  auto visit = [&](const Polyline& pl) {
+    for (const Vec3& m : pl) {
+      const Vec3 v = m + offset;
+      if (v.x < stock.box.lo.x - radius || v.x > stock.box.hi.x + radius || v.y < stock.box.lo.y - radius ||
+          v.y > stock.box.hi.y + radius)
+        continue;
+      const double x = std::clamp(v.x, stock.box.lo.x, stock.box.hi.x);
+      const double y = std::clamp(v.y, stock.box.lo.y, stock.box.hi.y);
+      deepest = std::max(deepest, stock.top_at(x, y) - v.z);
+    }
+  };
+  for (const auto& piece : pieces) visit(piece);
+  return deepest;
+}
+
+std::string mm(double v) { return fmt::format("{:.2f} mm", v); }
+
+}  // namespace
+
+RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std::vector<Polyline>& finishing,
+                            const Vec3& work_offset, const Checkpoint& checkpoint) {
+  RoughingStage s;
+  Box3 part = mesh.bounds();
+  part.lo = part.lo + work_offset;
+  part.hi = part.hi + work_offset;
+  s.stock = resolve_stock(*p.stock, part);
+  s.finish_max_depth = p.max_depth.value_or(default_max_depth(p.cutter));
+  if (!(s.finish_max_depth > 0)) throw std::invalid_argument("the maximum depth of cut must be positive");
+  s.finish_depth_alone = depth_below_stock(finishing, work_offset, s.stock, p.cutter.radius);
+  s.finish_depth = s.finish_depth_alone;
+  const bool needed = s.finish_depth_alone > s.finish_max_depth + 1e-9;
+  if (!needed && !p.rough) {
+    s.notes.push_back(fmt::format("the finishing pass cuts at most {} below the stock's top, within its cutter's {}: "
+                                  "no roughing",
+                                  mm(s.finish_depth_alone), mm(s.finish_max_depth)));
+    return s;
+  }
+  const Cutter rc = p.rough.value_or(p.cutter);
+  s.rough_max_depth = p.rough_max_depth.value_or(default_max_depth(rc));
+  if (!(s.rough_max_depth > 0)) throw std::invalid_argument("the roughing cutter's maximum depth must be positive");
+  if (!(p.leave >= 0)) throw std::invalid_argument("the stock to leave must not be negative");
+  if (!(p.leave < s.finish_max_depth))
+    throw std::invalid_argument(fmt::format("the stock to leave ({}) is not less than the finishing cutter's maximum depth "
+                                            "({}): the finishing pass could not take it",
+                                            mm(p.leave), mm(s.finish_max_depth)));
+  if (needed)
+    s.notes.push_back(fmt::format("the finishing pass alone would cut {} deep in one pass, more than the {}'s {}: "
+                                  "roughing first with the {}",
+                                  mm(s.finish_depth_alone), p.cutter.spec(), mm(s.finish_max_depth), rc.spec()));
+  else
+    s.notes.push_back(fmt::format("roughing with the {} as asked", rc.spec()));
+
+  // The stock as a block in model coordinates (a height map: its box; the
+  // levels above its surface cut air).
+  StockBlock block;
+  block.x0 = s.stock.box.lo.x - work_offset.x;
+  block.y0 = s.stock.box.lo.y - work_offset.y;
+  block.x1 = s.stock.box.hi.x - work_offset.x;
+  block.y1 = s.stock.box.hi.y - work_offset.y;
+  block.top = s.stock.box.hi.z - work_offset.z;
+
+  RoughingParams rp;
+  rp.leave = p.leave;
+  // No level below the stock's bottom (an open mesh would let the tip go
+  // below the part's floor).
+  rp.bottom = s.stock.box.lo.z - work_offset.z;
+  rp.stepover = p.rough_stepover;
+  // Every roughing pass within the roughing cutter's depth, and what the
+  // terraces leave within the finishing cutter's.
+  rp.step_down = p.step_down.value_or(std::min(s.rough_max_depth, s.finish_max_depth - p.leave));
+  if (!(rp.step_down > 0) || rp.step_down > s.rough_max_depth + 1e-9)
+    throw std::invalid_argument(fmt::format("step-down {} must be positive and at most the roughing cutter's maximum "
+                                            "depth {}",
+                                            mm(rp.step_down), mm(s.rough_max_depth)));
+  ClOptions clo;
+  clo.floor = p.floor;
+  const ClEngine grown(mesh, grown_cutter(rc, p.leave), clo);
+  RoughingPath path = build_zlevel_roughing(grown, rc, block, rp, checkpoint);
+  // The terraces' bound came out above what the finishing cutter may take
+  // (round cutters leave scallops between loops too): once more with the
+  // levels closer by the excess.
+  double after = p.leave + path.terrace_bound;
+  if (after > s.finish_max_depth + 1e-9 && !p.step_down) {
+    rp.step_down -= after - s.finish_max_depth;
+    if (rp.step_down > 0.05) {
+      path = build_zlevel_roughing(grown, rc, block, rp, checkpoint);
+      after = p.leave + path.terrace_bound;
+    }
+  }
+  if (after > s.finish_max_depth + 1e-9)
+    throw std::invalid_argument(fmt::format(
+        "after roughing the finishing pass could still cut {} (leave {} plus terraces up to {}), more than the {}'s "
+        "maximum depth {}: give a smaller --step-down or --leave",
+        mm(after), mm(p.leave), mm(path.terrace_bound), p.cutter.spec(), mm(s.finish_max_depth)));
+  s.finish_depth = std::min(s.finish_depth_alone, after);
+  s.notes.push_back(fmt::format("roughing: {} levels, step-down at most {}, stepover {}, leaving {} (terraces up to {} more)",
+                                path.levels.size(), mm(rp.step_down), mm(path.stepover), mm(p.leave),
+                                mm(path.terrace_bound)));
+  s.path = std::move(path);
+  return s;
+}
+
+OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParams& p, const ProgramStats& stats) {
+  OperationSummary o;
+  o.name = "finishing";
+  o.cutter = r.cutter;
+  o.detail = fmt::format("raster, {} rows {} mm apart along {}", r.path.rows.size(),
+                         format_gcode_number(r.path.stepover, 4), p.direction == RasterDirection::Y ? "Y" : "X");
+  if (r.waterline_pieces > 0)
+    o.detail = fmt::format("waterlines where steeper than {} degrees ({} levels {} mm apart, {} pieces), then {} with "
+                           "{} steep stretches left to them",
+                           format_gcode_number(p.steep_angle, 1), r.waterline_levels,
+                           format_gcode_number(r.waterline_step, 4), r.waterline_pieces, o.detail, r.steep_bridges);
+  o.lines = stats.lines;
+  o.cut_length = stats.cut_length;
+  o.feed_time_s = stats.feed_time_s;
+  return o;
+}
+
+void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStage& rough, MachiningParams mp) {
+  r.stock = rough.stock.box;
+  r.notes = rough.notes;
+  // Rapids and tool changes above the stock, not only the part.
+  const double stock_top = rough.stock.box.hi.z;
+  if (!p.safe_z) {
+    mp.safe_z = std::max(mp.safe_z, stock_top + 5.0);
+  } else if (!(*p.safe_z > stock_top + 0.5)) {
+    throw std::invalid_argument(fmt::format("safe Z {} is not at least 0.5 mm above the stock's top Z {} (work "
+                                            "coordinates)",
+                                            format_gcode_number(*p.safe_z), format_gcode_number(stock_top)));
+  }
+  JobProgramOptions jo;
+  jo.decimals = mp.decimals;
+  jo.safe_z = mp.safe_z;
+  jo.dwell_s = mp.dwell_s;
+  jo.tool_change = p.tool_change;
+  jo.header_comments = mp.header_comments;
+  jo.header_comments.insert(jo.header_comments.begin() + 1,
+                            fmt::format("stock: X {:.3f}..{:.3f} Y {:.3f}..{:.3f} Z {:.3f}..{:.3f} (work coordinates)",
+                                        rough.stock.box.lo.x, rough.stock.box.hi.x, rough.stock.box.lo.y,
+                                        rough.stock.box.hi.y, rough.stock.box.lo.z, rough.stock.box.hi.z));
+  {
+    const char* finishing = r.waterline_pieces > 0 ? "steep-and-shallow finishing" : "raster finishing";
+    jo.header_comments.front() = rough.path ? fmt::format("cncstream job: Z-level roughing, then {}", finishing)
+                                            : fmt::format("cncstream job: {}", finishing);
+  }
+  for (const auto& n : rough.notes) jo.header_comments.push_back(n);
+  JobProgram program(jo);
+
+  // An operation's lines and time begin with its tool change.
+  auto begin = [&](const std::string& name, int tool, const Cutter& c) {
+    auto at = std::make_pair(program.writer().lines().size(), program.stats());
+    program.begin_operation({name, tool, c, p.rpm});
+    return at;
+  };
+  auto summary = [&](OperationSummary o, const std::pair<std::size_t, ProgramStats>& at) {
+    o.first_line = at.first + 1;
+    o.lines = program.writer().lines().size() - at.first;
+    o.cut_length = program.stats().cut_length - at.second.cut_length;
+    o.feed_time_s = program.stats().feed_time_s - at.second.feed_time_s;
+    r.operations.push_back(std::move(o));
+  };
+
+  int tool = 1;
+  if (rough.path) {
+    const auto at = begin("roughing", tool, rough.path->cutter);
+    MachiningParams rm = mp;
+    rm.feed = p.rough_feed.value_or(p.feed);
+    write_roughing(program.writer(), *rough.path, r.work_offset, rm, program.stats());
+    OperationSummary o;
+    o.name = "roughing";
+    o.tool = tool;
+    o.cutter = rough.path->cutter;
+    o.detail = fmt::format("Z-level, {} levels, stepover {} mm, leave {} mm", rough.path->levels.size(),
+                           format_gcode_number(rough.path->stepover, 3), format_gcode_number(p.leave, 3));
+    o.max_depth = rough.rough_max_depth;
+    summary(std::move(o), at);
+    // The same cutter finishes without a tool change.
+    if (rough.path->cutter.spec() != p.cutter.spec()) ++tool;
+  }
+  const auto at = begin("finishing", tool, p.cutter);
+  write_pieces(program.writer(), r.finish_pieces, r.work_offset, mp, program.stats());
+  OperationSummary f = finishing_summary(r, p, ProgramStats{});
+  f.tool = tool;
+  f.max_depth = rough.finish_depth;
+  summary(std::move(f), at);
+  r.gcode = program.finish();
+  r.stats = program.stats();
+}
+
+}  // namespace cncstream::jobs

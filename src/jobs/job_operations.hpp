@@ -1,0 +1,40 @@
+#pragma once
+// The operations of a tool path job with a stock (toolpath_job.hpp): whether
+// the finishing pass alone would cut deeper than its cutter may, the Z-level
+// roughing that comes first when it would, and the program of both with the
+// tool change between them. Private to the jobs layer.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cncstream/cam/checkpoint.hpp"
+#include "cncstream/cam/zlevel_roughing.hpp"
+#include "cncstream/jobs/toolpath_job.hpp"
+
+namespace cncstream::jobs {
+
+struct RoughingStage {
+  WorkStock stock;                   // work coordinates
+  double finish_max_depth = 0;       // the finishing cutter's
+  double finish_depth_alone = 0;     // the deepest the finishing pass would cut from the stock alone
+  double finish_depth = 0;           // ... after the roughing (= alone without one)
+  std::optional<RoughingPath> path;  // model coordinates; none when the finishing pass is within its depth
+  double rough_max_depth = 0;
+  std::vector<std::string> notes;
+};
+
+// Throws std::invalid_argument for a stock that does not hold the part, a
+// leave or depth that leaves no room for a level, or a roughing that cannot
+// keep the finishing pass within its depth.
+// `finishing`: the finishing operation's pieces (model coordinates).
+RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std::vector<Polyline>& finishing,
+                            const Vec3& work_offset, const Checkpoint& checkpoint);
+
+// The finishing operation's summary from its program's stats.
+OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParams& p, const ProgramStats& stats);
+
+// The whole program (roughing, tool change, finishing) into r.gcode, r.stats
+// and r.operations; the notes into r.notes.
+void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStage& rough, MachiningParams mp);
+
+}  // namespace cncstream::jobs

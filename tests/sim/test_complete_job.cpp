@@ -1,0 +1,126 @@
+// The complete job of the plaque from its block: Z-level roughing with a
+// 6 mm flat, a tool change, raster finishing with a 3.175 mm ball, in one
+// program, run line by line in the simulator with the job's tool table and
+// the operator's cycle start at the pause: nothing below the design, no move
+// deeper than its cutter's maximum depth, the finishing pass within its
+// depth of the roughed surface, and the plaque finished.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "cncsim/machine.hpp"
+#include "cncsim/removal.hpp"
+#include "cncstream/cam/deviation.hpp"
+#include "cncstream/gcode/program_pause.hpp"
+#include "cncstream/jobs/toolpath_job.hpp"
+#include "sim_test_util.hpp"
+
+using namespace cncstream;
+
+namespace {
+
+jobs::ToolpathParams plaque_job() {
+  jobs::ToolpathParams p;
+  p.part.stl = (std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "examples/plaque.stl").string();
+  p.cutter = parse_cutter_spec("ball:3.175");
+  p.stepover = 1.0;  // coarse: the test is about depths, not the finish
+  p.tolerance = 0.01;
+  p.feed = 3000;
+  p.rpm = 0;
+  p.stock = jobs::StockSpec{};  // auto: the part's box grown by 1 mm
+  p.rough = parse_cutter_spec("flat:6");
+  return p;
+}
+
+struct Cut {
+  HeightFieldStock stock;
+  std::map<int, double> deepest;  // the largest depth one move took off, per tool
+  std::map<int, double> where_depth;
+  std::map<int, std::pair<Vec3, Vec3>> where;
+  int pauses = 0;
+};
+
+Cut run(const jobs::ToolpathProgram& prog) {
+  cncsim::MachineOptions mo;
+  mo.instant_waits = true;
+  cncsim::Machine m(mo);
+  const Box3 s = *prog.stock;
+  cncsim::StockBox box{s.lo, s.hi, 0.25};
+  box.lo.x += 0.0373;  // nodes off round numbers: none on the part's silhouette
+  box.lo.y += 0.0411;
+  cncsim::MaterialRemoval removal(box, prog.operations.front().cutter);
+  cncsim::ToolTable tools;
+  for (const auto& op : prog.operations) tools[op.tool] = op.cutter;
+  removal.set_tool_table(tools);
+  removal.attach(m);
+  Cut c{removal.stock(), {}, {}, {}, 0};
+  // Where each tool's deepest move was, for the failure message.
+  int tool = 0;
+  m.set_tool_observer([&](int t) {
+    tool = t;
+    removal.set_cutter(tools.at(t));
+  });
+  m.set_motion_observer([&](const Vec3& a, const Vec3& b, bool) {
+    const double before = removal.deepest_cut_by_tool().count(tool) ? removal.deepest_cut_by_tool().at(tool) : 0;
+    removal.cut(a, b);
+    (void)before;
+    if (removal.stock().last_max_depth() > c.where_depth[tool]) {
+      c.where_depth[tool] = removal.stock().last_max_depth();
+      c.where[tool] = {a, b};
+    }
+  });
+  std::istringstream in(prog.gcode);
+  std::string line;
+  while (std::getline(in, line)) {
+    const std::string out = simtest::send(m, line);
+    EXPECT_EQ(out.find("error"), std::string::npos) << line << " -> " << out;
+    if (gcode::is_program_pause(line)) {
+      ++c.pauses;
+      m.run_until_idle();
+      m.receive("~");  // the operator changed the tool and pressed cycle start
+    }
+  }
+  m.run_until_idle();
+  EXPECT_TRUE(removal.unknown_tools().empty());
+  c.stock = removal.stock();
+  c.deepest = c.where_depth;
+  return c;
+}
+
+}  // namespace
+
+TEST(CompleteJob, PlaqueRoughedThenFinishedWithoutGougeOrOverDeepPass) {
+  const jobs::ToolpathProgram prog = jobs::generate_toolpath(plaque_job());
+  ASSERT_EQ(prog.operations.size(), 2u);
+  EXPECT_EQ(prog.operations[0].name, "roughing");
+  EXPECT_EQ(prog.operations[0].cutter.spec(), "flat:6");
+  EXPECT_EQ(prog.operations[1].name, "finishing");
+  EXPECT_EQ(prog.operations[1].tool, 2);
+  ASSERT_TRUE(prog.stock);
+  for (const auto& n : prog.notes) std::cout << n << "\n";
+  std::cout << prog.stats.lines << " lines: roughing " << prog.operations[0].lines << ", finishing "
+            << prog.operations[1].lines << "\n";
+
+  const Cut c = run(prog);
+  EXPECT_EQ(c.pauses, 1);
+  // No move deeper than its cutter may cut (a grid node's drop; the grid's
+  // 0.25 mm adds nothing to a depth).
+  ASSERT_TRUE(c.deepest.count(1) && c.deepest.count(2));
+  std::cout << "deepest cut of one move: T1 " << c.deepest.at(1) << " mm (max " << prog.operations[0].max_depth
+            << "), T2 " << c.deepest.at(2) << " mm (max " << prog.operations[1].max_depth << ")\n";
+  for (const auto& [t, ab] : c.where)
+    std::cout << "  T" << t << " deepest from " << ab.first.x << "," << ab.first.y << "," << ab.first.z << " to "
+              << ab.second.x << "," << ab.second.y << "," << ab.second.z << "\n";
+  EXPECT_LE(c.deepest.at(1), prog.operations[0].max_depth + 1e-3);
+  EXPECT_LE(c.deepest.at(2), jobs::default_max_depth(prog.operations[1].cutter) + 1e-3);
+  EXPECT_GT(c.deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
+  const DesignHeights design = design_heights(prog.work_mesh, c.stock.grid());
+  const DeviationResult dev = compare_to_design(c.stock, design, 0.01);
+  EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
+      << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
+      << dev.stats.largest_gouge.y;
+}
