@@ -25,6 +25,14 @@ Rgb mix(Rgb a, Rgb b, double t) {
 Rgb DeviationPalette::gouge(double severity) { return mix({250, 160, 140}, {150, 0, 20}, severity); }
 Rgb DeviationPalette::excess(double severity) { return mix({160, 195, 240}, {15, 45, 140}, severity); }
 
+Rgb DeviationScale::colour(double v) const {
+  const double tol = tolerance;
+  // Severity runs from the tolerance to the worst value of that sign.
+  if (v < -tol) return DeviationPalette::gouge((-v - tol) / std::max(largest_gouge - tol, 1e-12));
+  if (v > tol) return DeviationPalette::excess((v - tol) / std::max(largest_excess - tol, 1e-12));
+  return DeviationPalette::within;
+}
+
 RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> dev, std::span<const std::uint8_t> off,
                               const DeviationMapOptions& options) {
   if (grid.size() == 0) throw std::invalid_argument("deviation map: the grid is empty");
@@ -48,13 +56,8 @@ RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> dev, 
     gouged += dev[k] < -tol;
     excess += dev[k] > tol;
   }
-  // Severity runs from the tolerance to the worst value of that sign.
-  const double gouge_span = std::max(-lo - tol, 1e-12), excess_span = std::max(hi - tol, 1e-12);
-  auto colour_of = [&](double v) {
-    if (v < -tol) return DeviationPalette::gouge((-v - tol) / gouge_span);
-    if (v > tol) return DeviationPalette::excess((v - tol) / excess_span);
-    return DeviationPalette::within;
-  };
+  const DeviationScale scale{tol, -lo, hi};
+  auto colour_of = [&](double v) { return scale.colour(v); };
 
   const int dec = std::max(3, mf::decimals_for(tol) - 1);
   auto mm = [&](double v) { return mf::fixed(v, dec) + " mm"; };

@@ -28,6 +28,16 @@ struct DeviationPalette {
   static Rgb excess(double severity);  // severity in [0, 1]
 };
 
+// The map's colour for one deviation v (mm): within +/-tolerance the pale
+// green, beyond it a gouge or excess colour whose severity runs from the
+// tolerance to the worst value of that sign (largest_gouge, largest_excess:
+// the magnitudes, >= 0). The map and the 3-D viewer colour with this.
+struct DeviationScale {
+  double tolerance = 0.05;
+  double largest_gouge = 0, largest_excess = 0;
+  Rgb colour(double v) const;
+};
+
 // deviation: grid.size() values; off_part: empty or grid.size() flags (1 = no
 // design surface there). Where a pixel covers several nodes it shows the
 // worst one (a gouge first), so a one-node gouge never disappears.
