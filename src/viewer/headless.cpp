@@ -90,7 +90,7 @@ void load_scene(Renderer& renderer, const Scene& scene) {
   if (scene.program) renderer.set_toolpath(*scene.program);
   if (scene.cutter) renderer.set_cutter(cutter_surface(*scene.cutter, {}));
   renderer.set_cutter_position(scene.cutter_tip());
-  renderer.set_progress(scene.progress);
+  if (scene.program) renderer.set_progress(*scene.program, scene.progress);
 }
 
 Camera camera_for(const Scene& scene, NamedView view, int width, int height) {

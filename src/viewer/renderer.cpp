@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace cncstream::viewer {
 
@@ -50,33 +51,39 @@ void main() {
 }
 )";
 
+// The path is a line strip: a line takes its colour and kind from its end
+// vertex (GL's provoking vertex for flat attributes, the last by default).
 const char* const kPathVertex = R"(#version 330 core
 layout(location = 0) in vec3 pos;
 layout(location = 1) in float along;
-layout(location = 2) in vec4 colour;  // rgb, and a = 1 for a rapid
+layout(location = 2) in vec4 colour;  // rgb, and a: 0 cut, 0.5 hidden jump, 1 rapid
+layout(location = 3) in int index;    // the distant strip: the vertex's index in the whole strip
+uniform bool indexed;                 // read index (else the whole strip: gl_VertexID)
 uniform mat4 vp;
-uniform int bright_vertices;  // the timeline: vertices before it are done
+uniform int bright_vertices;  // the timeline: lines ending before it are done
 uniform vec3 background;
 out float v_along;
-flat out float v_rapid;
-out vec3 v_colour;
+flat out float v_kind;
+flat out vec3 v_colour;
 void main() {
   gl_Position = vp * vec4(pos, 1.0);
   gl_Position.z -= 2e-4 * gl_Position.w;  // a path on a surface stays in front of it
   v_along = along;
-  v_rapid = colour.a;
-  v_colour = gl_VertexID < bright_vertices ? colour.rgb : mix(colour.rgb, background, 0.8);
+  v_kind = colour.a;
+  int id = indexed ? index : gl_VertexID;
+  v_colour = id < bright_vertices ? colour.rgb : mix(colour.rgb, background, 0.8);
 }
 )";
 
 const char* const kPathFragment = R"(#version 330 core
 in float v_along;
-flat in float v_rapid;
-in vec3 v_colour;
+flat in float v_kind;
+flat in vec3 v_colour;
 uniform float dash;  // mm per dash and gap
 out vec4 frag;
 void main() {
-  if (v_rapid > 0.5 && fract(v_along / dash) > 0.5) discard;
+  if (v_kind > 0.25 && v_kind < 0.75) discard;
+  if (v_kind > 0.75 && fract(v_along / dash) > 0.5) discard;
   frag = vec4(v_colour, 1.0);
 }
 )";
@@ -173,11 +180,29 @@ void set_matrix(GLuint program, const char* name, const Mat4& m) {
   glUniformMatrix4fv(glGetUniformLocation(program, name), 1, GL_FALSE, f.data());
 }
 
+// The distant strip's vertex: a copy of the whole strip's, with its index
+// there (for the timeline). A buffer of its own: llvmpipe shades every
+// vertex between the lowest and highest index of an indexed draw, so
+// indices into the whole strip would save nothing.
+struct DistantVertex {
+  PathVertex v;
+  std::int32_t index = 0;
+};
+
+void path_attributes(GLsizei stride) {
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, byte_offset(offsetof(PathVertex, x)));
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, stride, byte_offset(offsetof(PathVertex, along)));
+  glEnableVertexAttribArray(2);
+  glVertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, stride, byte_offset(offsetof(PathVertex, r)));
+}
+
 }  // namespace
 
 struct Renderer::Impl {
   GLuint mesh_program = 0, path_program = 0, overlay_program = 0;
-  Layer part, cut, cutter, path;
+  Layer part, cut, cutter, path, distant;
   GLuint overlay_vao = 0, overlay_vbo = 0;
 };
 
@@ -195,7 +220,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
 }
 
 Renderer::~Renderer() {
-  for (Layer* l : {&impl_->part, &impl_->cut, &impl_->cutter, &impl_->path}) l->release();
+  for (Layer* l : {&impl_->part, &impl_->cut, &impl_->cutter, &impl_->path, &impl_->distant}) l->release();
   glDeleteBuffers(1, &impl_->overlay_vbo);
   glDeleteVertexArrays(1, &impl_->overlay_vao);
   glDeleteProgram(impl_->mesh_program);
@@ -210,7 +235,10 @@ void Renderer::set_cutter(const TriangleMesh& mesh) { upload_mesh(impl_->cutter,
 void Renderer::set_toolpath(const Toolpath& path) {
   Layer& l = impl_->path;
   l.release();
+  impl_->distant.release();
   path_vertices_ = path.vertices.size();
+  distant_vertices_ = 0;
+  bright_vertices_ = SIZE_MAX;
   if (path.vertices.empty()) return;
   glGenVertexArrays(1, &l.vao);
   glBindVertexArray(l.vao);
@@ -218,22 +246,38 @@ void Renderer::set_toolpath(const Toolpath& path) {
   glBindBuffer(GL_ARRAY_BUFFER, l.vbo);
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(path.vertices.size() * sizeof(PathVertex)),
                path.vertices.data(), GL_STATIC_DRAW);
-  constexpr auto stride = static_cast<GLsizei>(sizeof(PathVertex));
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, byte_offset(offsetof(PathVertex, x)));
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, stride, byte_offset(offsetof(PathVertex, along)));
-  glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, stride, byte_offset(offsetof(PathVertex, r)));
-  glBindVertexArray(0);
+  path_attributes(static_cast<GLsizei>(sizeof(PathVertex)));
   l.count = static_cast<GLsizei>(path.vertices.size());
+  // The strip for distant views: lossless below half a pixel (display_strip).
+  distant_tolerance_ = std::max(norm(path.bounds.size()) / 8000, 1e-4);
+  std::vector<DistantVertex> distant;
+  for (const std::uint32_t v : display_strip(path, distant_tolerance_))
+    distant.push_back({path.vertices[v], static_cast<std::int32_t>(v)});
+  Layer& d = impl_->distant;
+  glGenVertexArrays(1, &d.vao);
+  glBindVertexArray(d.vao);
+  glGenBuffers(1, &d.vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, d.vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(distant.size() * sizeof(DistantVertex)), distant.data(),
+               GL_STATIC_DRAW);
+  path_attributes(static_cast<GLsizei>(sizeof(DistantVertex)));
+  glEnableVertexAttribArray(3);
+  glVertexAttribIPointer(3, 1, GL_INT, static_cast<GLsizei>(sizeof(DistantVertex)),
+                         byte_offset(offsetof(DistantVertex, index)));
+  d.count = static_cast<GLsizei>(distant.size());
+  distant_vertices_ = distant.size();
+  glBindVertexArray(0);
+}
+
+void Renderer::set_progress(const Toolpath& path, double segments_done) {
+  bright_vertices_ = std::isnan(segments_done) ? SIZE_MAX : path.vertices_done(segments_done);
 }
 
 void Renderer::recolour_toolpath(const Toolpath& path) {
-  if (path.vertices.size() != path_vertices_ || !impl_->path.vbo) return set_toolpath(path);
-  glBindBuffer(GL_ARRAY_BUFFER, impl_->path.vbo);
-  glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(path.vertices.size() * sizeof(PathVertex)),
-                  path.vertices.data());
+  // Uploaded again: the distant strip merges lines of one colour only.
+  const std::size_t bright = bright_vertices_;
+  set_toolpath(path);
+  bright_vertices_ = bright;
 }
 
 void Renderer::draw(const Camera& camera) {
@@ -267,15 +311,17 @@ void Renderer::draw(const Camera& camera) {
     const GLuint pp = impl_->path_program;
     glUseProgram(pp);
     set_matrix(pp, "vp", vp);
-    const double segments = static_cast<double>(path_vertices_ / 2);
-    const double done = std::isnan(progress_) ? segments : std::clamp(progress_, 0.0, segments);
-    glUniform1i(glGetUniformLocation(pp, "bright_vertices"), static_cast<GLint>(2 * std::floor(done)));
+    const std::size_t bright = std::min(bright_vertices_, path_vertices_);
+    glUniform1i(glGetUniformLocation(pp, "bright_vertices"), static_cast<GLint>(bright));
     glUniform3f(glGetUniformLocation(pp, "background"), kBackground.r / 255.0f, kBackground.g / 255.0f,
                 kBackground.b / 255.0f);
     // Dashes about 6 pixels long whatever the zoom.
     glUniform1f(glGetUniformLocation(pp, "dash"), static_cast<float>(12 * camera.mm_per_pixel()));
-    glBindVertexArray(impl_->path.vao);
-    glDrawArrays(GL_LINES, 0, impl_->path.count);
+    const bool far = camera.mm_per_pixel() >= 2 * distant_tolerance_ && impl_->distant.count > 1;
+    const Layer& l = far ? impl_->distant : impl_->path;
+    glUniform1i(glGetUniformLocation(pp, "indexed"), far ? 1 : 0);
+    glBindVertexArray(l.vao);
+    glDrawArrays(GL_LINE_STRIP, 0, l.count);
   }
   glBindVertexArray(0);
 }

@@ -24,25 +24,33 @@ Vec3 Toolpath::point_at(double t) const {
   return from(k) + (to(k) - from(k)) * f;
 }
 
+std::uint32_t Toolpath::vertices_done(double t) const {
+  if (segments.empty() || !(t >= 1)) return 0;
+  const auto k = std::min(static_cast<std::size_t>(t), segments.size());
+  return segments[k - 1].vertex + 1;
+}
+
 void append_segment(Toolpath& path, const Vec3& from, const Vec3& to, bool rapid, double feed, std::uint32_t line,
                     std::uint32_t operation) {
-  PathVertex a{static_cast<float>(from.x), static_cast<float>(from.y), static_cast<float>(from.z), 0, 0, 0, 0, 0};
-  PathVertex b{static_cast<float>(to.x), static_cast<float>(to.y), static_cast<float>(to.z), 0, 0, 0, 0, 0};
+  const PathVertex a{static_cast<float>(from.x), static_cast<float>(from.y), static_cast<float>(from.z), 0, 0, 0, 0,
+                     kJump};
+  PathVertex b{static_cast<float>(to.x), static_cast<float>(to.y), static_cast<float>(to.z), 0, 0, 0, 0,
+               rapid ? kRapid : kCut};
+  const bool meets = !path.vertices.empty() && path.vertices.back().x == a.x && path.vertices.back().y == a.y &&
+                     path.vertices.back().z == a.z;
+  if (!meets) path.vertices.push_back(a);  // the first point, or a hidden jump to it
   if (rapid) {
     // The dash pattern runs on along consecutive rapids.
-    const bool continues = !path.segments.empty() && path.vertices.back().flags == kRapid;
-    a.along = continues ? path.vertices.back().along : 0.0f;
-    b.along = a.along + static_cast<float>(norm(to - from));
-    a.flags = b.flags = kRapid;
+    b.along = path.vertices.back().along + static_cast<float>(norm(to - from));
     ++path.rapids;
   } else {
     if (path.segments.size() == path.rapids) path.min_feed = path.max_feed = feed;  // the first cut
     path.min_feed = std::min(path.min_feed, feed);
     path.max_feed = std::max(path.max_feed, feed);
   }
-  path.vertices.push_back(a);
   path.vertices.push_back(b);
-  path.segments.push_back({static_cast<float>(rapid ? 0.0 : feed), line, operation});
+  path.segments.push_back({static_cast<float>(rapid ? 0.0 : feed), line, operation,
+                           static_cast<std::uint32_t>(path.vertices.size() - 1)});
   path.bounds.add(from);
   path.bounds.add(to);
 }
@@ -143,12 +151,52 @@ void colour_toolpath(Toolpath& path, PathColouring how) {
         c = colormap_viridis(t);
       }
     }
-    for (std::size_t v = 2 * k; v < 2 * k + 2; ++v) {
-      path.vertices[v].r = c.r;
-      path.vertices[v].g = c.g;
-      path.vertices[v].b = c.b;
+    PathVertex& v = path.vertices[path.segments[k].vertex];
+    v.r = c.r;
+    v.g = c.g;
+    v.b = c.b;
+  }
+}
+
+std::vector<std::uint32_t> display_strip(const Toolpath& path, double tolerance) {
+  std::vector<std::uint32_t> keep;
+  const std::size_t n = path.vertices.size();
+  if (n == 0) return keep;
+  keep.reserve(n / 4 + 2);
+  auto pos = [&](std::size_t v) {
+    const PathVertex& p = path.vertices[v];
+    return Vec3{p.x, p.y, p.z};
+  };
+  auto same_look = [&](std::size_t u, std::size_t v) {
+    const PathVertex &a = path.vertices[u], &b = path.vertices[v];
+    return a.kind == b.kind && a.kind != kJump && a.r == b.r && a.g == b.g && a.b == b.b;
+  };
+  // Squared distance of p from the segment a-b.
+  auto dist2 = [](const Vec3& p, const Vec3& a, const Vec3& b) {
+    const Vec3 ab = b - a;
+    const double l2 = dot(ab, ab);
+    const double t = l2 > 0 ? std::clamp(dot(p - a, ab) / l2, 0.0, 1.0) : 0.0;
+    const Vec3 d = p - (a + ab * t);
+    return dot(d, d);
+  };
+  const double tol2 = tolerance * tolerance;
+  constexpr std::size_t kMaxRun = 64;  // bounds the checks per kept vertex
+  std::size_t anchor = 0;
+  keep.push_back(0);
+  for (std::size_t v = 1; v < n; ++v) {
+    // Can the line anchor -> v + 1 replace the lines through v?
+    // (The lines before v in the run already look like the one ending at v.)
+    bool merge = v + 1 < n && v + 1 - anchor <= kMaxRun && same_look(v, v + 1);
+    if (merge) {
+      const Vec3 a = pos(anchor), b = pos(v + 1);
+      for (std::size_t u = anchor + 1; u <= v && merge; ++u) merge = dist2(pos(u), a, b) <= tol2;
+    }
+    if (!merge) {
+      keep.push_back(static_cast<std::uint32_t>(v));
+      anchor = v;
     }
   }
+  return keep;
 }
 
 }  // namespace cncstream::viewer

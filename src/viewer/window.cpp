@@ -240,7 +240,7 @@ void run_window(Scene& scene, const WindowOptions& options) {
       renderer.recolour_toolpath(*scene.program);
     }
     s.recolour = false;
-    renderer.set_progress(scene.progress);
+    if (scene.program) renderer.set_progress(*scene.program, scene.progress);
     renderer.set_cutter_position(scene.cutter_tip());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     renderer.draw(s.camera);

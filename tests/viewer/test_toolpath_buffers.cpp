@@ -3,6 +3,7 @@
 // offsets, errors and operations as the firmware and CAM programs mean them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -11,6 +12,15 @@
 
 using namespace cncstream;
 using namespace cncstream::viewer;
+
+namespace {
+
+Rgb colour_of(const Toolpath& p, std::size_t segment) {
+  const PathVertex& v = p.vertices[p.segments[segment].vertex];
+  return {v.r, v.g, v.b};
+}
+
+}  // namespace
 
 TEST(ViewerToolpath, ArcsAreSampledOnTheCircle) {
   // A quarter circle of radius 10 about the origin, clockwise from +X to -Y.
@@ -59,19 +69,22 @@ TEST(ViewerToolpath, RapidsAreFlaggedAndDashedAlongTheirRun) {
   EXPECT_TRUE(p.rapid(4));
   EXPECT_EQ(p.segments[0].feed, 0);
   EXPECT_FLOAT_EQ(p.segments[3].feed, 400);
+  // One strip: each segment ends where the next begins.
+  ASSERT_EQ(p.vertices.size(), 6u);
+  for (std::size_t k = 0; k < p.size(); ++k) EXPECT_EQ(p.segments[k].vertex, k + 1);
   // The dash pattern continues from the first rapid into the second...
   EXPECT_FLOAT_EQ(p.vertices[1].along, 5);
-  EXPECT_FLOAT_EQ(p.vertices[2].along, 5);
-  EXPECT_FLOAT_EQ(p.vertices[3].along, 10);
+  EXPECT_FLOAT_EQ(p.vertices[2].along, 10);
   // ...and starts again after a cut.
-  EXPECT_FLOAT_EQ(p.vertices[8].along, 0);
+  EXPECT_FLOAT_EQ(p.vertices[4].along, 0);
+  EXPECT_FLOAT_EQ(p.vertices[5].along, 5);
   EXPECT_EQ(p.min_feed, 100);
   EXPECT_EQ(p.max_feed, 400);
   // Colours: rapids orange, cuts on the feed ramp.
-  const Rgb slow = colormap_viridis(0), fast = colormap_viridis(1);
-  EXPECT_EQ((Rgb{p.vertices[0].r, p.vertices[0].g, p.vertices[0].b}), kRapidColour);
-  EXPECT_EQ((Rgb{p.vertices[4].r, p.vertices[4].g, p.vertices[4].b}), slow);
-  EXPECT_EQ((Rgb{p.vertices[6].r, p.vertices[6].g, p.vertices[6].b}), fast);
+  EXPECT_EQ(colour_of(p, 0), kRapidColour);
+  EXPECT_EQ(colour_of(p, 2), colormap_viridis(0));
+  EXPECT_EQ(colour_of(p, 3), colormap_viridis(1));
+  EXPECT_EQ(colour_of(p, 4), kRapidColour);
 }
 
 TEST(ViewerToolpath, ModalStateAndWorkOffsetsAreTheInterpreters) {
@@ -85,6 +98,10 @@ TEST(ViewerToolpath, ModalStateAndWorkOffsetsAreTheInterpreters) {
   EXPECT_NEAR(p.from(3).x, 100, 1e-6);  // X3 machine is X0 in work coordinates
   EXPECT_NEAR(p.to(3).x, 102, 1e-6);
   EXPECT_FLOAT_EQ(p.segments[1].feed, 100);  // F is modal
+  // The strip jumps, hidden, from X103 to X100.
+  ASSERT_EQ(p.vertices.size(), 6u);
+  EXPECT_EQ(p.vertices[p.segments[3].vertex - 1].kind, kJump);
+  EXPECT_EQ(p.vertices[p.segments[3].vertex].kind, kCut);
 }
 
 TEST(ViewerToolpath, RejectedLinesAreRecordedAndSkipped) {
@@ -114,8 +131,7 @@ TEST(ViewerToolpath, OperationsBeginAtNamesAndToolChanges) {
   EXPECT_EQ(p.segments[5].operation, 2u);
   colour_toolpath(p, PathColouring::Operation);
   for (std::size_t k = 1; k < p.size(); ++k)
-    EXPECT_EQ((Rgb{p.vertices[2 * k].r, p.vertices[2 * k].g, p.vertices[2 * k].b}),
-              category_colour(p.segments[k].operation));
+    EXPECT_EQ(colour_of(p, k), category_colour(p.segments[k].operation));
   EXPECT_THROW(parse_path_colouring("speed"), std::invalid_argument);
 }
 
@@ -126,4 +142,47 @@ TEST(ViewerToolpath, PointAtFollowsTheTimeline) {
   EXPECT_NEAR(p.point_at(1.25).y, 2.5, 1e-6);
   EXPECT_NEAR(p.point_at(7).y, 10, 1e-6);
   EXPECT_NEAR(p.point_at(-1).x, 0, 1e-6);
+}
+
+TEST(ViewerToolpath, TimelineCountsTheStripsVertices) {
+  const Toolpath p = build_toolpath("G1 X1 F100\nG92 X0\nG1 X1\nG1 X2\n");
+  ASSERT_EQ(p.size(), 3u);
+  EXPECT_EQ(p.vertices_done(0), 0u);
+  EXPECT_EQ(p.vertices_done(1), 2u);    // vertices 0, 1: the first segment
+  EXPECT_EQ(p.vertices_done(2.5), 4u);  // past the hidden jump
+  EXPECT_EQ(p.vertices_done(99), 5u);
+}
+
+TEST(ViewerToolpath, DistantStripDropsOnlyWhatCannotBeSeen) {
+  // A wavy cut, 0.05 mm steps, then a rapid along the same line.
+  Toolpath p;
+  Vec3 at{0, 0, 0};
+  for (int k = 1; k <= 2000; ++k) {
+    const Vec3 next{k * 0.05, 0, 0.3 * std::sin(k * 0.05)};
+    append_segment(p, at, next, false, 1000, 0, 0);
+    at = next;
+  }
+  append_segment(p, at, at + Vec3{10, 0, 0}, true, 0, 1, 0);
+  append_segment(p, at + Vec3{10, 0, 0}, at + Vec3{20, 0, 0}, true, 0, 2, 0);
+  colour_toolpath(p, PathColouring::Feed);
+  const double tol = 0.01;
+  const auto keep = display_strip(p, tol);
+  ASSERT_GE(keep.size(), 3u);
+  EXPECT_LT(keep.size(), p.vertices.size() / 4);
+  EXPECT_EQ(keep.front(), 0u);
+  EXPECT_EQ(keep.back(), p.vertices.size() - 1);
+  // The vertex where the cut turns into the rapid is kept.
+  EXPECT_NE(std::find(keep.begin(), keep.end(), p.segments[1999].vertex), keep.end());
+  for (std::size_t q = 0; q + 1 < keep.size(); ++q) {
+    const PathVertex &a = p.vertices[keep[q]], &b = p.vertices[keep[q + 1]];
+    const Vec3 pa{a.x, a.y, a.z}, pb{b.x, b.y, b.z};
+    for (std::uint32_t v = keep[q] + 1; v < keep[q + 1]; ++v) {
+      const PathVertex& m = p.vertices[v];
+      const Vec3 pm{m.x, m.y, m.z};
+      const Vec3 ab = pb - pa;
+      const double t = std::clamp(dot(pm - pa, ab) / dot(ab, ab), 0.0, 1.0);
+      EXPECT_LE(norm(pm - (pa + ab * t)), tol + 1e-6);
+      EXPECT_EQ(m.kind, b.kind);  // one kind per merged line
+    }
+  }
 }

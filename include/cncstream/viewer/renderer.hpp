@@ -9,6 +9,7 @@
 // whole life; throws gl::GlError when a shader does not compile.
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 
@@ -34,12 +35,12 @@ class Renderer {
   // The cutter's mesh with its tip at the origin; drawn at set_cutter_position.
   void set_cutter(const TriangleMesh& mesh_at_origin);
   void set_toolpath(const Toolpath& path);
-  // After colour_toolpath: the colours again, the positions untouched.
+  // After colour_toolpath: the path uploaded again, the timeline kept.
   void recolour_toolpath(const Toolpath& path);
 
-  // Timeline: segments before `segments_done` bright, the rest dim; NaN: all
-  // bright.
-  void set_progress(double segments_done) { progress_ = segments_done; }
+  // Timeline: segments before `segments_done` of `path` (the one uploaded)
+  // bright, the rest dim; NaN: all bright.
+  void set_progress(const Toolpath& path, double segments_done);
   void set_cutter_position(std::optional<Vec3> tip) { cutter_at_ = tip; }
 
   void draw(const Camera& camera);
@@ -48,13 +49,19 @@ class Renderer {
   // The timeline bar's rectangle in window pixels (x, y top-left, w, h).
   static void timeline_bar_rect(const Camera& camera, int& x, int& y, int& w, int& h);
 
-  std::size_t toolpath_segments() const { return path_vertices_ / 2; }
+  std::size_t toolpath_vertices() const { return path_vertices_; }
+  // Vertices in the strip drawn at a distance (display_strip).
+  std::size_t toolpath_distant_vertices() const { return distant_vertices_; }
+  // The tolerance of that strip, mm; it is drawn when a pixel is at least
+  // twice as large.
+  double distant_tolerance() const { return distant_tolerance_; }
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  std::size_t path_vertices_ = 0;
-  double progress_ = NAN;
+  std::size_t path_vertices_ = 0, distant_vertices_ = 0;
+  double distant_tolerance_ = 0;
+  std::size_t bright_vertices_ = SIZE_MAX;
   std::optional<Vec3> cutter_at_;
 };
 
