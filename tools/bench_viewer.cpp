@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
                   s.program->lines, s.program->size(), s.program->arcs, width, height, hv.gl_renderer().c_str());
       std::printf("  read %.3f s, interpret %.3f s, GL context %.3f s, upload %.3f s, frame %.3f s: total %.3f s\n",
                   t_read - t0, t_parse - t_read, t_ctx - t_parse, t_up - t_ctx, t_frame - t_up, t_frame - t0);
+      frames(hv, camera_for(s, NamedView::Iso, width, height), k, "iso, whole program");
     }
     // 2. and 3. N segments.
     {
