@@ -65,7 +65,8 @@ struct WindowState {
   Toolpath* colour_target = nullptr;
   PathColouring colouring = PathColouring::Feed;
   Box3 bounds;
-  double mouse_x = 0, mouse_y = 0;
+  double mouse_x = 0, mouse_y = 0;  // framebuffer pixels
+  double pixel_scale = 1;           // framebuffer pixels per window unit (HiDPI)
   int dragging = -1;       // the mouse button held, or -1
   bool scrubbing = false;  // the left button went down on the slider
   bool dirty = true;
@@ -90,6 +91,8 @@ void scrub_to(WindowState& s, double x) {
 
 void on_cursor(GLFWwindow* w, double x, double y) {
   WindowState& s = state_of(w);
+  x *= s.pixel_scale;
+  y *= s.pixel_scale;
   const double dx = x - s.mouse_x, dy = y - s.mouse_y;
   s.mouse_x = x;
   s.mouse_y = y;
@@ -150,6 +153,9 @@ void on_resize(GLFWwindow* w, int width, int height) {
   if (width < 1 || height < 1) return;  // minimised
   WindowState& s = state_of(w);
   s.camera.set_viewport(width, height);
+  int ww = 0, wh = 0;
+  glfwGetWindowSize(w, &ww, &wh);
+  if (ww > 0) s.pixel_scale = static_cast<double>(width) / ww;
   s.dirty = true;
 }
 
@@ -208,6 +214,9 @@ void run_window(Scene& scene, const WindowOptions& options) {
   glfwGetFramebufferSize(win, &fw, &fh);
   s.bounds = scene.bounds();
   s.camera = camera_for(scene, options.view, std::max(fw, 1), std::max(fh, 1));
+  int ww = 0, wh = 0;
+  glfwGetWindowSize(win, &ww, &wh);
+  if (ww > 0 && fw > 0) s.pixel_scale = static_cast<double>(fw) / ww;
 
   glfwSetWindowUserPointer(win, &s);
   glfwSetCursorPosCallback(win, on_cursor);

@@ -148,8 +148,8 @@ void register_view(CLI::App& app, CommandRegistry& registry) {
       if (o->colour != "feed") colour_toolpath(*scene.program, parse_path_colouring(o->colour));
       const Toolpath& p = *scene.program;
       std::cout << "program " << o->program << ": " << p.lines << " lines, " << p.size() << " segments ("
-                << p.rapids << " rapid, " << p.arcs << " arcs), " << p.operations.size() << " operation"
-                << (p.operations.size() == 1 ? "" : "s") << "\n";
+                << p.rapids << " rapid), " << p.arcs << (p.arcs == 1 ? " arc, " : " arcs, ") << p.operations.size()
+                << (p.operations.size() == 1 ? " operation" : " operations") << "\n";
       if (!p.errors.empty()) {
         std::cerr << "cncstream view: " << p.errors.size() << " line" << (p.errors.size() == 1 ? "" : "s")
                   << " the controller would reject (skipped), first at line " << p.errors.front().line + 1
