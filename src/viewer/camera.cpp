@@ -154,6 +154,17 @@ WindowPoint Camera::project(const Vec3& world) const {
   return {(nx + 1) * 0.5 * width_, (1 - ny) * 0.5 * height_, (nz + 1) * 0.5};
 }
 
+bool Camera::may_see(const Box3& box) const {
+  if (box.empty()) return false;
+  double lo_x = HUGE_VAL, hi_x = -HUGE_VAL, lo_y = HUGE_VAL, hi_y = -HUGE_VAL;
+  for (int k = 0; k < 8; ++k) {
+    const WindowPoint p = project({k & 1 ? box.hi.x : box.lo.x, k & 2 ? box.hi.y : box.lo.y,
+                                   k & 4 ? box.hi.z : box.lo.z});
+    lo_x = std::min(lo_x, p.x), hi_x = std::max(hi_x, p.x), lo_y = std::min(lo_y, p.y), hi_y = std::max(hi_y, p.y);
+  }
+  return hi_x >= 0 && lo_x <= width_ && hi_y >= 0 && lo_y <= height_;
+}
+
 Vec3 Camera::unproject(const WindowPoint& p) const {
   const double aspect = static_cast<double>(width_) / height_;
   const double nx = 2 * p.x / width_ - 1, ny = 1 - 2 * p.y / height_, nz = 2 * p.depth - 1;

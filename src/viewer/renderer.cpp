@@ -139,17 +139,62 @@ GLuint link(const char* vs_src, const char* fs_src, const char* what) {
   return p;
 }
 
+// A run of a line strip and its bounds: zoomed in, the renderer draws only
+// the runs that may be in view (a strip of millions of vertices costs
+// llvmpipe its vertex shading even where nothing is seen).
+struct StripRun {
+  GLint first = 0;
+  GLsizei count = 0;
+  Box3 box;
+};
+constexpr std::size_t kRunVertices = 16384;
+
 struct Layer {
   GLuint vao = 0, vbo = 0, ebo = 0;
   GLsizei count = 0;  // indices (surfaces) or vertices (lines)
+  std::vector<StripRun> runs;  // line strips
   void release() {
     if (ebo) glDeleteBuffers(1, &ebo);
     if (vbo) glDeleteBuffers(1, &vbo);
     if (vao) glDeleteVertexArrays(1, &vao);
     vao = vbo = ebo = 0;
     count = 0;
+    runs.clear();
   }
 };
+
+// Runs of kRunVertices lines; each takes the next run's first vertex too,
+// so the line between them is drawn.
+template <class PositionOf>
+std::vector<StripRun> strip_runs(std::size_t n, PositionOf position_of) {
+  std::vector<StripRun> runs;
+  for (std::size_t first = 0; first + 1 < n; first += kRunVertices) {
+    const std::size_t end = std::min(first + kRunVertices + 1, n);
+    StripRun r;
+    r.first = static_cast<GLint>(first);
+    r.count = static_cast<GLsizei>(end - first);
+    for (std::size_t v = first; v < end; ++v) r.box.add(position_of(v));
+    runs.push_back(r);
+  }
+  return runs;
+}
+
+// Draws the runs the camera may see, adjacent ones in one call.
+void draw_visible_runs(const Layer& l, const Camera& camera) {
+  GLint first = -1;
+  GLsizei count = 0;
+  for (const StripRun& r : l.runs) {
+    if (!camera.may_see(r.box)) continue;
+    if (first >= 0 && first + count - 1 == r.first) {
+      count = r.first + r.count - first;  // continues the previous run
+      continue;
+    }
+    if (first >= 0) glDrawArrays(GL_LINE_STRIP, first, count);
+    first = r.first;
+    count = r.count;
+  }
+  if (first >= 0) glDrawArrays(GL_LINE_STRIP, first, count);
+}
 
 void upload_mesh(Layer& layer, const TriangleMesh& mesh) {
   layer.release();
@@ -248,6 +293,10 @@ void Renderer::set_toolpath(const Toolpath& path) {
                path.vertices.data(), GL_STATIC_DRAW);
   path_attributes(static_cast<GLsizei>(sizeof(PathVertex)));
   l.count = static_cast<GLsizei>(path.vertices.size());
+  l.runs = strip_runs(path.vertices.size(), [&](std::size_t v) {
+    const PathVertex& p = path.vertices[v];
+    return Vec3{p.x, p.y, p.z};
+  });
   // The strip for distant views: lossless below half a pixel (display_strip).
   distant_tolerance_ = std::max(norm(path.bounds.size()) / 8000, 1e-4);
   std::vector<DistantVertex> distant;
@@ -265,6 +314,10 @@ void Renderer::set_toolpath(const Toolpath& path) {
   glVertexAttribIPointer(3, 1, GL_INT, static_cast<GLsizei>(sizeof(DistantVertex)),
                          byte_offset(offsetof(DistantVertex, index)));
   d.count = static_cast<GLsizei>(distant.size());
+  d.runs = strip_runs(distant.size(), [&](std::size_t v) {
+    const PathVertex& p = distant[v].v;
+    return Vec3{p.x, p.y, p.z};
+  });
   distant_vertices_ = distant.size();
   glBindVertexArray(0);
 }
@@ -321,7 +374,7 @@ void Renderer::draw(const Camera& camera) {
     const Layer& l = far ? impl_->distant : impl_->path;
     glUniform1i(glGetUniformLocation(pp, "indexed"), far ? 1 : 0);
     glBindVertexArray(l.vao);
-    glDrawArrays(GL_LINE_STRIP, 0, l.count);
+    draw_visible_runs(l, camera);
   }
   glBindVertexArray(0);
 }

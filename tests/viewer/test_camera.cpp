@@ -162,3 +162,13 @@ TEST(ViewerCamera, OrbitTurnsAndStopsAtThePoles) {
   EXPECT_EQ(c.elevation_deg(), -90);
   EXPECT_THROW(c.set_viewport(0, 10), std::invalid_argument);
 }
+
+TEST(ViewerCamera, MaySeeWhatIsInTheViewportOnly) {
+  Camera c = camera(NamedView::Top, 400, 300);
+  EXPECT_TRUE(c.may_see(box({10, 10, -1}, {20, 20, 0})));
+  EXPECT_TRUE(c.may_see(box({-1000, 50, 0}, {1000, 51, 0})));  // crosses the view
+  EXPECT_FALSE(c.may_see(box({500, 10, 0}, {600, 20, 0})));
+  c.zoom_at(10, 0, 0);  // toward the top-left corner
+  EXPECT_FALSE(c.may_see(box({100, 10, 0}, {120, 20, 0})));
+  EXPECT_FALSE(c.may_see(Box3{}));
+}

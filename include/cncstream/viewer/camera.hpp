@@ -73,6 +73,9 @@ class Camera {
   Mat4 view_projection() const { return projection_matrix() * view_matrix(); }
 
   WindowPoint project(const Vec3& world) const;
+  // Whether any of the box can be in the view (its projected corners'
+  // rectangle meets the viewport): what the renderer skips drawing.
+  bool may_see(const Box3& box) const;
   Vec3 unproject(const WindowPoint& p) const;
 
  private:
