@@ -240,7 +240,9 @@ void run_window(Scene& scene, const WindowOptions& options) {
       if (u.progress) scene.progress = *u.progress, s.dirty = true;
     }
     if (!s.dirty) {
-      glfwWaitEvents();
+      // Input and LiveCursor's wake-ups end the wait; the timeout is a
+      // safety net for a wake-up lost to the X server.
+      glfwWaitEventsTimeout(1.0);
       continue;
     }
     s.dirty = false;
@@ -272,6 +274,7 @@ void run_window(Scene& scene, const WindowOptions& options) {
     }
     glfwSetWindowTitle(win, title.c_str());
     glfwSwapBuffers(win);
+    if (options.after_frame && !options.after_frame(title)) glfwSetWindowShouldClose(win, GLFW_TRUE);
   }
 }
 

@@ -53,6 +53,9 @@ struct WindowOptions {
   std::string title = "cncstream view";
   PathColouring colouring = PathColouring::Feed;
   LiveCursor* live = nullptr;  // optional
+  // Called after each frame with the window's title (the readouts); false
+  // closes the window. For programs that embed the viewer, and its tests.
+  std::function<bool(const std::string& title)> after_frame;
 };
 
 // Opens the window and runs until it is closed. Throws NoDisplayError (the
