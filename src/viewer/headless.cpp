@@ -6,6 +6,8 @@
 #include <GL/glext.h>
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -103,12 +105,39 @@ Camera camera_for(const Scene& scene, NamedView view, int width, int height) {
   return cam;
 }
 
+DeviationLegend legend_of(const CutSurface& cut) {
+  const DeviationStats& st = cut.stats;
+  DeviationLegend l;
+  l.tolerance = st.tolerance;
+  l.lo = st.has_gouge ? std::min(0.0, st.largest_gouge.value) : 0.0;
+  l.hi = std::max(0.0, st.largest_excess.value);
+  if (l.lo < 0) l.lo_at = fmt::format("at x {:.2f} y {:.2f}", st.largest_gouge.x, st.largest_gouge.y);
+  if (l.hi > 0) l.hi_at = fmt::format("at x {:.2f} y {:.2f}", st.largest_excess.x, st.largest_excess.y);
+  l.gouged = st.gouged;
+  l.excess = st.excess;
+  l.on_part = st.on_part;
+  return l;
+}
+
 RgbImage screenshot(const Scene& scene, NamedView view, int width, int height, std::string* gl_renderer) {
-  HeadlessView hv(width, height);
+  std::optional<DeviationLegend> legend;
+  int legend_w = 0;
+  if (scene.cut) {
+    legend = legend_of(*scene.cut);
+    const auto [w, h] = deviation_legend_size(*legend);
+    if (h + 32 <= height && w + 32 < width / 2) legend_w = w + 32;
+    else legend.reset();  // no room: the view alone
+  }
+  const int view_w = width - legend_w;
+  HeadlessView hv(view_w, height);
   if (gl_renderer) *gl_renderer = hv.gl_renderer();
   load_scene(hv.renderer(), scene);
-  hv.draw(camera_for(scene, view, width, height));
-  return hv.read_image();
+  hv.draw(camera_for(scene, view, view_w, height));
+  if (!legend) return hv.read_image();
+  RgbImage out(width, height, kBackground);
+  out.blit(hv.read_image(), 0, 0);
+  draw_deviation_legend(out, view_w + 16, 16, *legend);
+  return out;
 }
 
 }  // namespace cncstream::viewer

@@ -7,8 +7,13 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "app_run.hpp"
+#include "cncstream/cam/deviation.hpp"
+#include "cncstream/cam/height_field_io.hpp"
+#include "cncstream/geometry/stl.hpp"
+#include "cncstream/image/deviation_map.hpp"
 #include "cncstream/image/image.hpp"
 
 using namespace apptest;
@@ -80,4 +85,32 @@ TEST(ViewCommand, BadInputIsAClearError) {
   r = run_cncstream({"view", plaque(), "--screenshot", (temp_dir() / "x.png").string(), "--size", "0x10"});
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_TRUE(r.has("WIDTHxHEIGHT")) << r.out;
+}
+
+TEST(ViewCommand, CutScreenshotCarriesTheDeviationMapsLegend) {
+  // A clean cut of the plaque: its design heights on a 2 mm grid.
+  const cncstream::Mesh plaque_mesh = cncstream::load_stl(plaque()).mesh;
+  const cncstream::GridSpec g = cncstream::GridSpec::covering(0, 0, 120, 100, 2, 2);
+  const cncstream::DesignHeights d = cncstream::design_heights(plaque_mesh, g);
+  std::vector<double> z(g.size());
+  for (std::size_t k = 0; k < g.size(); ++k) z[k] = d.off_part[k] ? plaque_mesh.bounds().lo.z : d.z[k];
+  const fs::path cut = temp_dir() / "view_cut.f32";
+  cncstream::write_height_field(cut, g, z);
+  const fs::path png = temp_dir() / "view_cut.png";
+  const auto r = run_cncstream({"view", "--cut", cut.string(), "--design", plaque(), "--screenshot", png.string(),
+                                "--view", "top", "--size", "1000x640"});
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("61 x 51 nodes")) << r.out;
+  EXPECT_TRUE(r.has(", 0 gouged,")) << r.out;
+  const cncstream::RgbImage img = cncstream::read_png(png);
+  ASSERT_EQ(img.width(), 1000);
+  // The legend's swatches, in the map's own colours, right of the view.
+  bool gouge_swatch = false, excess_swatch = false;
+  for (int y = 0; y < img.height(); ++y)
+    for (int x = img.width() / 2; x < img.width(); ++x) {
+      gouge_swatch = gouge_swatch || img.get(x, y) == cncstream::DeviationPalette::gouge(0.6);
+      excess_swatch = excess_swatch || img.get(x, y) == cncstream::DeviationPalette::excess(0.6);
+    }
+  EXPECT_TRUE(gouge_swatch);
+  EXPECT_TRUE(excess_swatch);
 }

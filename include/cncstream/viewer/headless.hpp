@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "cncstream/image/deviation_map.hpp"
 #include "cncstream/image/image.hpp"
 #include "cncstream/viewer/camera.hpp"
 #include "cncstream/viewer/renderer.hpp"
@@ -51,7 +52,12 @@ void load_scene(Renderer& renderer, const Scene& scene);
 // A camera on the scene from a named view, fitted to it, width x height.
 Camera camera_for(const Scene& scene, NamedView view, int width, int height);
 
-// One frame of the scene from a named view, fitted: --screenshot.
+// One frame of the scene from a named view, fitted: --screenshot. With a
+// cut, and room for it (height at least deviation_legend_size's), the
+// deviation map's legend stands at the right and the view is narrower.
 RgbImage screenshot(const Scene& scene, NamedView view, int width, int height, std::string* gl_renderer = nullptr);
+
+// The deviation map's legend for a cut (image/deviation_map.hpp).
+DeviationLegend legend_of(const CutSurface& cut);
 
 }  // namespace cncstream::viewer
