@@ -64,7 +64,7 @@ std::string read_file(const std::string& path) {
   if (!f) throw std::runtime_error(path + ": cannot open (make it with: cncstream toolpath examples/plaque.stl --tool ball:3.175 -o /tmp/plaque.nc)");
   std::ostringstream s;
   s << f.rdbuf();
-  return s.str();
+  return std::move(s).str();
 }
 
 double median(std::vector<double> v) {

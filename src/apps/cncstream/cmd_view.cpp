@@ -11,7 +11,6 @@
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 
 #include "cncstream/cam/height_field_io.hpp"
@@ -54,12 +53,15 @@ std::pair<int, int> parse_view_size(const std::string& text) {
   return {w, h};
 }
 
+// Read in one piece (a 5-million-line program is over 100 MB).
 std::string read_program_text(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
+  std::ifstream f(path, std::ios::binary | std::ios::ate);
   if (!f) throw std::runtime_error(path + ": cannot open the program");
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
+  std::string text(static_cast<std::size_t>(f.tellg()), '\0');
+  f.seekg(0);
+  if (!f.read(text.data(), static_cast<std::streamsize>(text.size())))
+    throw std::runtime_error(path + ": cannot read the program");
+  return text;
 }
 
 // The work origin a cncstream program names in its header ("work origin: XY
