@@ -9,6 +9,7 @@
 // the screen. Window pixels: x to the right, y down, (0, 0) the top-left
 // corner; depth 0 at the near plane and 1 at the far one (GL's window depth).
 #include <array>
+#include <cstddef>
 #include <string>
 
 #include "cncstream/geometry/vec3.hpp"
@@ -19,8 +20,8 @@ namespace cncstream::viewer {
 struct Mat4 {
   std::array<double, 16> m{};
   static Mat4 identity();
-  double at(int row, int col) const { return m[static_cast<std::size_t>(col * 4 + row)]; }
-  double& at(int row, int col) { return m[static_cast<std::size_t>(col * 4 + row)]; }
+  double at(int row, int col) const { return m[static_cast<std::size_t>(col) * 4 + static_cast<std::size_t>(row)]; }
+  double& at(int row, int col) { return m[static_cast<std::size_t>(col) * 4 + static_cast<std::size_t>(row)]; }
   std::array<float, 16> to_floats() const;
 };
 Mat4 operator*(const Mat4& a, const Mat4& b);

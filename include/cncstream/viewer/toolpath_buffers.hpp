@@ -7,7 +7,7 @@
 //
 // Positions are work coordinates (machine - the work offset in force) plus
 // ToolpathOptions::offset, as floats: the GPU's format, and 5 million
-// segments fit in 200 MB.
+// segments fit in 100 MB (one line strip).
 #include <cstddef>
 #include <cstdint>
 #include <string>

@@ -68,7 +68,7 @@ std::string read_program_text(const std::string& path) {
 // at part minimum, Z0 at part top"), so its path can be drawn on the part.
 std::optional<jobs::WorkSetup> program_work_origin(const std::string& text, const Box3& part) {
   const auto at = text.find("(work origin: XY at ");
-  if (at == std::string::npos || at > 4096) return std::nullopt;
+  if (at > 4096) return std::nullopt;  // in the header, or not at all (npos)
   const std::string line = text.substr(at, text.find('\n', at) - at);
   XYOrigin xy = XYOrigin::PartMin;
   if (line.find("XY at part centre") != std::string::npos) xy = XYOrigin::PartCenter;
