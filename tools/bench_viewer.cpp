@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -129,7 +130,9 @@ int main(int argc, char** argv) {
       Scene s;
       s.program = build_toolpath(text);
       const double t_parse = now();
-      HeadlessView hv(width, height);
+      std::optional<HeadlessView> view;  // one EGL display a process: one view at a time
+      view.emplace(width, height);
+      HeadlessView& hv = *view;
       const double t_ctx = now();
       load_scene(hv.renderer(), s);
       const double t_up = now();
@@ -153,6 +156,12 @@ int main(int argc, char** argv) {
       hv.renderer().set_progress(*s.program, NAN);
       iso.zoom_at(10, width / 2.0, height / 2.0);
       frames(hv, iso, k, "iso, zoomed in x10");
+      // What the window draws while a drag moves the view of a large
+      // program: half the resolution, scaled up.
+      view.reset();
+      view.emplace(width / 2, height / 2);
+      load_scene(view->renderer(), s);
+      frames(*view, camera_for(s, NamedView::Iso, width / 2, height / 2), k, "iso, half resolution (drag)");
       std::printf("peak memory %.0f MB\n", peak_mb());
     }
   } catch (const std::exception& e) {

@@ -7,6 +7,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -111,6 +112,7 @@ void on_button(GLFWwindow* w, int button, int action, int /*mods*/) {
   } else {
     s.dragging = -1;
     s.scrubbing = false;
+    s.dirty = true;  // a full-resolution frame after a drag
   }
 }
 
@@ -158,6 +160,59 @@ void on_resize(GLFWwindow* w, int width, int height) {
   if (ww > 0) s.pixel_scale = static_cast<double>(width) / ww;
   s.dirty = true;
 }
+
+// While a drag moves the view of a large program, frames are drawn at half
+// the resolution and scaled up: llvmpipe's time for a frame of lines grows
+// with their length in pixels, and a moving view needs speed more than
+// detail. The frame after the drag is drawn in full.
+class HalfResolution {
+ public:
+  HalfResolution() = default;
+  ~HalfResolution() { release(); }
+  HalfResolution(const HalfResolution&) = delete;
+  HalfResolution& operator=(const HalfResolution&) = delete;
+
+  void draw(Renderer& renderer, const Camera& full) {
+    const int w = std::max(1, full.width() / 2), h = std::max(1, full.height() / 2);
+    if (w != w_ || h != h_) create(w, h);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+    Camera half = full;
+    half.set_viewport(w, h);
+    renderer.draw(half);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+    glBlitFramebuffer(0, 0, w, h, 0, 0, full.width(), full.height(), GL_COLOR_BUFFER_BIT, GL_LINEAR);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, full.width(), full.height());
+  }
+
+ private:
+  void create(int w, int h) {
+    release();
+    glGenFramebuffers(1, &fbo_);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+    glGenRenderbuffers(2, rb_);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb_[0]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb_[0]);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb_[1]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb_[1]);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    w_ = w;
+    h_ = h;
+  }
+  void release() {
+    if (!fbo_) return;
+    glDeleteRenderbuffers(2, rb_);
+    glDeleteFramebuffers(1, &fbo_);
+    fbo_ = 0;
+    w_ = h_ = 0;
+  }
+  GLuint fbo_ = 0, rb_[2] = {0, 0};
+  int w_ = 0, h_ = 0;
+};
+constexpr std::size_t kHalfResolutionVertices = 1'000'000;
 
 // Releases GLFW however run_window ends.
 struct GlfwSession {
@@ -207,6 +262,7 @@ void run_window(Scene& scene, const WindowOptions& options) {
   s.scene = &scene;
   s.colouring = options.colouring;
   Renderer renderer;
+  HalfResolution half_resolution;  // destroyed before the renderer, with the context current
   s.renderer = &renderer;
   if (scene.program && options.colouring != PathColouring::Feed) colour_toolpath(*scene.program, options.colouring);
   load_scene(renderer, scene);
@@ -253,12 +309,15 @@ void run_window(Scene& scene, const WindowOptions& options) {
     s.recolour = false;
     if (scene.program) renderer.set_progress(*scene.program, scene.progress);
     renderer.set_cutter_position(scene.cutter_tip());
+    const bool half = s.dragging >= 0 && !s.scrubbing && renderer.toolpath_vertices() > kHalfResolutionVertices;
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    renderer.draw(s.camera);
-    // The readout: the depth under the cursor before the slider covers it.
+    if (half) half_resolution.draw(renderer, s.camera);
+    else renderer.draw(s.camera);
+    // The readout: the depth under the cursor before the slider covers it
+    // (none while a drag draws at half resolution: no depth in the window).
     std::string title = options.title;
     const int px = static_cast<int>(s.mouse_x), py = static_cast<int>(s.mouse_y);
-    if (px >= 0 && py >= 0 && px < s.camera.width() && py < s.camera.height()) {
+    if (!half && px >= 0 && py >= 0 && px < s.camera.width() && py < s.camera.height()) {
       float depth = 1.0f;
       glReadPixels(px, s.camera.height() - 1 - py, 1, 1, GL_DEPTH_COMPONENT, GL_FLOAT, &depth);
       if (depth < 1.0f) {
