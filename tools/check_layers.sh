@@ -24,6 +24,7 @@ declare -A may_include=(
   [pendant]="geometry image cam gcode protocol transport session"
   [daemon]="geometry image cam gcode jobs protocol transport session pendant"
   [gl]="geometry image cam"
+  [viewer]="geometry image cam gcode gl"
 )
 # The machine session serves `PORT=sim` with the in-process simulator: it
 # may include cncsim (the simulator never includes it back).

@@ -1,4 +1,4 @@
-#include "egl_context.hpp"
+#include "cncstream/gl/egl_context.hpp"
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
@@ -19,7 +19,7 @@ std::string egl_error_text() { return fmt::format("0x{:04X}", static_cast<unsign
   m += what;
   m += " (EGL error ";
   m += egl_error_text();
-  m += "); the GL CL engine needs EGL with Mesa's surfaceless platform and OpenGL 3.3 core (llvmpipe will do)";
+  m += "); headless rendering (the GL CL engine, the viewer's screenshots) needs EGL with Mesa's surfaceless platform and OpenGL 3.3 core (llvmpipe will do)";
   throw GlError(m);
 }
 

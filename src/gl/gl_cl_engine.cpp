@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "cncstream/gl/offset_tessellation.hpp"
-#include "egl_context.hpp"
+#include "cncstream/gl/egl_context.hpp"
 
 namespace cncstream::gl {
 

@@ -25,6 +25,82 @@ Rgb mix(Rgb a, Rgb b, double t) {
 Rgb DeviationPalette::gouge(double severity) { return mix({250, 160, 140}, {150, 0, 20}, severity); }
 Rgb DeviationPalette::excess(double severity) { return mix({160, 195, 240}, {15, 45, 140}, severity); }
 
+Rgb DeviationScale::colour(double v) const {
+  const double tol = tolerance;
+  // Severity runs from the tolerance to the worst value of that sign.
+  if (v < -tol) return DeviationPalette::gouge((-v - tol) / std::max(largest_gouge - tol, 1e-12));
+  if (v > tol) return DeviationPalette::excess((v - tol) / std::max(largest_excess - tol, 1e-12));
+  return DeviationPalette::within;
+}
+
+namespace {
+
+constexpr int kLegendBarHeight = 240;
+
+std::vector<std::string> legend_lines(const DeviationLegend& l) {
+  const int dec = std::max(3, mf::decimals_for(l.tolerance) - 1);
+  auto mm = [&](double v) { return mf::fixed(v, dec) + " mm"; };
+  auto pct = [&](std::size_t n) { return mf::fixed(l.on_part ? 100.0 * n / l.on_part : 0, 1) + "%"; };
+  // Appends, not "  " + s in a conditional: GCC 12 warns falsely (-Wrestrict).
+  std::string lo_at, hi_at;
+  if (l.lo < 0 && !l.lo_at.empty()) lo_at.append("  ").append(l.lo_at);
+  if (l.hi > 0 && !l.hi_at.empty()) hi_at.append("  ").append(l.hi_at);
+  return {
+      "Machined - design",
+      "gouge: below by > " + mm(l.tolerance),
+      "within +/-" + mm(l.tolerance),
+      "excess: above by > " + mm(l.tolerance),
+      "off part (no design)",
+      "largest gouge " + (l.lo < 0 ? mm(-l.lo) : std::string("none")),
+      lo_at,
+      "largest excess " + (l.hi > 0 ? mm(l.hi) : std::string("none")),
+      hi_at,
+      "gouged nodes " + std::to_string(l.gouged) + " (" + pct(l.gouged) + ")",
+      "excess nodes " + std::to_string(l.excess) + " (" + pct(l.excess) + ")",
+  };
+}
+
+}  // namespace
+
+std::pair<int, int> deviation_legend_size(const DeviationLegend& l) {
+  const int dec = std::max(3, mf::decimals_for(l.tolerance) - 1);
+  const int w = std::max(mf::widest(legend_lines(l)) + 24,
+                         48 + mf::widest({mf::fixed(l.lo, dec) + " mm", mf::fixed(l.hi, dec) + " mm"}));
+  return {w, mf::kLineStep * 14 + kLegendBarHeight + 24};
+}
+
+void draw_deviation_legend(RgbImage& img, int x, int y, const DeviationLegend& l) {
+  const double tol = l.tolerance;
+  const std::vector<std::string> lines = legend_lines(l);
+  const int dec = std::max(3, mf::decimals_for(tol) - 1);
+  auto mm = [&](double v) { return mf::fixed(v, dec) + " mm"; };
+  const DeviationScale scale{tol, -l.lo, l.hi};
+  img.draw_text(x, y, lines[0], mf::kInk, mf::kTextScale);
+  y += mf::kLineStep + 4;
+  mf::draw_swatch(img, x, y, DeviationPalette::gouge(0.6), lines[1]);
+  y += mf::kLineStep;
+  mf::draw_swatch(img, x, y, DeviationPalette::within, lines[2]);
+  y += mf::kLineStep;
+  mf::draw_swatch(img, x, y, DeviationPalette::excess(0.6), lines[3]);
+  y += mf::kLineStep;
+  mf::draw_swatch(img, x, y, DeviationPalette::off_part, lines[4]);
+  y += mf::kLineStep + 12;
+
+  // The colour bar spans the data's range (at least the tolerance band).
+  const double blo = std::min(l.lo, -2 * tol), bhi = std::max(l.hi, 2 * tol);
+  auto t_of = [&](double v) { return (v - blo) / (bhi - blo); };
+  std::vector<std::pair<double, std::string>> labels = {{1.0, mm(bhi)}, {t_of(tol), std::string("+").append(mm(tol))},
+                                                        {t_of(-tol), mm(-tol)}, {0.0, mm(blo)}};
+  mf::draw_colour_bar(img, x, y, 24, kLegendBarHeight, [&](double t) { return scale.colour(blo + t * (bhi - blo)); },
+                      labels);
+  y += kLegendBarHeight + 16;
+  for (std::size_t q = 5; q < lines.size(); ++q) {
+    if (lines[q].empty()) continue;
+    img.draw_text(x, y, lines[q], q >= 9 ? mf::kFaint : mf::kInk, mf::kTextScale);
+    y += mf::kLineStep;
+  }
+}
+
 RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> dev, std::span<const std::uint8_t> off,
                               const DeviationMapOptions& options) {
   if (grid.size() == 0) throw std::invalid_argument("deviation map: the grid is empty");
@@ -48,37 +124,17 @@ RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> dev, 
     gouged += dev[k] < -tol;
     excess += dev[k] > tol;
   }
-  // Severity runs from the tolerance to the worst value of that sign.
-  const double gouge_span = std::max(-lo - tol, 1e-12), excess_span = std::max(hi - tol, 1e-12);
-  auto colour_of = [&](double v) {
-    if (v < -tol) return DeviationPalette::gouge((-v - tol) / gouge_span);
-    if (v > tol) return DeviationPalette::excess((v - tol) / excess_span);
-    return DeviationPalette::within;
-  };
+  const DeviationScale scale{tol, -lo, hi};
+  auto colour_of = [&](double v) { return scale.colour(v); };
 
-  const int dec = std::max(3, mf::decimals_for(tol) - 1);
-  auto mm = [&](double v) { return mf::fixed(v, dec) + " mm"; };
+  DeviationLegend legend{tol, lo, hi, "", "", gouged, excess, on};
   auto at = [&](std::size_t k) {
     const std::size_t i = k % grid.nx, j = k / grid.nx;
     return "at x " + mf::fixed(grid.x0 + i * grid.dx, 2) + " y " + mf::fixed(grid.y0 + j * grid.dy, 2);
   };
-  auto pct = [&](std::size_t n) { return mf::fixed(on ? 100.0 * n / on : 0, 1) + "%"; };
-  std::vector<std::string> lines = {
-      "Machined - design",
-      "gouge: below by > " + mm(tol),
-      "within +/-" + mm(tol),
-      "excess: above by > " + mm(tol),
-      "off part (no design)",
-      "largest gouge " + (lo < 0 ? mm(-lo) : std::string("none")),
-      lo < 0 ? "  " + at(klo) : "",
-      "largest excess " + (hi > 0 ? mm(hi) : std::string("none")),
-      hi > 0 ? "  " + at(khi) : "",
-      "gouged nodes " + std::to_string(gouged) + " (" + pct(gouged) + ")",
-      "excess nodes " + std::to_string(excess) + " (" + pct(excess) + ")",
-  };
-  const int bar_h = 240;
-  const int legend_w = std::max(mf::widest(lines) + 24, 48 + mf::widest({mm(lo), mm(hi)}));
-  const int legend_h = mf::kLineStep * 14 + bar_h + 24;
+  if (lo < 0) legend.lo_at = at(klo);
+  if (hi > 0) legend.hi_at = at(khi);
+  const auto [legend_w, legend_h] = deviation_legend_size(legend);
   mf::Frame f = mf::make_frame(grid, options.max_map_pixels, options.title, options.subtitle, legend_w, legend_h);
   RgbImage& img = f.image;
 
@@ -102,31 +158,7 @@ RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> dev, 
       f.image.set(f.map_x + px, f.map_y + py, any ? colour_of(worst) : DeviationPalette::off_part);
     }
 
-  int y = f.legend_y;
-  const int x = f.legend_x;
-  img.draw_text(x, y, lines[0], mf::kInk, mf::kTextScale);
-  y += mf::kLineStep + 4;
-  mf::draw_swatch(img, x, y, DeviationPalette::gouge(0.6), lines[1]);
-  y += mf::kLineStep;
-  mf::draw_swatch(img, x, y, DeviationPalette::within, lines[2]);
-  y += mf::kLineStep;
-  mf::draw_swatch(img, x, y, DeviationPalette::excess(0.6), lines[3]);
-  y += mf::kLineStep;
-  mf::draw_swatch(img, x, y, DeviationPalette::off_part, lines[4]);
-  y += mf::kLineStep + 12;
-
-  // The colour bar spans the data's range (at least the tolerance band).
-  const double blo = std::min(lo, -2 * tol), bhi = std::max(hi, 2 * tol);
-  auto t_of = [&](double v) { return (v - blo) / (bhi - blo); };
-  std::vector<std::pair<double, std::string>> labels = {{1.0, mm(bhi)}, {t_of(tol), "+" + mm(tol)},
-                                                        {t_of(-tol), mm(-tol)}, {0.0, mm(blo)}};
-  mf::draw_colour_bar(img, x, y, 24, bar_h, [&](double t) { return colour_of(blo + t * (bhi - blo)); }, labels);
-  y += bar_h + 16;
-  for (std::size_t q = 5; q < lines.size(); ++q) {
-    if (lines[q].empty()) continue;
-    img.draw_text(x, y, lines[q], q >= 9 ? mf::kFaint : mf::kInk, mf::kTextScale);
-    y += mf::kLineStep;
-  }
+  draw_deviation_legend(img, f.legend_x, f.legend_y, legend);
   return std::move(f.image);
 }
 

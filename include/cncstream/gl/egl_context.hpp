@@ -2,7 +2,8 @@
 // A headless OpenGL 3.3 core context: EGL on Mesa's surfaceless platform (no
 // X server, no window; llvmpipe without a GPU, the GPU's driver with one),
 // made current on the calling thread with no surface. Throws GlError naming
-// the step that failed.
+// the step that failed. Used by the GL CL engine and the viewer's
+// screenshots (src/viewer/).
 #include <string>
 
 namespace cncstream::gl {
