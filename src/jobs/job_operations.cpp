@@ -85,6 +85,17 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
   // below the part's floor).
   rp.bottom = s.stock.box.lo.z - work_offset.z;
   rp.stepover = p.rough_stepover;
+  if (!(rp.stepover > 0) && rc.corner_radius > 0) {
+    // A round end leaves scallops between its loops that the next level
+    // must take as well: loops close enough that they stay under a quarter
+    // of the step-down (the roughing allows for a further grid cell, at most
+    // a sixth of the radius).
+    const double sd = p.step_down.value_or(std::min(s.rough_max_depth, s.finish_max_depth - p.leave));
+    const double t = std::min(rc.corner_radius, sd / 4);
+    const double reach = rc.core_radius() + std::sqrt(rc.corner_radius * rc.corner_radius -
+                                                      (rc.corner_radius - t) * (rc.corner_radius - t));
+    rp.stepover = std::clamp(reach - rc.radius / 6, 0.1 * rc.diameter(), 0.4 * rc.diameter());
+  }
   // Every roughing pass within the roughing cutter's depth, and what the
   // terraces leave within the finishing cutter's.
   rp.step_down = p.step_down.value_or(std::min(s.rough_max_depth, s.finish_max_depth - p.leave));
