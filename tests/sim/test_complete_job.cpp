@@ -12,10 +12,14 @@
 #include <cstdint>
 #include <map>
 #include <sstream>
+#include <string>
+
+#include <unistd.h>
 
 #include "cncsim/machine.hpp"
 #include "cncsim/removal.hpp"
 #include "cncstream/cam/deviation.hpp"
+#include "cncstream/cam/height_field_io.hpp"
 #include "cncstream/gcode/program_pause.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "move_depth.hpp"
@@ -127,4 +131,62 @@ TEST(CompleteJob, PlaqueRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
       << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
       << dev.stats.largest_gouge.y;
+}
+
+// A roughing interrupted half way, its result written as the simulator
+// writes it, and the job run again from that height map: the second
+// roughing cuts only what is left (fewer lines, levels only where material
+// stands above them), no move deeper than the cutter may cut, no gouge, and
+// as much removed as by one roughing run whole.
+TEST(CompleteJob, PlaqueRoughedAgainFromAnInterruptedRoughingCutsOnlyWhatIsLeft) {
+  jobs::ToolpathParams p = plaque_job();
+  p.stepover = 3.0;  // the finishing is not run here
+  p.tolerance = 0.05;
+  const jobs::ToolpathProgram first = jobs::generate_toolpath(p);
+  ASSERT_EQ(first.operations.size(), 2u);
+  const jobs::OperationSummary& r1 = first.operations[0];
+  // Up to the line before the finishing's tool change: the whole roughing.
+  const std::size_t whole = first.operations[1].first_line - 1;
+  const Cut full = run(first, block_of(first), whole);
+  const Cut half = run(first, block_of(first), r1.first_line + r1.lines / 2);
+
+  const auto dir = std::filesystem::temp_directory_path() / ("cncstream_rough_again_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto map = dir / "half.f32";
+  write_height_field(map, half.stock.grid(), half.stock.heights());
+  jobs::ToolpathParams again = p;
+  again.stock = jobs::parse_stock_spec(map.string());
+  const jobs::ToolpathProgram second = jobs::generate_toolpath(again);
+  const HeightFieldData read = read_height_field(map);
+  std::filesystem::remove_all(dir);
+  ASSERT_EQ(second.operations.size(), 2u);
+  const jobs::OperationSummary& r2 = second.operations[0];
+  ASSERT_EQ(r2.name, "roughing");
+  for (const auto& n : second.notes) std::cout << n << "\n";
+  std::cout << "roughing lines: whole " << r1.lines << ", again from the half-cut stock " << r2.lines << "\n";
+  EXPECT_LT(r2.lines, r1.lines);
+  EXPECT_GT(r2.lines, r1.lines / 10);  // it did go on
+
+  const Cut c = run(second, cncsim::stock_from_heights(read.grid, read.z), second.operations[1].first_line - 1);
+  ASSERT_TRUE(c.depth.deepest.count(1));
+  print_deepest(c);
+  EXPECT_LE(c.depth.deepest.at(1), r2.max_depth + 1e-3);
+  const DesignHeights design = design_heights(second.work_mesh, c.stock.grid());
+  const DeviationResult dev = compare_to_design(c.stock, design, 0.01);
+  EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
+      << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
+      << dev.stats.largest_gouge.y;
+  // About as much left as after the whole roughing (its levels are planned
+  // anew from the half-cut stock's highest point, so its terraces lie at
+  // other heights: compared in volume, not node by node).
+  double left = 0, left_whole = 0, start = 0;
+  for (std::size_t n = 0; n < c.stock.heights().size(); ++n) {
+    left += c.stock.heights()[n];
+    left_whole += full.stock.heights()[n];
+    start += first.stock->hi.z;
+  }
+  const double cell = c.stock.grid().dx * c.stock.grid().dy;
+  std::cout << "removed by the whole roughing " << (start - left_whole) * cell << " mm^3, by half and again "
+            << (start - left) * cell << " mm^3\n";
+  EXPECT_LE(left - left_whole, 0.01 * (start - left_whole));
 }
