@@ -110,7 +110,8 @@ TEST(CompleteJob, PlaqueRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   ASSERT_TRUE(prog.stock);
   for (const auto& n : prog.notes) std::cout << n << "\n";
   std::cout << prog.stats.lines << " lines: roughing " << prog.operations[0].lines << ", finishing "
-            << prog.operations[1].lines << "\n";
+            << prog.operations[1].lines << "; feed time roughing " << prog.operations[0].feed_time_s / 60
+            << " min, finishing " << prog.operations[1].feed_time_s / 60 << " min\n";
 
   const Cut c = run(prog, block_of(prog));
   EXPECT_EQ(c.pauses, 1);
@@ -163,7 +164,8 @@ TEST(CompleteJob, PlaqueRoughedAgainFromAnInterruptedRoughingCutsOnlyWhatIsLeft)
   const jobs::OperationSummary& r2 = second.operations[0];
   ASSERT_EQ(r2.name, "roughing");
   for (const auto& n : second.notes) std::cout << n << "\n";
-  std::cout << "roughing lines: whole " << r1.lines << ", again from the half-cut stock " << r2.lines << "\n";
+  std::cout << "roughing lines: whole " << r1.lines << ", again from the half-cut stock " << r2.lines
+            << "; feed time " << r1.feed_time_s / 60 << " and " << r2.feed_time_s / 60 << " min\n";
   EXPECT_LT(r2.lines, r1.lines);
   EXPECT_GT(r2.lines, r1.lines / 10);  // it did go on
 
