@@ -4,8 +4,9 @@
 // least `rim` inside the cutter (the drop a cutter `rim` narrower would
 // have taken). A node on the very rim of the footprint drops the whole
 // height of the material beside it when the path moves by a micrometre
-// (a lower level's loop a few micrometres nearer a wall than the one above,
-// arcs against their chords): a sliver that narrow is no depth of cut. A
+// (a lower level's loop nearer a wall than the one above by the arcs fitted
+// to it, two-sided within the program's tolerance, or an arc's chords): a
+// sliver that narrow is no depth of cut; set `rim` to the tolerance. A
 // finishing cutter's rim can be set to the stock the roughing left (plus a
 // little): its side cut of that skin along a wall is as tall as the wall.
 #include <algorithm>
@@ -19,10 +20,11 @@
 namespace simtest {
 
 struct MoveDepth {
-  double rim = 0.01;            // mm
+  double rim = 0.01;            // mm; at least the program's arc tolerance
   std::map<int, double> rim_of;  // per tool, where not `rim`
   std::map<int, double> deepest;  // per tool
-  std::map<int, std::pair<cncstream::Vec3, cncstream::Vec3>> where;
+  std::map<int, std::pair<cncstream::Vec3, cncstream::Vec3>> where;  // the move
+  std::map<int, cncstream::Vec3> node;  // the node (x, y, its height before)
 
   // Cuts a -> b into `removal` with `cutter` (tool `tool`), noting the depth.
   void cut(cncsim::MaterialRemoval& removal, int tool, const cncstream::Cutter& cutter, const cncstream::Vec3& a,
@@ -54,6 +56,7 @@ struct MoveDepth {
         if (before_[q] - low > d) {
           d = before_[q] - low;
           where[tool] = {a, b};
+          node[tool] = {g.x(static_cast<std::size_t>(i)), g.y(static_cast<std::size_t>(j)), before_[q]};
         }
       }
   }
