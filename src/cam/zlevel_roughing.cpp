@@ -13,7 +13,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "cncstream/cam/distance_transform.hpp"
 #include "zlevel_regions.hpp"
 #include "zlevel_stock.hpp"
 
@@ -331,19 +330,9 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     // stock's top on the grid is the highest within a cell of each node, and
     // the distance is between nodes), so a tip left out has no material
     // above z under the cutter.
-    if (stock.surface) {
-      // Material counts where the cutter can reach it at z (within the
-      // radius and a cell of a node of the tip region: the skin left on the
-      // part's walls does not), and where it stands more than the flat
-      // tolerance above z (a level cut before stands up to the G-code's
-      // rounding of Z above it).
-      std::vector<std::uint8_t> off_region(g.size()), reachable(g.size());
-      for (std::size_t n = 0; n < g.size(); ++n)
-        off_region[n] = std::max(tips[n] - z, b.dbox(g.x(n % g.nx), g.y(n / g.nx))) <= 0 ? 0 : 1;
-      const std::vector<double> to_region = distance_to_outside(g, off_region, false);
-      for (std::size_t n = 0; n < g.size(); ++n) reachable[n] = to_region[n] <= b.R + b.h ? 1 : 0;
-      reach = detail::material_reach(g, stock_top, z, flat_tol, reachable, b.R + 2 * b.h);
-    }
+    // Material counts where it stands more than the flat tolerance above z
+    // (a level cut before stands up to the G-code's rounding of Z above it).
+    if (stock.surface) reach = detail::material_reach(g, stock_top, z, flat_tol, b.R + 2 * b.h);
     for (std::size_t n = 0; n < g.size(); ++n) {
       phi[n] = std::max(tips[n] - z, b.dbox(g.x(n % g.nx), g.y(n / g.nx)));
       if (stock.surface) phi[n] = std::max(phi[n], reach[n]);

@@ -2,7 +2,6 @@
 // A roughing stock whose top is a height map (an earlier operation's
 // result): where on the roughing grid there is material above a level, and
 // how far each node is from it. Internal to the roughing.
-#include <cstdint>
 #include <vector>
 
 #include "cncstream/cam/cl_grid.hpp"
@@ -16,10 +15,9 @@ namespace cncstream::detail {
 std::vector<double> stock_top_on_grid(const GridSpec& g, const StockBlock& stock);
 
 // Per node: distance to the nearest node with stock more than `above` above
-// z that the cutter can reach at z (`reachable`), minus `reach` (<= 0:
-// within reach of material to cut at z).
+// z, minus `reach` (<= 0: within reach of material above z).
 std::vector<double> material_reach(const GridSpec& g, const std::vector<double>& top, double z, double above,
-                                   const std::vector<std::uint8_t>& reachable, double reach);
+                                   double reach);
 
 // Bilinear interpolation of node values at (x, y) (clamped to the grid).
 double interpolate(const GridSpec& g, const std::vector<double>& v, double x, double y);
