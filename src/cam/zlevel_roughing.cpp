@@ -151,21 +151,36 @@ struct Builder {
     const double ramp_top = std::min(z_above + above + 0.5, pass.lift_z);
     const double drop = ramp_top - z;
     const double need = drop / std::tan(p.ramp_angle_deg * kPi / 180);
-    const double laps = std::max(1.0, std::ceil(need / std::max(length, 1e-9)));
     if (length < (p.min_ramp_loop > 0 ? p.min_ramp_loop : kPi * R / 2)) ++path.stats.short_entries;
+    // Down along the loop over the length the angle needs (laps of a short
+    // loop), not a whole lap of a long one at the plunge feed; then one
+    // whole lap at z from where the ramp got down.
     pass.points.push_back({loop.front().x, loop.front().y, ramp_top});
+    const std::size_t n = loop.size();
     double s = 0;
-    const double total = laps * length;
-    for (int lap = 0; lap < static_cast<int>(laps); ++lap)
-      for (std::size_t k = 1; k <= loop.size(); ++k) {
-        const Vec3& a = loop[k - 1];
-        const Vec3& b = loop[k % loop.size()];
-        s += xy_dist(a, b);
-        pass.points.push_back({b.x, b.y, ramp_top - drop * std::min(1.0, s / total)});
+    std::size_t k = 0;
+    Vec3 down = loop.front();
+    for (;; ++k) {
+      const Vec3& a = loop[k % n];
+      const Vec3& b = loop[(k + 1) % n];
+      const double seg = xy_dist(a, b);
+      if (s + seg >= need || (k + 1 >= n && s + seg <= 1e-9)) {
+        const double t = seg > 0 ? std::clamp((need - s) / seg, 0.0, 1.0) : 1.0;
+        if (t >= 1) ++k;  // down at b: the lap starts there
+        down = t >= 1 ? Vec3{b.x, b.y, z} : Vec3{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, z};
+        pass.points.push_back(down);
+        break;
       }
+      s += seg;
+      pass.points.push_back({b.x, b.y, ramp_top - drop * s / need});
+    }
     pass.entry_points = pass.points.size() - 1;
-    pass.points.back().z = z;
-    append_loop(pass.points, loop, z, false);
+    // The lap: the vertices after `down` round to the one before it, then back to it.
+    for (std::size_t m = 1; m <= n; ++m) {
+      const Vec3& v = loop[(k + m) % n];
+      pass.points.push_back({v.x, v.y, z});
+    }
+    if (pass.points.back().x != down.x || pass.points.back().y != down.y) pass.points.push_back(down);
     return pass;
   }
 
@@ -315,7 +330,9 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     // stock's top on the grid is the highest within a cell of each node, and
     // the distance is between nodes), so a tip left out has no material
     // above z under the cutter.
-    if (stock.surface) reach = detail::material_reach(g, stock_top, z, b.R + 2 * b.h);
+    // Material counts where it stands more than the flat tolerance above z
+    // (a level cut before stands up to the G-code's rounding of Z above it).
+    if (stock.surface) reach = detail::material_reach(g, stock_top, z, flat_tol, b.R + 2 * b.h);
     for (std::size_t n = 0; n < g.size(); ++n) {
       phi[n] = std::max(tips[n] - z, b.dbox(g.x(n % g.nx), g.y(n / g.nx)));
       if (stock.surface) phi[n] = std::max(phi[n], reach[n]);

@@ -41,9 +41,10 @@ std::vector<double> stock_top_on_grid(const GridSpec& g, const StockBlock& s) {
   return top;
 }
 
-std::vector<double> material_reach(const GridSpec& g, const std::vector<double>& top, double z, double reach) {
+std::vector<double> material_reach(const GridSpec& g, const std::vector<double>& top, double z, double above,
+                                   double reach) {
   std::vector<std::uint8_t> empty(g.size());
-  for (std::size_t n = 0; n < g.size(); ++n) empty[n] = top[n] > z ? 0 : 1;
+  for (std::size_t n = 0; n < g.size(); ++n) empty[n] = top[n] > z + above ? 0 : 1;
   std::vector<double> d = distance_to_outside(g, empty, false);  // beyond the grid: no stock
   for (double& v : d) v -= reach;
   return d;

@@ -14,9 +14,10 @@ namespace cncstream::detail {
 // material between nodes is never missed.
 std::vector<double> stock_top_on_grid(const GridSpec& g, const StockBlock& stock);
 
-// Per node: distance to the nearest node with stock above z, minus `reach`
-// (<= 0: within reach of material above z).
-std::vector<double> material_reach(const GridSpec& g, const std::vector<double>& top, double z, double reach);
+// Per node: distance to the nearest node with stock more than `above` above
+// z, minus `reach` (<= 0: within reach of material above z).
+std::vector<double> material_reach(const GridSpec& g, const std::vector<double>& top, double z, double above,
+                                   double reach);
 
 // Bilinear interpolation of node values at (x, y) (clamped to the grid).
 double interpolate(const GridSpec& g, const std::vector<double>& v, double x, double y);

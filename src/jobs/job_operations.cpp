@@ -33,6 +33,18 @@ double depth_below_stock(const std::vector<Polyline>& pieces, const Vec3& offset
   return deepest;
 }
 
+// A height map in work coordinates as a stock surface in model coordinates
+// (no value: the block's top).
+HeightFieldStock model_surface(const HeightFieldData& map, const Vec3& work_offset, double top) {
+  GridSpec g = map.grid;
+  g.x0 -= work_offset.x;
+  g.y0 -= work_offset.y;
+  std::vector<double> z(map.z.size());
+  for (std::size_t n = 0; n < z.size(); ++n)
+    z[n] = std::isfinite(map.z[n]) ? static_cast<double>(map.z[n]) - work_offset.z : top;
+  return HeightFieldStock(g, top, std::move(z));
+}
+
 std::string mm(double v) { return fmt::format("{:.2f} mm", v); }
 
 }  // namespace
@@ -70,14 +82,19 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
   else
     s.notes.push_back(fmt::format("roughing with the {} as asked", rc.spec()));
 
-  // The stock as a block in model coordinates (a height map: its box; the
-  // levels above its surface cut air).
+  // The stock as a block in model coordinates; a height map its surface
+  // (levels start below its highest point and cut only where there is
+  // material above them).
   StockBlock block;
   block.x0 = s.stock.box.lo.x - work_offset.x;
   block.y0 = s.stock.box.lo.y - work_offset.y;
   block.x1 = s.stock.box.hi.x - work_offset.x;
   block.y1 = s.stock.box.hi.y - work_offset.y;
   block.top = s.stock.box.hi.z - work_offset.z;
+  if (s.stock.heights) {
+    s.surface = std::make_shared<const HeightFieldStock>(model_surface(*s.stock.heights, work_offset, block.top));
+    block.surface = s.surface.get();
+  }
 
   RoughingParams rp;
   rp.leave = p.leave;

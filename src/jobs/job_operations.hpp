@@ -3,11 +3,13 @@
 // the finishing pass alone would cut deeper than its cutter may, the Z-level
 // roughing that comes first when it would, and the program of both with the
 // tool change between them. Private to the jobs layer.
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "cncstream/cam/checkpoint.hpp"
+#include "cncstream/cam/stock.hpp"
 #include "cncstream/cam/zlevel_roughing.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 
@@ -20,6 +22,8 @@ struct RoughingStage {
   double finish_depth = 0;           // ... after the roughing (= alone without one)
   std::optional<RoughingPath> path;  // model coordinates; none when the finishing pass is within its depth
   double rough_max_depth = 0;
+  // A height-map stock in model coordinates (the roughing's surface).
+  std::shared_ptr<const HeightFieldStock> surface;
   std::vector<std::string> notes;
 };
 

@@ -9,14 +9,20 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <cstdint>
 #include <map>
 #include <sstream>
+#include <string>
+
+#include <unistd.h>
 
 #include "cncsim/machine.hpp"
 #include "cncsim/removal.hpp"
 #include "cncstream/cam/deviation.hpp"
+#include "cncstream/cam/height_field_io.hpp"
 #include "cncstream/gcode/program_pause.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
+#include "move_depth.hpp"
 #include "sim_test_util.hpp"
 
 using namespace cncstream;
@@ -38,44 +44,35 @@ jobs::ToolpathParams plaque_job() {
 
 struct Cut {
   HeightFieldStock stock;
-  std::map<int, double> deepest;  // the largest depth one move took off, per tool
-  std::map<int, double> where_depth;
-  std::map<int, std::pair<Vec3, Vec3>> where;
+  simtest::MoveDepth depth;  // the largest depth one move took off, per tool
   int pauses = 0;
 };
 
-Cut run(const jobs::ToolpathProgram& prog) {
+// Runs `gcode` line by line from `start` with the job's tool table, the
+// operator's cycle start at each pause; stops after `max_lines` lines.
+// Moves' depths leave out slivers narrower than `tolerance` (the arcs').
+Cut run(const jobs::ToolpathProgram& prog, HeightFieldStock start, double tolerance, std::size_t max_lines = SIZE_MAX,
+        double leave = 0.3) {
   cncsim::MachineOptions mo;
   mo.instant_waits = true;
   cncsim::Machine m(mo);
-  const Box3 s = *prog.stock;
-  cncsim::StockBox box{s.lo, s.hi, 0.25};
-  box.lo.x += 0.0373;  // nodes off round numbers: none on the part's silhouette
-  box.lo.y += 0.0411;
-  cncsim::MaterialRemoval removal(box, prog.operations.front().cutter);
+  cncsim::MaterialRemoval removal(std::move(start), prog.operations.front().cutter);
   cncsim::ToolTable tools;
   for (const auto& op : prog.operations) tools[op.tool] = op.cutter;
-  removal.set_tool_table(tools);
-  removal.attach(m);
-  Cut c{removal.stock(), {}, {}, {}, 0};
-  // Where each tool's deepest move was, for the failure message.
+  Cut c{removal.stock(), {}, 0};
+  c.depth.rim = std::max(0.01, tolerance);
+  // The finishing cutter's side cut of the skin the roughing left beside a
+  // wall is as tall as the wall, a leave wide: not its depth of cut.
+  if (prog.operations.size() > 1) c.depth.rim_of[prog.operations.back().tool] = leave + 0.01;
   int tool = 0;
   m.set_tool_observer([&](int t) {
     tool = t;
     removal.set_cutter(tools.at(t));
   });
-  m.set_motion_observer([&](const Vec3& a, const Vec3& b, bool) {
-    const double before = removal.deepest_cut_by_tool().count(tool) ? removal.deepest_cut_by_tool().at(tool) : 0;
-    removal.cut(a, b);
-    (void)before;
-    if (removal.stock().last_max_depth() > c.where_depth[tool]) {
-      c.where_depth[tool] = removal.stock().last_max_depth();
-      c.where[tool] = {a, b};
-    }
-  });
+  m.set_motion_observer([&](const Vec3& a, const Vec3& b, bool) { c.depth.cut(removal, tool, removal.cutter(), a, b); });
   std::istringstream in(prog.gcode);
   std::string line;
-  while (std::getline(in, line)) {
+  for (std::size_t n = 0; n < max_lines && std::getline(in, line); ++n) {
     const std::string out = simtest::send(m, line);
     EXPECT_EQ(out.find("error"), std::string::npos) << line << " -> " << out;
     if (gcode::is_program_pause(line)) {
@@ -85,10 +82,23 @@ Cut run(const jobs::ToolpathProgram& prog) {
     }
   }
   m.run_until_idle();
-  EXPECT_TRUE(removal.unknown_tools().empty());
   c.stock = removal.stock();
-  c.deepest = c.where_depth;
   return c;
+}
+
+// The job's stock block, its nodes off round numbers (none on the part's
+// silhouette).
+HeightFieldStock block_of(const jobs::ToolpathProgram& prog) {
+  const Box3 s = *prog.stock;
+  GridSpec g = GridSpec::covering(s.lo.x + 0.0373, s.lo.y + 0.0411, s.hi.x, s.hi.y, 0.25, 0.25);
+  return HeightFieldStock(g, s.hi.z);
+}
+
+void print_deepest(const Cut& c) {
+  for (const auto& [t, ab] : c.depth.where)
+    std::cout << "  T" << t << " deepest " << c.depth.deepest.at(t) << " mm from " << ab.first.x << "," << ab.first.y
+              << "," << ab.first.z << " to " << ab.second.x << "," << ab.second.y << "," << ab.second.z << " (node "
+              << c.depth.node.at(t).x << "," << c.depth.node.at(t).y << " from " << c.depth.node.at(t).z << ")\n";
 }
 
 }  // namespace
@@ -103,24 +113,86 @@ TEST(CompleteJob, PlaqueRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   ASSERT_TRUE(prog.stock);
   for (const auto& n : prog.notes) std::cout << n << "\n";
   std::cout << prog.stats.lines << " lines: roughing " << prog.operations[0].lines << ", finishing "
-            << prog.operations[1].lines << "\n";
+            << prog.operations[1].lines << "; feed time roughing " << prog.operations[0].feed_time_s / 60
+            << " min, finishing " << prog.operations[1].feed_time_s / 60 << " min\n";
 
-  const Cut c = run(prog);
+  const Cut c = run(prog, block_of(prog), plaque_job().tolerance);
   EXPECT_EQ(c.pauses, 1);
-  // No move deeper than its cutter may cut (a grid node's drop; the grid's
-  // 0.25 mm adds nothing to a depth).
-  ASSERT_TRUE(c.deepest.count(1) && c.deepest.count(2));
-  std::cout << "deepest cut of one move: T1 " << c.deepest.at(1) << " mm (max " << prog.operations[0].max_depth
-            << "), T2 " << c.deepest.at(2) << " mm (max " << prog.operations[1].max_depth << ")\n";
-  for (const auto& [t, ab] : c.where)
-    std::cout << "  T" << t << " deepest from " << ab.first.x << "," << ab.first.y << "," << ab.first.z << " to "
-              << ab.second.x << "," << ab.second.y << "," << ab.second.z << "\n";
-  EXPECT_LE(c.deepest.at(1), prog.operations[0].max_depth + 1e-3);
-  EXPECT_LE(c.deepest.at(2), jobs::default_max_depth(prog.operations[1].cutter) + 1e-3);
-  EXPECT_GT(c.deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
+  // No move deeper than its cutter may cut (a grid node's drop, nodes on the
+  // cutter's rim left out: see move_depth.hpp, the finishing cutter's side
+  // cuts of the skin the roughing left too; the grid's 0.25 mm adds nothing
+  // to a depth).
+  const auto& deepest = c.depth.deepest;
+  ASSERT_TRUE(deepest.count(1) && deepest.count(2));
+  std::cout << "deepest cut of one move: T1 " << deepest.at(1) << " mm (max " << prog.operations[0].max_depth
+            << "), T2 " << deepest.at(2) << " mm (max " << prog.operations[1].max_depth << ")\n";
+  print_deepest(c);
+  EXPECT_LE(deepest.at(1), prog.operations[0].max_depth + 1e-3);
+  EXPECT_LE(deepest.at(2), jobs::default_max_depth(prog.operations[1].cutter) + 1e-3);
+  EXPECT_GT(deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
   const DesignHeights design = design_heights(prog.work_mesh, c.stock.grid());
   const DeviationResult dev = compare_to_design(c.stock, design, 0.01);
   EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
       << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
       << dev.stats.largest_gouge.y;
+}
+
+// A roughing interrupted half way, its result written as the simulator
+// writes it, and the job run again from that height map: the second
+// roughing cuts only what is left (fewer lines, levels only where material
+// stands above them), no move deeper than the cutter may cut, no gouge, and
+// as much removed as by one roughing run whole.
+TEST(CompleteJob, PlaqueRoughedAgainFromAnInterruptedRoughingCutsOnlyWhatIsLeft) {
+  jobs::ToolpathParams p = plaque_job();
+  p.stepover = 3.0;  // the finishing is not run here
+  p.tolerance = 0.05;
+  const jobs::ToolpathProgram first = jobs::generate_toolpath(p);
+  ASSERT_EQ(first.operations.size(), 2u);
+  const jobs::OperationSummary& r1 = first.operations[0];
+  // Up to the line before the finishing's tool change: the whole roughing.
+  const std::size_t whole = first.operations[1].first_line - 1;
+  const Cut full = run(first, block_of(first), p.tolerance, whole);
+  const Cut half = run(first, block_of(first), p.tolerance, r1.first_line + r1.lines / 2);
+
+  const auto dir = std::filesystem::temp_directory_path() / ("cncstream_rough_again_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto map = dir / "half.f32";
+  write_height_field(map, half.stock.grid(), half.stock.heights());
+  jobs::ToolpathParams again = p;
+  again.stock = jobs::parse_stock_spec(map.string());
+  const jobs::ToolpathProgram second = jobs::generate_toolpath(again);
+  const HeightFieldData read = read_height_field(map);
+  std::filesystem::remove_all(dir);
+  ASSERT_EQ(second.operations.size(), 2u);
+  const jobs::OperationSummary& r2 = second.operations[0];
+  ASSERT_EQ(r2.name, "roughing");
+  for (const auto& n : second.notes) std::cout << n << "\n";
+  std::cout << "roughing lines: whole " << r1.lines << ", again from the half-cut stock " << r2.lines
+            << "; feed time " << r1.feed_time_s / 60 << " and " << r2.feed_time_s / 60 << " min\n";
+  EXPECT_LT(r2.lines, r1.lines * 3 / 4);
+  EXPECT_LT(r2.feed_time_s, r1.feed_time_s * 3 / 4);
+  EXPECT_GT(r2.lines, r1.lines / 10);  // it did go on
+
+  const Cut c = run(second, cncsim::stock_from_heights(read.grid, read.z), p.tolerance, second.operations[1].first_line - 1);
+  ASSERT_TRUE(c.depth.deepest.count(1));
+  print_deepest(c);
+  EXPECT_LE(c.depth.deepest.at(1), r2.max_depth + 1e-3);
+  const DesignHeights design = design_heights(second.work_mesh, c.stock.grid());
+  const DeviationResult dev = compare_to_design(c.stock, design, 0.01);
+  EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
+      << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
+      << dev.stats.largest_gouge.y;
+  // About as much left as after the whole roughing (its levels are planned
+  // anew from the half-cut stock's highest point, so its terraces lie at
+  // other heights: compared in volume, not node by node).
+  double left = 0, left_whole = 0, start = 0;
+  for (std::size_t n = 0; n < c.stock.heights().size(); ++n) {
+    left += c.stock.heights()[n];
+    left_whole += full.stock.heights()[n];
+    start += first.stock->hi.z;
+  }
+  const double cell = c.stock.grid().dx * c.stock.grid().dy;
+  std::cout << "removed by the whole roughing " << (start - left_whole) * cell << " mm^3, by half and again "
+            << (start - left) * cell << " mm^3\n";
+  EXPECT_LE(left - left_whole, 0.01 * (start - left_whole));
 }

@@ -16,7 +16,8 @@
 // the cutter radius, the boundary followed), so wherever the tip goes at a
 // level, the cutter's footprint was cleared to the level above (a round
 // cutter to its scallop above it: its levels are closer by that much). Entries ramp
-// along a loop of the region from the level above; links between loops stay
+// along a loop of the region from the level above (over the length the ramp
+// angle needs, then a whole lap at the level); links between loops stay
 // down when the straight move lies inside the region, otherwise the tool
 // lifts to just above the level above (when the move over lies over its
 // region) or to the clearance height above the stock.
@@ -42,7 +43,8 @@ class HeightFieldStock;
 // a surface (an earlier operation's result; it must outlive the call), the
 // stock's top is that surface where it lies lower than `top` (beyond the
 // surface's grid: `top`): levels start below its highest point and each
-// level clears only within reach of material above it.
+// level clears only within reach of material more than tolerance / 5 above
+// it (a level cut before stands up to the G-code's rounding of Z above it).
 struct StockBlock {
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   double top = 0;
