@@ -17,11 +17,36 @@ namespace {
 
 double xy_dist(const Vec3& a, const Vec3& b) { return std::hypot(a.x - b.x, a.y - b.y); }
 
+// (x, y) on the lattice: the nearest lattice point where the CL allows the
+// point's height, else the nearest one lifted onto the CL there.
+Vec3 on_lattice(const ClEngine& engine, const std::optional<XYLattice>& lat, Vec3 p, std::size_t& queries) {
+  if (!lat) return p;
+  const double s = lat->step;
+  const double i0 = std::round((p.x - lat->x0) / s), j0 = std::round((p.y - lat->y0) / s);
+  struct Cand {
+    double x, y, d;
+  };
+  std::vector<Cand> cands;
+  for (int di = -1; di <= 1; ++di)
+    for (int dj = -1; dj <= 1; ++dj) {
+      const double x = lat->x0 + (i0 + di) * s, y = lat->y0 + (j0 + dj) * s;
+      cands.push_back({x, y, std::hypot(x - p.x, y - p.y)});
+    }
+  std::sort(cands.begin(), cands.end(), [](const Cand& a, const Cand& b) { return a.d < b.d; });
+  for (const Cand& c : cands) {
+    ++queries;
+    const double cl = engine.height_at(c.x, c.y);
+    if (cl <= p.z) return {c.x, c.y, p.z};
+  }
+  ++queries;
+  return {cands.front().x, cands.front().y, std::max(p.z, engine.height_at(cands.front().x, cands.front().y))};
+}
+
 // The chord a -> b (a at the level) sampled every `step` with the exact CL;
-// samples the CL rises above are lifted onto it. Appends the points after a.
-// The last resort of keep_level below.
-void append_lifted(const ClEngine& engine, const Vec3& a, const Vec3& b, double level, double step, Polyline& out,
-                   std::size_t& queries) {
+// samples the CL rises above are lifted onto it (on the lattice). Appends
+// the points after a. The last resort of keep_level below.
+void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, const Vec3& a, const Vec3& b,
+                   double level, double step, Polyline& out, std::size_t& queries) {
   const double len = xy_dist(a, b);
   const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / step)));
   for (std::size_t k = 1; k < n; ++k) {
@@ -31,6 +56,10 @@ void append_lifted(const ClEngine& engine, const Vec3& a, const Vec3& b, double 
     ++queries;
     if (cl > p.z) {
       p.z = cl;
+      p = on_lattice(engine, lat, p, queries);
+      // On the lattice the CL may be higher still: the point sits on it.
+      ++queries;
+      p.z = std::max(p.z, engine.height_at(p.x, p.y));
       out.push_back(p);
     }
   }
@@ -74,8 +103,8 @@ double push_needed(const ClEngine& engine, const Vec3& a, const Vec3& b, double 
 // points move sideways into the free region by what the exact CL says
 // (microns), which keeps the run level (an arc fits it) and leaves at most
 // that much. What a few rounds of that cannot clear is lifted instead.
-Polyline keep_level(const ClEngine& engine, Polyline pts, bool closed, double level, double step,
-                    std::size_t& queries) {
+Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat, Polyline pts, bool closed,
+                    double level, double step, std::size_t& queries) {
   const std::size_t n = pts.size();
   if (n < 2) return pts;
   const std::size_t chords = closed ? n : n - 1;
@@ -115,9 +144,13 @@ Polyline keep_level(const ClEngine& engine, Polyline pts, bool closed, double le
     }
     pts = std::move(moved);
   }
-  // Whatever still dips into the CL is lifted onto it.
+  // Whatever still dips into the CL is lifted onto it, checked five times
+  // as densely: where the CL has a cliff (an overhang of the part seen from
+  // above) a chord can clip its corner between the samples above.
+  for (Vec3& p : pts) p = on_lattice(engine, lat, p, queries);
   Polyline out{pts.front()};
-  for (std::size_t c = 0; c < chords; ++c) append_lifted(engine, pts[c], pts[(c + 1) % n], level, step, out, queries);
+  for (std::size_t c = 0; c < chords; ++c)
+    append_lifted(engine, lat, pts[c], pts[(c + 1) % n], level, step / 5, out, queries);
   return out;
 }
 
@@ -241,8 +274,9 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
       for (Run& r : steep_runs(c, slope, angle)) {
         // Every chord checked against the exact CL (closed loops: the closing
         // chord too; the loop then repeats its first point at its end).
-        r.points = simplify_level_run(keep_level(engine, std::move(r.points), r.closed, z, o.sample_step, lp.queries),
-                                      o.simplify_tolerance);
+        r.points = simplify_level_run(
+            keep_level(engine, o.lattice, std::move(r.points), r.closed, z, o.sample_step, lp.queries),
+            o.simplify_tolerance);
         lp.runs.push_back(std::move(r));
       }
     if (checkpoint) checkpoint(0.9 * double(++done) / double(levels.size()));

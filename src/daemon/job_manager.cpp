@@ -95,6 +95,7 @@ JobManager::JobManager(boost::asio::io_context& io, boost::asio::thread_pool& po
   l.started = [this](const std::string& m, std::int64_t id) { on_started(m, id); };
   l.progress = [this](const std::string& m, const protocol::JobProgress& p) { on_progress(m, p); };
   l.state = [this](const std::string& m, const std::string& s) { on_state(m, s); };
+  l.holding = [this](const std::string& m, long answered) { on_holding(m, answered); };
   l.ended = [this](const std::string& m, protocol::JobOutcome o, long line, const std::string& t) {
     on_ended(m, o, line, t);
   };
@@ -472,6 +473,7 @@ void JobManager::kick_generation(DaemonJob& j) {
         if (r.operations.size() > 1)
           for (const auto& op : r.operations) prog->tools[op.tool] = op.cutter;
         prog->operations = r.operations;
+        prog->stock = r.stock;
         prog->notes = r.notes;
         prog->height = std::make_shared<const jobs::HeightPreview>(std::move(r.preview));
       } else {
@@ -588,10 +590,12 @@ json JobManager::start(std::int64_t id, const std::string& client) {
   std::optional<Mesh> design;
   std::optional<Cutter> cutter;
   std::map<int, Cutter> tools;
+  std::optional<Box3> stock;
   if (!j.resume && j.program->work_mesh && j.program->cutter) {
     design = j.program->work_mesh;
     cutter = j.program->cutter;
     tools = j.program->tools;
+    stock = j.program->stock;
   }
   // Marked running before the call: a session that starts at once reports
   // JobStarted from inside start_job.
@@ -599,7 +603,7 @@ json JobManager::start(std::int64_t id, const std::string& client) {
   last_run_[j.row.machine] = id;
   j.progress = {};
   j.verify.reset();
-  const auto r = machines_.start_job(m, std::move(in), std::move(design), cutter, std::move(tools));
+  const auto r = machines_.start_job(m, std::move(in), std::move(design), cutter, std::move(tools), stock);
   if (!r) {
     running_.erase(j.row.machine);
     throw ApiError{409, "refused", r.reason};
@@ -678,6 +682,25 @@ void JobManager::on_progress(const std::string& machine, const protocol::JobProg
     j->row.last_line = p.last_answered_line;
     publish_job(*j);
   }
+}
+
+void JobManager::on_holding(const std::string& machine, long answered) {
+  auto* j = running_on(machine);
+  if (!j || !j->program) return;
+  static const std::vector<long> kNoSourceLines;
+  const auto& lines = j->resume ? j->resume->lines : j->program->lines;
+  const auto& sources = j->resume ? j->resume->source_lines : kNoSourceLines;
+  const auto pause = session::pause_at(lines, sources, answered);
+  if (!pause) return;
+  // The program asks something of the operator (a tool change): say it
+  // where the job is shown; resume (cycle start) goes on.
+  std::string msg = cat({"paused at line ", std::to_string(pause->line), ": ",
+                         pause->note.empty() ? std::string("program pause (M0)") : pause->note,
+                         " (resume to go on)"});
+  if (j->row.message == msg) return;
+  spdlog::info("job {}: {}", j->row.id, msg);
+  j->row.message = std::move(msg);
+  publish_job(*j);
 }
 
 void JobManager::on_state(const std::string& machine, const std::string& state) {

@@ -86,9 +86,10 @@ void SimMachinePort::opened() {
 }
 
 void SimMachinePort::set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter,
-                                     std::map<int, Cutter> tools) {
+                                     std::map<int, Cutter> tools, std::optional<Box3> stock) {
   base_.design = std::move(design);
   base_.cutter = cutter;
+  base_.stock = stock;
   base_.tools.reset();
   if (!tools.empty()) base_.tools = cncsim::ToolTable(tools.begin(), tools.end());
 }
@@ -285,6 +286,10 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
       hub_.publish_status(name, WsHub::frame(status_frame(m)));
       // The executing line moves with the planner (Bf:), not only with answers.
       if (m.session->job_active()) push_progress(name, m);
+      if (m.session->job_active() && m.session->status() &&
+          m.session->status()->state == protocol::MachineState::Hold && m.session->engine() &&
+          m.session->engine()->progress().state == protocol::JobState::Running && listener_.holding)
+        listener_.holding(name, m.session->engine()->progress().last_answered_line);
       return;
     case EventKind::LineAnswered: push_progress(name, m); return;
     case EventKind::JobState:
@@ -313,7 +318,8 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
 }
 
 session::CommandResult Machines::start_job(Machine& m, session::JobInput job, std::optional<Mesh> design,
-                                           std::optional<Cutter> cutter, std::map<int, Cutter> tools) {
+                                           std::optional<Cutter> cutter, std::map<int, Cutter> tools,
+                                           std::optional<Box3> stock) {
   if (!(m.sim && m.config.sim_verify && design && cutter)) return m.session->start_job(std::move(job));
   auto& s = *m.session;
   if (!s.ready()) return session::CommandResult::refused(cat({"the machine is not connected (", to_string(s.link()), ")"}));
@@ -325,7 +331,7 @@ session::CommandResult Machines::start_job(Machine& m, session::JobInput job, st
   if (auto r = s.close(); !r) return r;
   auto old = m.sim->retire();
   boost::asio::post(pool_, [old] {});  // its thread is joined off the event loop
-  m.sim->set_next_design(std::move(design), cutter, std::move(tools));
+  m.sim->set_next_design(std::move(design), cutter, std::move(tools), stock);
   m.pending_start = std::move(job);
   m.verifying = true;
   try {

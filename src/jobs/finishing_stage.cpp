@@ -50,7 +50,7 @@ FinishSpacing finish_spacing(const ToolpathParams& p) {
 }
 
 void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine& engine, const XYBounds& region,
-                    const FinishSpacing& spacing, const Checkpoint& checkpoint) {
+                    const XYLattice& lattice, const FinishSpacing& spacing, const Checkpoint& checkpoint) {
   const GridSpec spec = GridSpec::covering(region.x0, region.y0, region.x1, region.y1, spacing.grid_step,
                                            spacing.grid_step);
   auto part = [&checkpoint](double from, double to) -> Checkpoint {
@@ -63,6 +63,7 @@ void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine&
   wo.z_step = spacing.z_step;
   wo.steep_angle_deg = p.steep_angle;
   wo.tolerance = p.tolerance;
+  wo.lattice = lattice;
   // Half the tolerance merges straight stretches; arcs take the curves.
   wo.simplify_tolerance = p.tolerance / 2;
   wo.sample_step = std::min(0.05, spacing.grid_step / 2);

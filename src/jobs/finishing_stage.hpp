@@ -26,7 +26,8 @@ FinishSpacing finish_spacing(const ToolpathParams& p);
 
 // Waterlines where the surface is steep, then the raster with its steep
 // stretches bridged, into r.finish_pieces (and the waterline counts).
+// `lattice`: the G-code's, as the raster's.
 void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine& engine, const XYBounds& region,
-                    const FinishSpacing& spacing, const Checkpoint& checkpoint);
+                    const XYLattice& lattice, const FinishSpacing& spacing, const Checkpoint& checkpoint);
 
 }  // namespace cncstream::jobs

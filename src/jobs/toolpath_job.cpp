@@ -68,7 +68,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     r.preview = height_preview_from_grid(r.path.grid, r.path.bounds, work.offset);
     r.path.grid = ClGrid{};
     if (steep_shallow) {
-      add_waterlines(r, p, engine, region, spacing, run.nested_checkpoint(0.6, 1.0));
+      add_waterlines(r, p, engine, region, work.lattice, spacing, run.nested_checkpoint(0.6, 1.0));
     } else {
       r.finish_pieces = raster_as_one_cut(r.path);
     }

@@ -478,21 +478,26 @@ void GrblSession::pause() {
   set_job_state(JobState::Paused, "feed hold");
 }
 
+bool GrblSession::release_machine_hold() {
+  // M0, a pendant or the door put the machine in Hold while the job runs:
+  // resuming is cycle start then.
+  const auto& st = tracker_.last();
+  if (progress_.state != JobState::Running || !st || st->state != MachineState::Hold) return false;
+  write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::CycleStart).value_or('~'))));
+  hold_sent_ = false;
+  emit({EventKind::JobState, "cycle start: the machine was holding (program pause or pendant)"});
+  return true;
+}
+
 void GrblSession::toggle_pause() {
   if (progress_.state == JobState::Paused || progress_.state == JobState::HeldOnError) return resume();
-  // M0/M1, a pendant or the door put the machine in Hold while the job runs:
-  // space is cycle start then, not a second hold.
-  const auto& st = tracker_.last();
-  if (progress_.state == JobState::Running && st && st->state == MachineState::Hold) {
-    write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::CycleStart).value_or('~'))));
-    hold_sent_ = false;
-    emit({EventKind::JobState, "cycle start: the machine was holding (program pause or pendant)"});
-    return;
-  }
+  // Space is cycle start for a machine holding by itself, not a second hold.
+  if (release_machine_hold()) return;
   pause();
 }
 
 void GrblSession::resume() {
+  if (release_machine_hold()) return;
   if (progress_.state != JobState::Paused && progress_.state != JobState::HeldOnError) return;
   write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::CycleStart).value_or('~'))));
   hold_sent_ = false;

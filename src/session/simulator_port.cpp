@@ -41,6 +41,10 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
     // Grid nodes exactly on a vertical wall of the design have no single
     // design height: shift the grid off the part's round coordinates.
     cncsim::StockBox box = cncsim::stock_box_for(*opt_.design, opt_.resolution);
+    if (opt_.stock) {
+      box.lo = opt_.stock->lo;
+      box.hi = opt_.stock->hi;
+    }
     box.lo.x += 0.373 * opt_.resolution;
     box.lo.y += 0.411 * opt_.resolution;
     removal_ = std::make_unique<cncsim::MaterialRemoval>(box, *opt_.cutter);

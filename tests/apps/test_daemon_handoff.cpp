@@ -159,7 +159,12 @@ TEST_F(DaemonHandoff, StlJobWithTheToolPathOptionsRunsOnTheDaemon) {
   EXPECT_EQ(r.code, 0) << r.out << "\n--- daemon:\n" << daemon->log();
   EXPECT_TRUE(r.has("plan for " + gearwheel() + " (tool path by the daemon at " + api)) << r.out;
   EXPECT_TRUE(r.has("tool: 3.175 mm ball-nose end mill")) << r.out;
-  EXPECT_TRUE(r.has("3 mm stepover along X, feed 1500 mm/min")) << r.out;
+  // The daemon's operations: roughing from the part's block with the same
+  // ball (no tool change), then the finishing rows at the stepover asked.
+  EXPECT_TRUE(r.has("roughing: T1 ball:3.175")) << r.out;
+  EXPECT_TRUE(r.has("finishing: T1 ball:3.175")) << r.out;
+  EXPECT_TRUE(r.has("rows 3 mm apart along X")) << r.out;
+  EXPECT_TRUE(r.has("feed 1500 mm/min")) << r.out;
   EXPECT_TRUE(r.has("outcome: completed")) << r.out;
   // The program the daemon generated, written where -o said.
   std::ifstream f(out);

@@ -1,5 +1,6 @@
-// The operator's main command end to end: STL -> plan -> stream to the
-// built-in simulator (strict RX buffer) -> verify the cut.
+// The operator's main command end to end: STL -> plan (roughing, tool
+// change, finishing) -> stream to the built-in simulator (strict RX buffer)
+// -> verify the cut.
 #include <gtest/gtest.h>
 
 #include "app_run.hpp"
@@ -8,15 +9,23 @@
 using namespace apptest;
 
 TEST(MainCommand, PlaqueToTheBuiltInSimulatorCutsWithoutGouge) {
-  const auto r = run_cncstream({plaque(), "sim", "--tool", "ball:3.175", "--stepover", "2", "--sim-resolution", "0.2", "--yes"});
+  // The shop's job: rough the block with a 6 mm flat, change to the ball,
+  // finish. The simulator's operator changes the tool at the pause at once.
+  const auto r = run_cncstream({plaque(), "sim", "--tool", "ball:3.175", "--rough", "flat:6", "--stepover", "2",
+                                "--tolerance", "0.02", "--sim-resolution", "0.2", "--yes"});
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_TRUE(r.has("tool: 3.175 mm ball-nose end mill")) << r.out;
-  EXPECT_TRUE(r.has("tool tip in work coordinates: X -1.587 .. 121.587")) << r.out;
+  EXPECT_TRUE(r.has("stock in work coordinates: X -1 .. 121, Y -1 .. 101, Z -10.5 .. 1")) << r.out;
+  EXPECT_TRUE(r.has("1. roughing   T1 flat:6")) << r.out;
+  EXPECT_TRUE(r.has("2. finishing  T2 ball:3.175")) << r.out;
+  EXPECT_TRUE(r.has("roughing first with the flat:6")) << r.out;
   EXPECT_TRUE(r.has("estimated machining time:")) << r.out;
+  EXPECT_TRUE(r.has("PAUSED at line")) << r.out;
+  EXPECT_TRUE(r.has("TOOL CHANGE for finishing: mount T2, 3.175 mm ball-nose end mill")) << r.out;
+  EXPECT_TRUE(r.has("(simulator: resuming at once)")) << r.out;
   EXPECT_TRUE(r.has("outcome: completed")) << r.out;
   EXPECT_TRUE(r.has(" 0 RX bytes dropped")) << r.out;
-  // Every line answered: the finishing program ends retracted at the last row's end.
-  EXPECT_TRUE(r.has("final position MPos 121.587,101.587,5.000")) << r.out;
+  // Every line answered: the program ends retracted above the stock at the last row's end.
+  EXPECT_TRUE(r.has("final position MPos 121.587,101.587,6.000")) << r.out;
   EXPECT_TRUE(r.has(": 0 gouged,")) << r.out;
   // Not even below tolerance: the path's XY are printed exactly and steps
   // beside walls are crossed by staircases.

@@ -206,7 +206,7 @@ TEST(DaemonPreview, StlJobGivesItsClGridAsAPngAndItsPathThinned) {
   RunningDaemon d(test_config(dir));
   const Http h = with_client(d.http);
   const auto f = upload(h, dome_stl(dir), "dome.stl");
-  const auto id = ready_job(h, {{"machine", "sim1"}, {"file", f["id"]}, {"params", {{"tool", "ball:3"}, {"stepover", 1}}}});
+  const auto id = ready_job(h, {{"machine", "sim1"}, {"file", f["id"]}, {"params", {{"tool", "ball:3"}, {"stepover", 1}, {"stock", "none"}, {"strategy", "raster"}}}});
   ASSERT_GT(id, 0);
   const std::string base = "/api/v1/jobs/" + std::to_string(id);
   const json preview = job(h, id)["preview"];

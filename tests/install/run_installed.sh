@@ -41,7 +41,7 @@ run() {  # run ARGS...: the installed cncstream, clean environment, no terminal
 
 run "$tmp/moved/bin/cncsim" --help >"$tmp/cncsim.log" 2>&1 || { cat "$tmp/cncsim.log"; fail "installed cncsim --help"; }
 
-if ! run "$tmp/moved/bin/cncstream" plaque.stl sim --tool ball:3.175 --stepover 0.4 --sim-speed max \
+if ! run "$tmp/moved/bin/cncstream" plaque.stl sim --tool ball:3.175 --rough flat:6 --stepover 2 --tolerance 0.02 --sim-speed max \
      --yes --journal "$tmp/journal.sqlite" >"$tmp/job.log" 2>&1; then
   cat "$tmp/job.log"; fail "the installed cncstream did not machine the plaque"
 fi

@@ -84,7 +84,7 @@ class CrashRun {
     if (fs::exists(program_)) return;
     Child c(cncstream_exe(),
             {"toolpath", kDesign, "--tool", kTool, "--stepover", "1.5", "--origin", "model", "--z-zero", "model",
-             "--bounds", "0,0,40,30", "-o", program_.string()},
+             "--bounds", "0,0,40,30", "--stock", "none", "--strategy", "raster", "-o", program_.string()},
             env_, opt_.dir / "toolpath.log");
     if (!c.wait(120) || c.code() != 0) problem("toolpath failed: " + c.output());
   }

@@ -14,6 +14,7 @@
 // down) above every CL point under it, otherwise it is a separate piece (the
 // program retracts between pieces).
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "cncstream/cam/checkpoint.hpp"
@@ -32,6 +33,10 @@ struct WaterlineOptions {
   double simplify_tolerance = 0;
   double sample_step = 0.05;      // mm: the CL is queried this often along every chord
   double bridge_max = 0;          // mm: join pieces closer than this by a bridge; 0: 4 cutter radii
+  // The G-code's decimal grid: every point is put on it (on the free side,
+  // where the CL lets it be at the level), so printing moves none of them
+  // (beside a CL cliff a rounded half micron is a deep vertical error).
+  std::optional<XYLattice> lattice;
   double top = HUGE_VAL;          // highest level (tip height); default: the grid's highest CL
   double bottom = -HUGE_VAL;      // lowest level; default: the grid's lowest CL
 };

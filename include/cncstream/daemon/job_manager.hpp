@@ -40,6 +40,7 @@ struct Program {
   std::optional<Mesh> work_mesh;   // STL jobs: the part in work coordinates (the simulator's verify)
   std::optional<Cutter> cutter;
   std::map<int, Cutter> tools;     // T number -> cutter, for a program of several tools
+  std::optional<Box3> stock;       // the job's stock block (work coordinates)
   std::vector<jobs::OperationSummary> operations;  // STL jobs: roughing, finishing ...
   std::vector<std::string> notes;  // what the plan decided and why
   double seconds = 0;              // generation time
@@ -127,6 +128,7 @@ class JobManager {
   void on_started(const std::string& machine, std::int64_t journal_id);
   void on_progress(const std::string& machine, const protocol::JobProgress& p);
   void on_state(const std::string& machine, const std::string& state);
+  void on_holding(const std::string& machine, long last_answered_line);
   void on_ended(const std::string& machine, protocol::JobOutcome o, long last_line, const std::string& text);
   void on_verified(const std::string& machine, SimVerifyReport rep);
   void on_start_failed(const std::string& machine, const std::string& why);

@@ -38,7 +38,8 @@ class SimMachinePort final : public session::MachinePort {
   std::string describe() override { return "the built-in simulator"; }
   // The next simulator cuts a stock and verifies it against `design` (work = machine coordinates),
   // with `cutter`, or the cutter of `tools` each T word selects.
-  void set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter, std::map<int, Cutter> tools = {});
+  void set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter, std::map<int, Cutter> tools = {},
+                       std::optional<Box3> stock = std::nullopt);
   // Hands over the current simulator (to be finished or dropped off the event loop).
   std::shared_ptr<session::SimulatorPort> retire();
 
@@ -59,6 +60,9 @@ struct MachineJobListener {
   std::function<void(const std::string& machine, std::int64_t journal_id)> started;
   std::function<void(const std::string& machine, const protocol::JobProgress&)> progress;
   std::function<void(const std::string& machine, const std::string& state_text)> state;  // "running"/"held"
+  // The machine holds by itself while its job runs (M0, a pendant, the
+  // door); the job's last answered line.
+  std::function<void(const std::string& machine, long last_answered_line)> holding;
   std::function<void(const std::string& machine, protocol::JobOutcome, long last_line, const std::string& text)> ended;
   std::function<void(const std::string& machine, SimVerifyReport)> verified;
   std::function<void(const std::string& machine, bool ok, const std::string& why)> start_failed;
@@ -101,7 +105,8 @@ class Machines {
   // and check it against this design (work coordinates) with this cutter.
   // `tools`: T number -> cutter for a program of several tools.
   session::CommandResult start_job(Machine& m, session::JobInput job, std::optional<Mesh> design,
-                                   std::optional<Cutter> cutter, std::map<int, Cutter> tools = {});
+                                   std::optional<Cutter> cutter, std::map<int, Cutter> tools = {},
+                                   std::optional<Box3> stock = std::nullopt);
 
   // Control: throws ApiError (428 no client id, 409 held by another / nobody holds it).
   void require_control(Machine& m, const std::string& client_id);

@@ -53,6 +53,9 @@ class GrblSession final : public ProtocolEngine {
   void on_line(std::string_view line, double now);
 
  private:
+  // Cycle start for a running job whose machine holds by itself (M0, a
+  // pendant, the door); false when it does not.
+  bool release_machine_hold();
   enum class CheckPhase { None, Entering, Streaming, Leaving };
   enum class Origin { File, Command, Jog, CheckToggle };
 

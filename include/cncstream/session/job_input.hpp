@@ -29,4 +29,21 @@ struct JobInput {
 // Reads a G-code file into a JobInput (hash, lines 1..n).
 JobInput job_from_file(const std::filesystem::path& gcode_path);
 
+// A program pause (M0) the machine holds on, and what the program says to
+// the operator there (gcode::program_pause_note).
+struct PauseAt {
+  long line = 0;     // file line of the M0
+  std::string note;  // empty: the program says nothing
+};
+// Where a job whose last answered file line is `answered` is paused, if the
+// line it holds on is an M0: GRBL answers an M0 only once cycle start ends
+// the pause, so that is the line after the last answered (a controller that
+// answers first holds on the last answered one).
+// `lines` and `source_lines` as in JobInput.
+std::optional<PauseAt> pause_at(const std::vector<std::string>& lines, const std::vector<long>& source_lines,
+                                long answered);
+inline std::optional<PauseAt> pause_at(const JobInput& job, long answered) {
+  return pause_at(job.lines, job.source_lines, answered);
+}
+
 }  // namespace cncstream::session

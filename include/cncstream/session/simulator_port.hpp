@@ -34,6 +34,7 @@ struct SimulatorOptions {
   double tolerance = 0.05;  // verify tolerance, mm
   std::string png;          // deviation map written after the job
   std::optional<cncsim::ToolTable> tools;  // T number -> cutter (else `cutter` throughout)
+  std::optional<Box3> stock;  // the block cut (machine coordinates); default: the design's box
   std::string result;       // machined surface written here (.f32 + .txt, and .stl)
   std::optional<std::filesystem::path> link;  // a stable symlink to the pty (e.g. for a reconnect test)
   std::optional<double> probe_surface_z;       // G38.x touches this Z plane (machine coordinates)

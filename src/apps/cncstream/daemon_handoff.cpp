@@ -298,7 +298,9 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
     if (program.contains("notes") && program["notes"].is_array())
       for (const auto& n : program["notes"])
         if (n.is_string()) std::cout << "  " << n.get<std::string>() << "\n";
-    std::cout << "  work origin: XY at the part's " << job.tp.origin << ", Z0 at the part's " << job.tp.z_zero
+    std::cout << "  feed " << format_gcode_number(job.tp.feed) << " mm/min, plunge " << format_gcode_number(job.tp.plunge_feed)
+              << " mm/min\n"
+              << "  work origin: XY at the part's " << job.tp.origin << ", Z0 at the part's " << job.tp.z_zero
               << " (set G54 there before cutting)\n"
               << "  program: daemon job #" << job_id << ", " << total_lines << " lines\n"
               << "  estimated machining time: " << est_text << " (the daemon's estimate for machine '" << machine

@@ -12,7 +12,6 @@
 
 #include "cncsim/settings.hpp"
 #include "cncstream/gcode/program.hpp"
-#include "cncstream/gcode/program_pause.hpp"
 #include "cncstream/geometry/stl.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/protocol/grbl_settings.hpp"
@@ -153,11 +152,12 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     session::SimulatorOptions so = simulator_options(s);
     if (!s.design.empty()) {
       if (s.tool.empty()) throw std::invalid_argument("--sim-design needs --sim-tool (the cutter that cuts it)");
-      verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool), {}};
+      verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool), {}, std::nullopt};
     }
     if (verify && !s.no_verify) {
       so.design = verify->design;
       so.cutter = verify->cutter;
+      so.stock = verify->stock;
       so.resolution = s.resolution;
       so.tolerance = s.tolerance;
       so.png = s.png;
@@ -254,20 +254,14 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
   // say what the program asks of the operator, once per pause.
   long announced_pause = 0;
   auto announce_pause = [&](const session::MachineSnapshot& snap) {
-    const long line = snap.progress.last_answered_line;
+    const long answered = snap.progress.last_answered_line;
     if (!snap.status || snap.status->state != protocol::MachineState::Hold ||
-        snap.progress.state != protocol::JobState::Running || line <= 0 || line == announced_pause)
+        snap.progress.state != protocol::JobState::Running)
       return;
-    std::size_t index = static_cast<std::size_t>(line - 1);
-    if (!job.source_lines.empty()) {
-      const auto it = std::find(job.source_lines.begin(), job.source_lines.end(), line);
-      if (it == job.source_lines.end()) return;
-      index = static_cast<std::size_t>(it - job.source_lines.begin());
-    }
-    const auto note = gcode::program_pause_note(job.lines, index);
-    if (!note) return;
-    announced_pause = line;
-    const std::string what = note->empty() ? std::string("program pause (M0)") : *note;
+    const auto pause = session::pause_at(job, answered);
+    if (!pause || pause->line == announced_pause) return;
+    const long line = announced_pause = pause->line;
+    const std::string what = pause->note.empty() ? std::string("program pause (M0)") : pause->note;
     if (interactive) {
       panel.message("PAUSED at line " + std::to_string(line) + ": " + what + "\n  (space resumes, s or Ctrl-C stops)");
     } else if (sim) {

@@ -66,6 +66,7 @@ struct VerifyTarget {
   Mesh design;  // in work = machine coordinates of the sim
   Cutter cutter;
   std::map<int, Cutter> tools;  // T number -> cutter, for a program of several tools (else `cutter` throughout)
+  std::optional<Box3> stock;    // the job's stock block (else the design's box)
 };
 
 // Motion limits for a plan shown before connecting: the simulator's settings
