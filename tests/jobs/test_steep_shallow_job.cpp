@@ -22,6 +22,9 @@ TEST(SteepShallowJob, EveryMoveStaysOnOrAboveTheClSurface) {
   p.cutter = parse_cutter_spec("ball:3.175");
   p.stepover = 0.4;
   p.strategy = jobs::FinishStrategy::SteepShallow;
+  // The left half: the outer edge, the rim, the "C" and the "S" (walls
+  // taller than the ball's radius: cliffs of its CL) in half the time.
+  p.bounds = XYBounds{-1.5875, -1.5875, 50, 101.5875};
   const jobs::ToolpathProgram r = jobs::generate_toolpath(p);
   ASSERT_GT(r.waterline_pieces, 0u);
   const Mesh mesh = load_stl(jobstest::plaque()).mesh;
