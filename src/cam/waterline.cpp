@@ -3,6 +3,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -200,10 +201,10 @@ std::vector<Run> steep_runs(const LevelContour& c, const SlopeMap& slope, double
   const std::size_t n = p.size();
   std::vector<Run> out;
   if (n < 2) return out;
-  std::vector<char> steep(n);
+  std::vector<std::uint8_t> steep(n);
   std::size_t first_gentle = n;
   for (std::size_t k = 0; k < n; ++k) {
-    steep[k] = slope.max_near(p[k].x, p[k].y) >= angle;
+    steep[k] = slope.max_near(p[k].x, p[k].y) >= angle ? 1 : 0;
     if (!steep[k] && first_gentle == n) first_gentle = k;
   }
   if (c.closed && first_gentle == n) {
@@ -252,7 +253,7 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
   // Levels from the foot of the walls (just above the lowest CL) upwards.
   const double bottom = std::max(o.bottom, lo + 1e-3);
   const double top = std::min(o.top, hi);
-  for (double z = bottom; z < top; z += o.z_step) out.levels.push_back(z);
+  for (std::size_t k = 0; bottom + double(k) * o.z_step < top; ++k) out.levels.push_back(bottom + double(k) * o.z_step);
   std::reverse(out.levels.begin(), out.levels.end());
   if (out.levels.empty()) return out;
 

@@ -90,7 +90,7 @@ WorkStock resolve_stock(const StockSpec& spec, const Box3& part) {
     case StockSpec::Kind::Box: w.box = spec.box; break;
     case StockSpec::Kind::HeightMap: {
       HeightFieldData d = read_height_field(spec.height_map);
-      double top = -INFINITY;
+      double top = -HUGE_VAL;
       for (const float z : d.z)
         if (std::isfinite(z)) top = std::max(top, static_cast<double>(z));
       if (!std::isfinite(top))
