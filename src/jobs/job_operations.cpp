@@ -78,14 +78,16 @@ HeightFieldStock cut(const HeightFieldStock& stock, const RoughingPath& path) {
   return HeightFieldStock(stock.grid(), stock.top(), std::move(z));
 }
 
-// The rest roughing's leave: the ball grown by it must fit gaps barely
-// wider than the ball (the roughing's 0.3 mm would make a 3.175 mm ball as
-// wide as a 3.8 mm gap; with 0.05 mm a gap 3.2 mm wide still held the grown
-// ball 1.3 mm above a floor the finishing ball reaches), and it must still
-// hold what the rest roughing's own chords (0.01 mm at its 0.02 mm region
-// tolerance) and the G-code's arcs take, so the finishing pass has a skin to
-// cut everywhere and nothing is gouged. No more than asked.
-constexpr double kRestLeave = 0.02;
+// The rest roughing's leave: small, so the ball grown by it fits gaps
+// barely wider than the ball (the roughing's 0.3 mm would make a 3.175 mm
+// ball 3.775 mm wide, as wide as the gaps it is for); enough to hold what the
+// rest roughing's own chords take (half its 0.05 mm region tolerance) and
+// the program's arcs (its tolerance), so nothing is gouged and the
+// finishing pass has a skin to cut. A gap between the ball's width and the
+// grown ball's is left to the finishing: the measure after says whether
+// that is within its depth. (On the plaque 0.02 mm, at a 0.02 mm tolerance,
+// cut as deep a finish with twice the lines.) No more than asked.
+constexpr double kRestLeave = 0.05;
 
 }  // namespace
 
@@ -205,12 +207,8 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
   // finishing cutter's depth, and one that brings the stock there within it.
   s.rest_spots = after_rough.over.size();
   RoughingParams rr;
-  rr.leave = std::min(p.leave, kRestLeave);
-  // Chords within 0.01 mm of the region, inside the leave. Its grid half the
-  // roughing's default: the ball drops into pits of the part (a counter just
-  // wider than it) a few tenths wide, which a coarser grid's region misses.
-  rr.tolerance = 0.02;
-  rr.grid_step = p.cutter.radius / 12;
+  rr.tolerance = 0.05;
+  rr.leave = std::min(p.leave, std::max(kRestLeave, rr.tolerance / 2 + p.tolerance));
   rr.bottom = rp.bottom;
   rr.near = after_rough.over;
   // The cutter over a spot from anywhere it can lower it (the window is a
@@ -235,7 +233,13 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
           "after roughing the finishing pass would still cut {} at {}, more than the {}'s {}, and a rest roughing "
           "with it finds nothing it can cut there: give a smaller --leave or --step-down",
           mm(after_rough.deepest), where(after_rough), p.cutter.spec(), mm(s.finish_max_depth)));
-    after_rest = finishing_depth(cut(roughed, rest));
+    {
+      // Bounded from the measure after the roughing (cheap), measured again
+      // only where a bound is over.
+      const HeightFieldStock both = cut(roughed, rest);
+      after_rest = pass_depth_bound(both, after_rough, p.cutter, p.leave, s.finish_max_depth);
+      if (after_rest.deepest > s.finish_max_depth + 1e-9) after_rest = finishing_depth(both);
+    }
     s.rest = std::move(rest);
     if (after_rest.deepest <= s.finish_max_depth + 1e-9) break;
     if (attempt == 3)

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cncstream/cam/cutter.hpp"
+#include "cncstream/cam/path_machining.hpp"
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/cam/stock.hpp"
 
@@ -28,13 +29,25 @@ struct PassDepth {
   // Along the moves deeper than the limit, points a third of the radius
   // apart, each at the move's lower end's z.
   std::vector<Vec3> over;
+  std::vector<MoveCut> too_deep;  // those moves
+  double deepest_within = 0;      // the deepest of the other moves
 };
 
-// `pieces` are cut apart: between them the tool lifts to `retract_z`
-// (above the stock), goes across and plunges to the next's first point, as
-// the program does. Throws std::invalid_argument for a rim that leaves no
+// `pieces` are cut apart: the tool comes down from `retract_z` (above the
+// stock) to each one's first point, and goes back up at its end, as the
+// program does (its plunges are moves too). Throws std::invalid_argument for a rim that leaves no
 // cutter, and as machine_path.
 PassDepth pass_depth(const HeightFieldStock& stock, const std::vector<Polyline>& pieces, const Cutter& cutter,
                      double rim, double limit, double retract_z);
+
+// The same pass against a stock nowhere higher than the one `before` was
+// measured on (a further roughing cut into it), bounded without machining
+// it again: a move's depth of cut only shrinks with the stock under it
+// (every node after any moves is no higher), so the moves within the limit
+// before stay within it, and a move too deep before is bounded by its cut
+// alone into `lower` (what the moves before it take can only make it
+// shallower). Exact for none of them; `over` lists the moves still over.
+PassDepth pass_depth_bound(const HeightFieldStock& lower, const PassDepth& before, const Cutter& cutter, double rim,
+                           double limit);
 
 }  // namespace cncstream

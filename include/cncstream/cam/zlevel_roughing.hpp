@@ -69,8 +69,9 @@ struct RoughingParams {
   std::optional<double> bottom;  // no level below this tip height
   // Rest roughing: not empty, the roughing clears only where its tip is
   // within near_radius (XY) of one of these points (where an earlier
-  // measurement found too much material), and computes only the part of its
-  // grid that reaches them. The window is the same at every level, so what
+  // measurement found too much material; the window is up to a cell and a
+  // cell's diagonal wider, from the grid), and computes only the part of
+  // its grid that reaches them. The window is the same at every level, so what
   // a level clears was cleared to the level above as before, and no move
   // cuts deeper than the step down. z: the height the stock there must come
   // within step_down + leave of (a finishing tip): where the cutter's tip
