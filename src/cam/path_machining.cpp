@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "cncstream/cam/stock.hpp"
 
@@ -30,8 +31,10 @@ std::vector<Polyline> raster_pieces(const RasterPath& path) {
   return out;
 }
 
-std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
-                                 const Cutter& cutter, const Checkpoint& checkpoint) {
+namespace {
+
+std::vector<double> machine(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
+                            const Cutter& cutter, std::vector<MoveCut>* cuts, const Checkpoint& checkpoint) {
   if (heights.size() != grid.size()) throw std::invalid_argument("machine_path: heights do not match the grid");
   if (grid.size() == 0) return heights;
   double top = -HUGE_VAL;
@@ -64,6 +67,8 @@ std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heigh
     const std::size_t b1 = std::min(bands - 1, std::size_t(std::min(hi, double(grid.ny - 1))) / kBandRows);
     for (std::size_t b = b0; b <= b1; ++b) band_moves[b].push_back(k);
   }
+  // Per band, the depth of each of its moves that cut (merged after).
+  std::vector<std::vector<std::pair<std::size_t, double>>> band_depths(cuts ? bands : 0);
   std::atomic<std::size_t> done{0};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bands, 1), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t b = r.begin(); b != r.end(); ++b) {
@@ -71,12 +76,34 @@ std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heigh
       const auto first = heights.begin() + static_cast<std::ptrdiff_t>(j0 * grid.nx);
       const auto end = heights.begin() + static_cast<std::ptrdiff_t>(j1 * grid.nx);
       HeightFieldStock stock = HeightFieldStock::band(grid, j0, top, std::vector<double>(first, end));
-      for (std::size_t k : band_moves[b]) stock.cut_segment(moves[k].a, moves[k].b, cutter);
+      for (std::size_t k : band_moves[b]) {
+        stock.cut_segment(moves[k].a, moves[k].b, cutter);
+        if (cuts && stock.nodes_cut() > 0) band_depths[b].emplace_back(k, stock.last_max_depth());
+      }
       std::copy(stock.heights().begin(), stock.heights().end(), first);
       if (checkpoint) checkpoint(double(++done) / double(bands));
     }
   });
+  if (cuts) {
+    std::vector<double> depth(moves.size(), -1.0);
+    for (const auto& bd : band_depths)
+      for (const auto& [k, d] : bd) depth[k] = std::max(depth[k], d);
+    for (std::size_t k = 0; k < moves.size(); ++k)
+      if (depth[k] >= 0) cuts->push_back({moves[k].a, moves[k].b, depth[k]});
+  }
   return heights;
+}
+
+}  // namespace
+
+std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
+                                 const Cutter& cutter, const Checkpoint& checkpoint) {
+  return machine(grid, std::move(heights), pieces, cutter, nullptr, checkpoint);
+}
+
+std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
+                                 const Cutter& cutter, std::vector<MoveCut>& cuts, const Checkpoint& checkpoint) {
+  return machine(grid, std::move(heights), pieces, cutter, &cuts, checkpoint);
 }
 
 }  // namespace cncstream

@@ -76,6 +76,8 @@ struct Builder {
   double top = 0;                             // the stock's highest point
   double scallop = 0;                         // left between loops above a level
   double clearance_z = 0;
+  // A rest roughing's window per node (<= 0: inside); empty: everywhere.
+  std::vector<double> window;
 
   // Signed distance from the stock's XY box grown by the radius (rounded
   // corners: beyond them the cutter meets no stock).
@@ -88,6 +90,7 @@ struct Builder {
   // reach of material above z). Safe to call concurrently.
   double region_value(double x, double y, double z, const std::vector<double>* reach = nullptr) const {
     double v = dbox(x, y);
+    if (!window.empty()) v = std::max(v, detail::interpolate(path.grid, window, x, y));
     if (reach) v = std::max(v, detail::interpolate(path.grid, *reach, x, y));
     if (v > 0) return v;
     return std::max(grown.height_at(x, y) + leave - z, v);
@@ -257,6 +260,9 @@ struct Builder {
 RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, const StockBlock& stock,
                                    const RoughingParams& p, const Checkpoint& checkpoint) {
   check(cutter, grown, stock, p);
+  if (!p.near.empty() && !(p.near_radius > 0 && std::isfinite(p.near_radius)))
+    throw std::invalid_argument("roughing: the radius around the points to clear near must be positive, got " +
+                                num(p.near_radius));
   RoughingPath path;
   path.cutter = cutter;
   path.leave = p.leave;
@@ -273,8 +279,35 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   path.stepover = std::min(p.stepover > 0 ? p.stepover : 0.8 * b.R, s_max);
   b.sx0 = stock.x0, b.sy0 = stock.y0, b.sx1 = stock.x1, b.sy1 = stock.y1;
   const double margin = b.R + 1.5 * b.h;
-  path.grid = GridSpec::covering(stock.x0 - margin, stock.y0 - margin, stock.x1 + margin, stock.y1 + margin, b.h, b.h);
+  double gx0 = stock.x0 - margin, gy0 = stock.y0 - margin, gx1 = stock.x1 + margin, gy1 = stock.y1 + margin;
+  if (!p.near.empty()) {
+    // Only what reaches the window: a tip in it, its cutter, and the
+    // material under the cutter (the clearance height is above all of it).
+    double nx0 = HUGE_VAL, ny0 = HUGE_VAL, nx1 = -HUGE_VAL, ny1 = -HUGE_VAL;
+    for (const Vec3& v : p.near) {
+      if (!std::isfinite(v.x) || !std::isfinite(v.y)) throw std::invalid_argument("roughing: a point to clear near is not finite");
+      nx0 = std::min(nx0, v.x), ny0 = std::min(ny0, v.y), nx1 = std::max(nx1, v.x), ny1 = std::max(ny1, v.y);
+    }
+    const double w = p.near_radius + b.h + margin;
+    gx0 = std::max(gx0, nx0 - w), gy0 = std::max(gy0, ny0 - w);
+    gx1 = std::min(gx1, nx1 + w), gy1 = std::min(gy1, ny1 + w);
+    if (!(gx0 + 2 * b.h < gx1 && gy0 + 2 * b.h < gy1)) return path;  // nothing of the stock near them
+  }
+  path.grid = GridSpec::covering(gx0, gy0, gx1, gy1, b.h, b.h);
   const GridSpec& g = path.grid;
+  if (!p.near.empty()) {
+    // The corners of each point's cell, and the window a cell wider than
+    // asked (a point is within a cell diagonal of its nearest corner).
+    std::vector<double> seed(g.size(), 0.0);
+    for (const Vec3& v : p.near) {
+      const double fx = (v.x - g.x0) / g.dx, fy = (v.y - g.y0) / g.dy;
+      if (fx < 0 || fy < 0 || fx > static_cast<double>(g.nx - 1) || fy > static_cast<double>(g.ny - 1)) continue;
+      const auto i = std::min(static_cast<std::size_t>(fx), g.nx - 2), j = std::min(static_cast<std::size_t>(fy), g.ny - 2);
+      for (std::size_t dj = 0; dj < 2; ++dj)
+        for (std::size_t di = 0; di < 2; ++di) seed[(j + dj) * g.nx + i + di] = 1.0;
+    }
+    b.window = detail::material_reach(g, seed, 0.5, 0.0, p.near_radius + b.h);
+  }
   const ClGrid cl = grown.compute(g);
   if (checkpoint) checkpoint(0.1);
   // A machined stock: its top on the grid, and levels from its highest point.
@@ -295,6 +328,7 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     for (std::size_t i = 1; i + 1 < g.nx; ++i) {
       const std::size_t n = j * g.nx + i;
       if (b.dbox(g.x(i), g.y(j)) > 0) continue;
+      if (!b.window.empty() && b.window[j * g.nx + i] > 0) continue;  // levels for the window only
       in_box.push_back(tips[n]);
       const double t = tips[n];
       if (std::fabs(tips[n - 1] - t) <= flat_tol && std::fabs(tips[n + 1] - t) <= flat_tol &&
@@ -313,7 +347,36 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     throw std::invalid_argument("roughing: the scallop between loops of " + cutter.spec() + " at stepover " +
                                 num(path.stepover) + " (" + num(scallop) + " mm) leaves no room in the step down " +
                                 num(p.step_down) + "; use a smaller stepover");
-  const LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, b.top, spaced, min_flat);
+  LevelPlan plan = plan_levels(in_box, flat, b.h * b.h, b.top, spaced, min_flat);
+  if (!p.near.empty()) {
+    // A level between where the tip can go at each point and its z plus
+    // the step down and leave, less the scallop (so the stock there comes
+    // within that of z: in a gap the cutter grown by the leave does not fit
+    // its tip stops above the part, and the levels' spacing alone may leave
+    // a level up to a step above that). Fewest levels: by the top of each
+    // interval, one at the top of each not yet met.
+    std::vector<std::pair<double, double>> want;  // (hi, lo)
+    for (const Vec3& v : p.near) {
+      const double lo = grown.height_at(v.x, v.y) + p.leave;
+      double hi = std::min(v.z + p.step_down + p.leave - scallop, b.top);
+      if (p.bottom && hi < *p.bottom) continue;
+      if (lo < hi - 1e-9) want.emplace_back(hi, lo);
+    }
+    std::sort(want.begin(), want.end());
+    std::vector<double> added;
+    for (const auto& [hi, lo] : want) {
+      auto met = [&, lo = lo, hi = hi](double z) { return z >= lo && z <= hi; };
+      if (std::any_of(plan.z.begin(), plan.z.end(), met) || std::any_of(added.begin(), added.end(), met)) continue;
+      added.push_back(hi);
+    }
+    for (double z : added) plan.z.push_back(z), plan.flat.push_back(false);
+    std::vector<std::size_t> order(plan.z.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t c) { return plan.z[a] > plan.z[c]; });
+    LevelPlan sorted;
+    for (std::size_t k : order) sorted.z.push_back(plan.z[k]), sorted.flat.push_back(plan.flat[k]);
+    plan = std::move(sorted);
+  }
 
   // Material left: the largest gap between levels and the scallop.
   double gap = 0;
@@ -335,6 +398,7 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     if (stock.surface) reach = detail::material_reach(g, stock_top, z, flat_tol, b.R + 2 * b.h);
     for (std::size_t n = 0; n < g.size(); ++n) {
       phi[n] = std::max(tips[n] - z, b.dbox(g.x(n % g.nx), g.y(n / g.nx)));
+      if (!b.window.empty()) phi[n] = std::max(phi[n], b.window[n]);
       if (stock.surface) phi[n] = std::max(phi[n], reach[n]);
     }
     const std::vector<double>* within = stock.surface ? &reach : nullptr;

@@ -7,6 +7,8 @@
 #include <stdexcept>
 
 #include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/path_machining.hpp"
+#include "cncstream/cam/pass_depth.hpp"
 #include "cncstream/gcode/roughing_program.hpp"
 
 namespace cncstream::jobs {
@@ -46,6 +48,46 @@ HeightFieldStock model_surface(const HeightFieldData& map, const Vec3& work_offs
 }
 
 std::string mm(double v) { return fmt::format("{:.2f} mm", v); }
+
+// A round cutter's roughing stepover: loops close enough that the scallops
+// between them stay under a quarter of the step-down (the roughing allows
+// for a further grid cell, at most a sixth of the radius).
+double round_stepover(const Cutter& c, double step_down) {
+  const double t = std::min(c.corner_radius, step_down / 4);
+  const double reach =
+      c.core_radius() + std::sqrt(c.corner_radius * c.corner_radius - (c.corner_radius - t) * (c.corner_radius - t));
+  return std::clamp(reach - c.radius / 6, 0.1 * c.diameter(), 0.4 * c.diameter());
+}
+
+// The stock before the roughing on a grid over the block (model
+// coordinates): the block's top, or the height map's surface below it.
+HeightFieldStock stock_before(const StockBlock& block, double cell) {
+  const GridSpec g = GridSpec::covering(block.x0, block.y0, block.x1, block.y1, cell, cell);
+  std::vector<double> z(g.size(), block.top);
+  if (block.surface)
+    for (std::size_t j = 0; j < g.ny; ++j)
+      for (std::size_t i = 0; i < g.nx; ++i)
+        if (const double h = stock_height_at(*block.surface, g.x(i), g.y(j)); std::isfinite(h))
+          z[j * g.nx + i] = std::min(h, block.top);
+  return HeightFieldStock(g, block.top, std::move(z));
+}
+
+// The stock after a roughing path cut into it.
+HeightFieldStock cut(const HeightFieldStock& stock, const RoughingPath& path) {
+  std::vector<double> z = machine_path(stock.grid(), stock.heights(), {roughing_moves(path)}, path.cutter);
+  return HeightFieldStock(stock.grid(), stock.top(), std::move(z));
+}
+
+// The rest roughing's leave: small, so the ball grown by it fits gaps
+// barely wider than the ball (the roughing's 0.3 mm would make a 3.175 mm
+// ball 3.775 mm wide, as wide as the gaps it is for); enough to hold what the
+// rest roughing's own chords take (half its 0.05 mm region tolerance) and
+// the program's arcs (its tolerance), so nothing is gouged and the
+// finishing pass has a skin to cut. A gap between the ball's width and the
+// grown ball's is left to the finishing: the measure after says whether
+// that is within its depth. (On the plaque 0.02 mm, at a 0.02 mm tolerance,
+// cut as deep a finish with twice the lines.) No more than asked.
+constexpr double kRestLeave = 0.05;
 
 }  // namespace
 
@@ -107,11 +149,7 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
     // must take as well: loops close enough that they stay under a quarter
     // of the step-down (the roughing allows for a further grid cell, at most
     // a sixth of the radius).
-    const double sd = p.step_down.value_or(std::min(s.rough_max_depth, s.finish_max_depth - p.leave));
-    const double t = std::min(rc.corner_radius, sd / 4);
-    const double reach = rc.core_radius() + std::sqrt(rc.corner_radius * rc.corner_radius -
-                                                      (rc.corner_radius - t) * (rc.corner_radius - t));
-    rp.stepover = std::clamp(reach - rc.radius / 6, 0.1 * rc.diameter(), 0.4 * rc.diameter());
+    rp.stepover = round_stepover(rc, p.step_down.value_or(std::min(s.rough_max_depth, s.finish_max_depth - p.leave)));
   }
   // Every roughing pass within the roughing cutter's depth, and what the
   // terraces leave within the finishing cutter's.
@@ -135,16 +173,91 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
       after = p.leave + path.terrace_bound;
     }
   }
-  if (after > s.finish_max_depth + 1e-9)
-    throw std::invalid_argument(fmt::format(
-        "after roughing the finishing pass could still cut {} (leave {} plus terraces up to {}), more than the {}'s "
-        "maximum depth {}: give a smaller --step-down or --leave",
-        mm(after), mm(p.leave), mm(path.terrace_bound), p.cutter.spec(), mm(s.finish_max_depth)));
-  s.finish_depth = std::min(s.finish_depth_alone, after);
   s.notes.push_back(fmt::format("roughing: {} levels, step-down at most {}, stepover {}, leaving {} (terraces up to {} more)",
                                 path.levels.size(), mm(rp.step_down), mm(path.stepover), mm(p.leave),
                                 mm(path.terrace_bound)));
   s.path = std::move(path);
+
+  // The finishing pass cut into the stock the roughing leaves (a height
+  // map fine enough for the finishing cutter): where the roughing cutter
+  // could not reach (gaps narrower than it grown by the leave), it would
+  // still cut deep. Its depth of cut leaves out a rim as wide as the leave:
+  // its side cut of the skin along a wall is as tall as the wall.
+  const double cell = std::min(0.25, p.cutter.radius / 4);
+  const double retract_z = block.top + 1;
+  auto finishing_depth = [&](const HeightFieldStock& stock) {
+    return pass_depth(stock, finishing, p.cutter, p.leave, s.finish_max_depth, retract_z);
+  };
+  auto where = [&](const PassDepth& e) {
+    return fmt::format("X{:.3f} Y{:.3f} (work coordinates; down to Z{:.3f})", e.at.x + work_offset.x,
+                       e.at.y + work_offset.y, e.at.z + work_offset.z);
+  };
+  const HeightFieldStock roughed = cut(stock_before(block, cell), *s.path);
+  const PassDepth after_rough = finishing_depth(roughed);
+  s.finish_depth = after_rough.deepest;
+  if (after_rough.deepest <= s.finish_max_depth + 1e-9) {
+    s.notes.push_back(fmt::format("after roughing the finishing pass cuts at most {}, within its cutter's {}",
+                                  mm(after_rough.deepest), mm(s.finish_max_depth)));
+    return s;
+  }
+
+  // Rest roughing with the finishing cutter (no tool change before the
+  // finishing) near where it would cut too deep, from the roughed stock:
+  // levels only where material stands above them, each within the
+  // finishing cutter's depth, and one that brings the stock there within it.
+  s.rest_spots = after_rough.over.size();
+  RoughingParams rr;
+  rr.tolerance = 0.05;
+  rr.leave = std::min(p.leave, std::max(kRestLeave, rr.tolerance / 2 + p.tolerance));
+  rr.bottom = rp.bottom;
+  rr.near = after_rough.over;
+  // The cutter over a spot from anywhere it can lower it (the window is a
+  // grid cell wider).
+  rr.near_radius = p.cutter.radius;
+  rr.step_down = s.finish_max_depth - rr.leave;
+  if (p.cutter.corner_radius > 0) rr.stepover = round_stepover(p.cutter, rr.step_down);
+  StockBlock rest_block = block;
+  rest_block.surface = &roughed;
+  const ClEngine grown_finish(mesh, grown_cutter(p.cutter, rr.leave), clo);
+  // The stage's progress stays where the roughing ended; a stop request
+  // still stops it.
+  Checkpoint rest_checkpoint;
+  if (checkpoint) rest_checkpoint = [&checkpoint](double) { checkpoint(1.0); };
+  PassDepth after_rest;
+  // Spots the rest roughing left too deep (its regions come from a grid,
+  // its levels from the spots' heights) are added, and again.
+  for (int attempt = 1;; ++attempt) {
+    RoughingPath rest = build_zlevel_roughing(grown_finish, p.cutter, rest_block, rr, rest_checkpoint);
+    if (rest.levels.empty())
+      throw std::invalid_argument(fmt::format(
+          "after roughing the finishing pass would still cut {} at {}, more than the {}'s {}, and a rest roughing "
+          "with it finds nothing it can cut there: give a smaller --leave or --step-down",
+          mm(after_rough.deepest), where(after_rough), p.cutter.spec(), mm(s.finish_max_depth)));
+    {
+      // Bounded from the measure after the roughing (cheap), measured again
+      // only where a bound is over.
+      const HeightFieldStock both = cut(roughed, rest);
+      after_rest = pass_depth_bound(both, after_rough, p.cutter, p.leave, s.finish_max_depth);
+      if (after_rest.deepest > s.finish_max_depth + 1e-9) after_rest = finishing_depth(both);
+    }
+    s.rest = std::move(rest);
+    if (after_rest.deepest <= s.finish_max_depth + 1e-9) break;
+    if (attempt == 3)
+      throw std::invalid_argument(fmt::format(
+          "after roughing and rest roughing with the {} the finishing pass would still cut {} at {}, more than its "
+          "{}: give a smaller --leave or --step-down, or a smaller finishing cutter",
+          p.cutter.spec(), mm(after_rest.deepest), where(after_rest), mm(s.finish_max_depth)));
+    rr.near.insert(rr.near.end(), after_rest.over.begin(), after_rest.over.end());
+  }
+  s.rest_leave = rr.leave;
+  s.rest_step_down = rr.step_down;
+  s.finish_depth = after_rest.deepest;
+  s.notes.push_back(fmt::format(
+      "after roughing the finishing pass would still cut {} (at {}, where the {} grown by the leave does not fit), "
+      "more than its cutter's {}: rest roughing with the {} near the {} places, {} levels, step-down at most {}, "
+      "leaving {}; then the finishing cuts at most {}",
+      mm(after_rough.deepest), where(after_rough), rc.spec(), mm(s.finish_max_depth), p.cutter.spec(), s.rest_spots,
+      s.rest->levels.size(), mm(s.rest_step_down), mm(s.rest_leave), mm(s.finish_depth)));
   return s;
 }
 
@@ -189,8 +302,9 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
                                         rough.stock.box.hi.y, rough.stock.box.lo.z, rough.stock.box.hi.z));
   {
     const char* finishing = r.waterline_pieces > 0 ? "steep-and-shallow finishing" : "raster finishing";
-    jo.header_comments.front() = rough.path ? fmt::format("cncstream job: Z-level roughing, then {}", finishing)
-                                            : fmt::format("cncstream job: {}", finishing);
+    jo.header_comments.front() = rough.rest   ? fmt::format("cncstream job: Z-level roughing, rest roughing, then {}", finishing)
+                                 : rough.path ? fmt::format("cncstream job: Z-level roughing, then {}", finishing)
+                                              : fmt::format("cncstream job: {}", finishing);
   }
   for (const auto& n : rough.notes) jo.header_comments.push_back(n);
   JobProgram program(jo);
@@ -225,6 +339,21 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
     summary(std::move(o), at);
     // The same cutter finishes without a tool change.
     if (rough.path->cutter.spec() != p.cutter.spec()) ++tool;
+  }
+  if (rough.rest) {
+    // With the finishing cutter: the finishing follows without a tool change.
+    const auto at = begin("rest roughing", tool, p.cutter);
+    write_roughing(program.writer(), *rough.rest, r.work_offset, mp, program.stats());
+    OperationSummary o;
+    o.name = "rest roughing";
+    o.tool = tool;
+    o.cutter = p.cutter;
+    o.detail = fmt::format("Z-level where the roughing cutter could not reach and the finishing would cut too deep "
+                           "({} places), {} levels, stepover {} mm, leave {} mm",
+                           rough.rest_spots, rough.rest->levels.size(), format_gcode_number(rough.rest->stepover, 3),
+                           format_gcode_number(rough.rest_leave, 3));
+    o.max_depth = rough.rest_step_down;
+    summary(std::move(o), at);
   }
   const auto at = begin("finishing", tool, p.cutter);
   write_pieces(program.writer(), r.finish_pieces, r.work_offset, mp, program.stats());

@@ -1,8 +1,11 @@
 #pragma once
 // The operations of a tool path job with a stock (toolpath_job.hpp): whether
 // the finishing pass alone would cut deeper than its cutter may, the Z-level
-// roughing that comes first when it would, and the program of both with the
-// tool change between them. Private to the jobs layer.
+// roughing that comes first when it would, the rest roughing with the
+// finishing cutter where the roughing cutter could not reach deep enough,
+// and the program of them all with the tool change between the cutters.
+// Private to the jobs layer.
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <string>
@@ -19,9 +22,18 @@ struct RoughingStage {
   WorkStock stock;                   // work coordinates
   double finish_max_depth = 0;       // the finishing cutter's
   double finish_depth_alone = 0;     // the deepest the finishing pass would cut from the stock alone
-  double finish_depth = 0;           // ... after the roughing (= alone without one)
+  // ... after the roughing (and the rest roughing), measured against the
+  // stock they leave (pass_depth.hpp); = alone without one.
+  double finish_depth = 0;
   std::optional<RoughingPath> path;  // model coordinates; none when the finishing pass is within its depth
   double rough_max_depth = 0;
+  // With the finishing cutter, where the roughing cutter could not reach and
+  // the finishing pass would still cut deeper than it may (model
+  // coordinates); none when it would not.
+  std::optional<RoughingPath> rest;
+  double rest_leave = 0;  // mm of stock the rest roughing leaves
+  double rest_step_down = 0;
+  std::size_t rest_spots = 0;  // stock nodes the finishing would have cut too deep after the roughing
   // A height-map stock in model coordinates (the roughing's surface).
   std::shared_ptr<const HeightFieldStock> surface;
   std::vector<std::string> notes;
@@ -37,7 +49,7 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
 // The finishing operation's summary from its program's stats.
 OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParams& p, const ProgramStats& stats);
 
-// The whole program (roughing, tool change, finishing) into r.gcode, r.stats
+// The whole program (roughing, tool change, rest roughing, finishing) into r.gcode, r.stats
 // and r.operations; the notes into r.notes.
 void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStage& rough, MachiningParams mp);
 

@@ -22,6 +22,17 @@ namespace cncstream {
 std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
                                  const Cutter& cutter, const Checkpoint& checkpoint = {});
 
+// A move of a path that cut, and its depth of cut: the largest height drop
+// of a stock node in it (HeightFieldStock::last_max_depth, over all bands).
+struct MoveCut {
+  Vec3 a, b;
+  double depth = 0;
+};
+
+// As machine_path, and every move that cut into `cuts` (in cutting order).
+std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heights, const std::vector<Polyline>& pieces,
+                                 const Cutter& cutter, std::vector<MoveCut>& cuts, const Checkpoint& checkpoint = {});
+
 // A raster's pieces in cutting order: row 0, link 0, row 1, ...
 std::vector<Polyline> raster_pieces(const RasterPath& path);
 

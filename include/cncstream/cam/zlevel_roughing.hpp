@@ -67,6 +67,18 @@ struct RoughingParams {
   double flat_min_area = 0;  // mm^2 of flat CL for an extra level; 0: the cutter's disc area / 4
   double grid_step = 0;      // mm; 0: from the radius and tolerance (see zlevel_roughing.cpp)
   std::optional<double> bottom;  // no level below this tip height
+  // Rest roughing: not empty, the roughing clears only where its tip is
+  // within near_radius (XY) of one of these points (where an earlier
+  // measurement found too much material; the window is up to a cell and a
+  // cell's diagonal wider, from the grid), and computes only the part of
+  // its grid that reaches them. The window is the same at every level, so what
+  // a level clears was cleared to the level above as before, and no move
+  // cuts deeper than the step down. z: the height the stock there must come
+  // within step_down + leave of (a finishing tip): where the cutter's tip
+  // can go low enough there, a level is added if none lies between that
+  // and z + step_down + leave less the scallop between loops.
+  std::vector<Vec3> near;
+  double near_radius = 0;
 };
 
 // One cut: lift first (if lift_before: straight up to lift_z, across at
@@ -119,6 +131,15 @@ struct RoughingPath {
 // fraction of levels done.
 RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, const StockBlock& stock,
                                    const RoughingParams& params, const Checkpoint& checkpoint = {});
+
+// The path as the tool moves it, in one polyline for a stock model
+// (path_machining.hpp's machine_path joins its points by straight moves):
+// down from the clearance height to the first pass, each pass's lift as
+// points of its own (straight up, across, straight down), the links of
+// passes without one straight at the level, and up to the clearance height
+// at the end. Model coordinates, as the passes are; the G-code rounds Z up
+// to its resolution (cutting less) and fits arcs within its tolerance.
+Polyline roughing_moves(const RoughingPath& path);
 
 // The levels (top down) below a stock top: every step_down from the top, the
 // lowest of `tips` (tip heights: the grown CL plus leave), and (if on) the

@@ -73,7 +73,7 @@ struct ToolpathParams {
 
 // One operation of the program, for the plan shown before cutting.
 struct OperationSummary {
-  std::string name;  // "roughing", "finishing"
+  std::string name;  // "roughing", "rest roughing", "finishing"
   int tool = 1;
   Cutter cutter;
   std::string detail;      // levels, stepover ... in words
