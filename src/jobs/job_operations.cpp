@@ -217,47 +217,57 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
   rr.step_down = s.finish_max_depth - rr.leave;
   if (p.cutter.corner_radius > 0) rr.stepover = round_stepover(p.cutter, rr.step_down);
   StockBlock rest_block = block;
-  rest_block.surface = &roughed;
   const ClEngine grown_finish(mesh, grown_cutter(p.cutter, rr.leave), clo);
   // The stage's progress stays where the roughing ended; a stop request
   // still stops it.
   Checkpoint rest_checkpoint;
   if (checkpoint) rest_checkpoint = [&checkpoint](double) { checkpoint(1.0); };
-  PassDepth after_rest;
-  // Spots the rest roughing left too deep (its regions come from a grid,
-  // its levels from the spots' heights) are added, and again.
+  // What a rest roughing leaves too deep (its regions come from a grid: a
+  // pit the finishing ball drops into, narrower than a cell, is missed) gets
+  // another near it alone, from the stock after it, on a grid half as fine.
+  HeightFieldStock stock = roughed;
+  PassDepth depth = after_rough;
+  double grid_step = 0;  // the roughing's default first
   for (int attempt = 1;; ++attempt) {
+    rest_block.surface = &stock;
+    rr.grid_step = grid_step;
     RoughingPath rest = build_zlevel_roughing(grown_finish, p.cutter, rest_block, rr, rest_checkpoint);
     if (rest.levels.empty())
       throw std::invalid_argument(fmt::format(
-          "after roughing the finishing pass would still cut {} at {}, more than the {}'s {}, and a rest roughing "
+          "after roughing{} the finishing pass would still cut {} at {}, more than the {}'s {}, and a rest roughing "
           "with it finds nothing it can cut there: give a smaller --leave or --step-down",
-          mm(after_rough.deepest), where(after_rough), p.cutter.spec(), mm(s.finish_max_depth)));
-    {
-      // Bounded from the measure after the roughing (cheap), measured again
-      // only where a bound is over.
-      const HeightFieldStock both = cut(roughed, rest);
-      after_rest = pass_depth_bound(both, after_rough, p.cutter, p.leave, s.finish_max_depth);
-      if (after_rest.deepest > s.finish_max_depth + 1e-9) after_rest = finishing_depth(both);
-    }
-    s.rest = std::move(rest);
-    if (after_rest.deepest <= s.finish_max_depth + 1e-9) break;
+          s.rest.empty() ? "" : " and rest roughing", mm(depth.deepest), where(depth), p.cutter.spec(),
+          mm(s.finish_max_depth)));
+    HeightFieldStock after = cut(stock, rest);
+    // Bounded from the measure before (cheap), measured again only where a
+    // bound is over.
+    PassDepth now = pass_depth_bound(after, depth, p.cutter, p.leave, s.finish_max_depth);
+    if (now.deepest > s.finish_max_depth + 1e-9) now = finishing_depth(after);
+    grid_step = rest.grid.dx / 2;
+    s.rest.push_back(std::move(rest));
+    stock = std::move(after);
+    depth = std::move(now);
+    if (depth.deepest <= s.finish_max_depth + 1e-9) break;
     if (attempt == 3)
       throw std::invalid_argument(fmt::format(
           "after roughing and rest roughing with the {} the finishing pass would still cut {} at {}, more than its "
           "{}: give a smaller --leave or --step-down, or a smaller finishing cutter",
-          p.cutter.spec(), mm(after_rest.deepest), where(after_rest), mm(s.finish_max_depth)));
-    rr.near.insert(rr.near.end(), after_rest.over.begin(), after_rest.over.end());
+          p.cutter.spec(), mm(depth.deepest), where(depth), mm(s.finish_max_depth)));
+    rr.near = depth.over;
   }
   s.rest_leave = rr.leave;
   s.rest_step_down = rr.step_down;
-  s.finish_depth = after_rest.deepest;
+  s.finish_depth = depth.deepest;
+  std::size_t levels = 0;
+  for (const auto& r : s.rest) levels += r.levels.size();
   s.notes.push_back(fmt::format(
       "after roughing the finishing pass would still cut {} (at {}, where the {} grown by the leave does not fit), "
-      "more than its cutter's {}: rest roughing with the {} near the {} places, {} levels, step-down at most {}, "
+      "more than its cutter's {}: rest roughing with the {} near {} points of its moves too deep ({} levels{}), "
+      "step-down at most {}, "
       "leaving {}; then the finishing cuts at most {}",
       mm(after_rough.deepest), where(after_rough), rc.spec(), mm(s.finish_max_depth), p.cutter.spec(), s.rest_spots,
-      s.rest->levels.size(), mm(s.rest_step_down), mm(s.rest_leave), mm(s.finish_depth)));
+      levels, s.rest.size() > 1 ? fmt::format(" in {} rounds, the later on finer grids", s.rest.size()) : "",
+      mm(s.rest_step_down), mm(s.rest_leave), mm(s.finish_depth)));
   return s;
 }
 
@@ -302,9 +312,9 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
                                         rough.stock.box.hi.y, rough.stock.box.lo.z, rough.stock.box.hi.z));
   {
     const char* finishing = r.waterline_pieces > 0 ? "steep-and-shallow finishing" : "raster finishing";
-    jo.header_comments.front() = rough.rest   ? fmt::format("cncstream job: Z-level roughing, rest roughing, then {}", finishing)
-                                 : rough.path ? fmt::format("cncstream job: Z-level roughing, then {}", finishing)
-                                              : fmt::format("cncstream job: {}", finishing);
+    jo.header_comments.front() = !rough.rest.empty() ? fmt::format("cncstream job: Z-level roughing, rest roughing, then {}", finishing)
+                                 : rough.path       ? fmt::format("cncstream job: Z-level roughing, then {}", finishing)
+                                                    : fmt::format("cncstream job: {}", finishing);
   }
   for (const auto& n : rough.notes) jo.header_comments.push_back(n);
   JobProgram program(jo);
@@ -340,17 +350,21 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
     // The same cutter finishes without a tool change.
     if (rough.path->cutter.spec() != p.cutter.spec()) ++tool;
   }
-  if (rough.rest) {
+  if (!rough.rest.empty()) {
     // With the finishing cutter: the finishing follows without a tool change.
     const auto at = begin("rest roughing", tool, p.cutter);
-    write_roughing(program.writer(), *rough.rest, r.work_offset, mp, program.stats());
+    std::size_t levels = 0;
+    for (const auto& rest : rough.rest) {
+      write_roughing(program.writer(), rest, r.work_offset, mp, program.stats());
+      levels += rest.levels.size();
+    }
     OperationSummary o;
     o.name = "rest roughing";
     o.tool = tool;
     o.cutter = p.cutter;
     o.detail = fmt::format("Z-level where the roughing cutter could not reach and the finishing would cut too deep "
-                           "({} places), {} levels, stepover {} mm, leave {} mm",
-                           rough.rest_spots, rough.rest->levels.size(), format_gcode_number(rough.rest->stepover, 3),
+                           "(near {} points of its moves too deep), {} levels, stepover {} mm, leave {} mm",
+                           rough.rest_spots, levels, format_gcode_number(rough.rest.front().stepover, 3),
                            format_gcode_number(rough.rest_leave, 3));
     o.max_depth = rough.rest_step_down;
     summary(std::move(o), at);

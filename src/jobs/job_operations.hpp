@@ -29,11 +29,12 @@ struct RoughingStage {
   double rough_max_depth = 0;
   // With the finishing cutter, where the roughing cutter could not reach and
   // the finishing pass would still cut deeper than it may (model
-  // coordinates); none when it would not.
-  std::optional<RoughingPath> rest;
+  // coordinates), in order: each from the stock the ones before leave, near
+  // what they left too deep, on a finer grid; none when it would not.
+  std::vector<RoughingPath> rest;
   double rest_leave = 0;  // mm of stock the rest roughing leaves
   double rest_step_down = 0;
-  std::size_t rest_spots = 0;  // stock nodes the finishing would have cut too deep after the roughing
+  std::size_t rest_spots = 0;  // points along the finishing's moves too deep after the roughing
   // A height-map stock in model coordinates (the roughing's surface).
   std::shared_ptr<const HeightFieldStock> surface;
   std::vector<std::string> notes;

@@ -54,7 +54,10 @@ struct ToolpathParams {
   // cutter's maximum depth: where the finishing pass alone would, the job
   // roughs first (Z-level, with `rough`, else the finishing cutter) and the
   // program holds both operations, a tool change between them when the
-  // cutters differ. Without one (the default here; the CLI's and the
+  // cutters differ. The finishing pass is then measured against the stock
+  // the roughing leaves; where the roughing cutter could not reach deep
+  // enough (gaps narrower than it), a rest roughing with the finishing
+  // cutter comes between them, no tool change before the finishing. Without one (the default here; the CLI's and the
   // daemon's default is `auto`), the finishing pass runs alone from the
   // part's top.
   std::optional<StockSpec> stock;
