@@ -33,12 +33,17 @@ SteepSkip skip_steep(const std::vector<Polyline>& pieces, const SlopeMap& slope,
       // p[k..e) steep, p[k - 1] and p[e] (if any) gentle.
       std::size_t e = k;
       while (e < p.size() && slope.min_near(p[e].x, p[e].y) >= angle) ++e;
+      if (e == p.size()) {
+        // Steep to the end of the piece: nothing to bridge to.
+        for (; k < e; ++k) q.push_back(p[k]);
+        continue;
+      }
       // The bridge starts at the last corner of the stretch (a link turning
       // into its row), so it runs along one row.
       std::size_t c = k - 1;
       while (c < e && !along_one_row(p, c, e)) ++c;
-      if (e == p.size() || e - c < 2) {
-        // At the end of the piece, or too short to gain: cut as it is.
+      if (e - c < 2) {
+        // Too short to gain: cut as it is.
         for (; k < e; ++k) q.push_back(p[k]);
         continue;
       }

@@ -47,11 +47,8 @@ void check_feeds(const MachiningParams& p) {
 
 }  // namespace
 
-std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
-                           ProgramStats* stats) {
-  check_feeds(p);
+void write_program_start(GcodeWriter& w, const MachiningParams& p) {
   if (!(p.rpm >= 0)) throw std::invalid_argument("spindle speed must not be negative");
-  GcodeWriter w(p.decimals);
   for (const auto& c : p.header_comments) w.comment(c);
   w.line("G21 G90 G17 G94");  // mm, absolute, XY plane, units/min feed
   if (p.tool > 0) w.line(std::string("T").append(std::to_string(p.tool)));
@@ -59,12 +56,47 @@ std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offs
     w.line("M3 S" + format_gcode_number(p.rpm, 0));
     if (p.dwell_s > 0) w.line("G4 P" + format_gcode_number(p.dwell_s, 2));
   }
-  ProgramStats st;
-  write_pieces(w, pieces, offset, p, st);
+}
+
+void write_program_end(GcodeWriter& w, const MachiningParams& p, ProgramStats& st) {
   if (p.rpm > 0) w.line("M5");
   w.line("M2");
   st.lines = w.lines().size();
   st.motion_lines = w.motion_lines();
+}
+
+void write_fitted_moves(GcodeWriter& w, const std::vector<FittedMove>& moves, double feed, ProgramStats& st,
+                        Vec3& at, Box3* bounds) {
+  for (const FittedMove& m : moves) {
+    if (!m.arc) {
+      if (w.feed(m.to.x, m.to.y, m.to.z, feed)) {
+        const double len = norm(m.to - at);
+        st.cut_length += len;
+        st.feed_time_s += len / feed * 60.0;
+      }
+    } else {
+      const int plane = m.plane == gcode::Plane::XY ? 17 : m.plane == gcode::Plane::ZX ? 18 : 19;
+      if (w.arc(plane, m.clockwise, m.to.x, m.to.y, m.to.z, m.center_offset.x, m.center_offset.y, m.center_offset.z,
+                feed)) {
+        const double len = m.radius * m.sweep;
+        st.cut_length += len;
+        st.feed_time_s += len / feed * 60.0;
+        ++st.arcs;
+      }
+    }
+    at = m.to;
+    if (bounds) bounds->add(m.to);
+  }
+}
+
+std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
+                           ProgramStats* stats) {
+  check_feeds(p);
+  GcodeWriter w(p.decimals);
+  write_program_start(w, p);
+  ProgramStats st;
+  write_pieces(w, pieces, offset, p, st);
+  write_program_end(w, p, st);
   if (stats) *stats = st;
   return w.text();
 }
@@ -127,21 +159,7 @@ void write_pieces(GcodeWriter& w, const std::vector<Polyline>& pieces, const Vec
         w.y = std::round(w.y * q) / q;
         pts.push_back(w);
       }
-      for (const FittedMove& m : fit_arcs(pts, *p.arcs)) {
-        if (!m.arc) {
-          feed_to(m.to, p.feed);
-          continue;
-        }
-        const int plane = m.plane == gcode::Plane::XY ? 17 : m.plane == gcode::Plane::ZX ? 18 : 19;
-        if (w.arc(plane, m.clockwise, m.to.x, m.to.y, m.to.z, m.center_offset.x, m.center_offset.y,
-                  m.center_offset.z, p.feed)) {
-          const double len = m.radius * m.sweep;
-          st.cut_length += len;
-          st.feed_time_s += len / p.feed * 60.0;
-          ++st.arcs;
-        }
-        at = m.to;
-      }
+      write_fitted_moves(w, fit_arcs(pts, *p.arcs), p.feed, st, at);
     }
     rapid_to(std::nullopt, std::nullopt, p.safe_z);
   }

@@ -74,44 +74,19 @@ void write_roughing(GcodeWriter& w, const RoughingPath& path, const Vec3& offset
         for (std::size_t k = 1; k < rest.size(); ++k) feed_to(rest[k], p.feed);
         continue;
       }
-      for (const FittedMove& m : fit_arcs(rest, *arcs)) {
-        if (!m.arc) {
-          feed_to(m.to, p.feed);
-          continue;
-        }
-        const int plane = m.plane == gcode::Plane::XY ? 17 : m.plane == gcode::Plane::ZX ? 18 : 19;
-        if (w.arc(plane, m.clockwise, m.to.x, m.to.y, m.to.z, m.center_offset.x, m.center_offset.y,
-                  m.center_offset.z, p.feed)) {
-          const double len = m.radius * m.sweep;
-          st.cut_length += len;
-          st.feed_time_s += len / p.feed * 60.0;
-          ++st.arcs;
-        }
-        at = m.to;
-        st.work_bounds.add(m.to);
-      }
+      write_fitted_moves(w, fit_arcs(rest, *arcs), p.feed, st, at, &st.work_bounds);
     }
   rapid_to({at.x, at.y, p.safe_z});
 }
 
 std::string roughing_program(const RoughingPath& path, const Vec3& offset, const MachiningParams& p,
                              ProgramStats* stats) {
-  if (!(p.rpm >= 0)) throw std::invalid_argument("spindle speed must not be negative");
   GcodeWriter w(p.decimals);
-  for (const auto& c : p.header_comments) w.comment(c);
-  w.line("G21 G90 G17 G94");  // mm, absolute, XY plane, units/min feed
-  if (p.tool > 0) w.line(std::string("T").append(std::to_string(p.tool)));
-  if (p.rpm > 0) {
-    w.line("M3 S" + format_gcode_number(p.rpm, 0));
-    if (p.dwell_s > 0) w.line("G4 P" + format_gcode_number(p.dwell_s, 2));
-  }
+  write_program_start(w, p);
   w.rapid(std::nullopt, std::nullopt, p.safe_z);
   ProgramStats st;
   write_roughing(w, path, offset, p, st);
-  if (p.rpm > 0) w.line("M5");
-  w.line("M2");
-  st.lines = w.lines().size();
-  st.motion_lines = w.motion_lines();
+  write_program_end(w, p, st);
   if (stats) *stats = st;
   return w.text();
 }

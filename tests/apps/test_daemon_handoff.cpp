@@ -174,7 +174,8 @@ TEST_F(DaemonHandoff, StlJobWithTheToolPathOptionsRunsOnTheDaemon) {
 }
 
 TEST_F(DaemonHandoff, WithoutYesAndWithoutATerminalTheStlJobIsNotStarted) {
-  const auto r = run_cncstream({gearwheel(), sim->slave(), "--tool", "ball:3.175", "--stepover", "3"}, 300);
+  const auto r =
+      run_cncstream({gearwheel(), sim->slave(), "--tool", "ball:3.175", "--stepover", "3", "--stock", "none"}, 300);
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_TRUE(r.has("pass --yes")) << r.out;
   EXPECT_FALSE(r.has("outcome:")) << r.out;

@@ -110,7 +110,8 @@ std::string mesh(const std::string& name) { return (fs::path(CNCSTREAM_SHARED_ME
 // A tool path that takes several seconds (about 7 s on a 2-core machine, more
 // with the G-code): the lion relief at 100 mm and a fine step.
 std::vector<std::string> slow_toolpath_args() {
-  return {mesh("lion_head_relief.stl"), "--scale", "100", "--tool", "ball:3", "--stepover", "0.05", "--step", "0.01"};
+  return {mesh("lion_head_relief.stl"), "--scale", "100", "--tool", "ball:3", "--stepover", "0.05", "--step", "0.01",
+          "--stock", "none", "--strategy", "raster"};
 }
 
 // Files in `dir` whose names start with `stem` (the output and any temporary file beside it).
@@ -166,7 +167,7 @@ TEST(Interrupt, SigtermStopsTheJobLikeCtrlC) {
 TEST(Interrupt, AToolPathRunToTheEndShowsProgressTo100PercentAndClearsTheLine) {
   const fs::path dir = fresh_dir("progress_toolpath");
   const fs::path out = dir / "gear.nc";
-  PipedRun run({"toolpath", mesh("gearwheel.bin.stl"), "--tool", "ball:3", "--stepover", "1", "--progress", "always",
+  PipedRun run({"toolpath", mesh("gearwheel.bin.stl"), "--tool", "ball:3", "--stepover", "1", "--stock", "none", "--strategy", "raster", "--progress", "always",
                 "-o", out.string()});
   EXPECT_EQ(run.finish(), 0) << run.output();
   const std::string& o = run.output();
@@ -182,7 +183,7 @@ TEST(Interrupt, AToolPathRunToTheEndShowsProgressTo100PercentAndClearsTheLine) {
 TEST(Interrupt, NoProgressLineWithoutATerminalUnlessAskedFor) {
   const fs::path dir = fresh_dir("progress_auto");
   for (const char* mode : {"auto", "never"}) {
-    PipedRun run({"toolpath", mesh("gearwheel.bin.stl"), "--tool", "ball:3", "--stepover", "1", "--progress", mode,
+    PipedRun run({"toolpath", mesh("gearwheel.bin.stl"), "--tool", "ball:3", "--stepover", "1", "--stock", "none", "--strategy", "raster", "--progress", mode,
                   "-o", (dir / "gear.nc").string()});
     EXPECT_EQ(run.finish(), 0) << run.output();
     EXPECT_EQ(run.output().find(" elapsed"), std::string::npos) << mode << ": " << run.output();

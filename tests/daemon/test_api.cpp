@@ -79,7 +79,8 @@ TEST(DaemonApi, PlaqueOnTwoSimulatorsAtOnceRunsToDoneWithProgressAndNoGouge) {
   ws.send(json{{"type", "subscribe"}, {"machines", {"*"}}, {"id", 1}});
   ASSERT_TRUE(ws.wait_message([](const json& j) { return j["type"] == "ack" && j["id"] == 1; }, 5));
 
-  const json params = {{"tool", "ball:3.175"}, {"stepover", 3}};
+  // Finishing alone: the test is about two machines at once, not the CAM.
+  const json params = {{"tool", "ball:3.175"}, {"stepover", 3}, {"stock", "none"}, {"strategy", "raster"}};
   std::vector<std::int64_t> ids;
   for (const char* m : {"sim1", "sim2"}) {
     ASSERT_EQ(h.post(std::string("/api/v1/machines/") + m + "/control").status, 200);

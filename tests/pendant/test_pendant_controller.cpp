@@ -345,8 +345,11 @@ TEST(PendantController, UnpluggedTheSimulatedMachineStopsWithinItsDeceleration) 
     return st && st->state == cncstream::protocol::MachineState::Idle && !session.snapshot().jogging;
   }, 10));
   const double s = std::chrono::duration<double>(Clock::now() - unplugged_at).count();
-  // Deceleration from at most 500 mm/min at 10 mm/s^2 takes 0.83 s; status polls add a little.
-  EXPECT_LT(s, 1.5) << "still moving " << s << " s after the unplug";
+  // Deceleration from at most 500 mm/min at 10 mm/s^2 takes 0.83 s; status
+  // polls add a little, and a loaded 2-core machine more (1.61 s seen while
+  // two builds ran). What matters is that the unplug stopped it, not the
+  // 5 s lease running out: half of that.
+  EXPECT_LT(s, 2.5) << "still moving " << s << " s after the unplug";
   // At most: full speed for the whole time the wheel turned, plus the stop
   // and one increment; the 5 s lease alone would have gone far beyond.
   const double v = 500.0 / 60;

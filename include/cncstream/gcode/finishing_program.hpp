@@ -58,6 +58,19 @@ std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offs
                            ProgramStats* stats = nullptr);
 
 class GcodeWriter;
+
+// The start of a one-tool program: header comments, modes, T (if any),
+// spindle on and its dwell (if any). And its end: spindle off, M2, and the
+// program's line counts into `stats`.
+void write_program_start(GcodeWriter& w, const MachiningParams& p);
+void write_program_end(GcodeWriter& w, const MachiningParams& p, ProgramStats& stats);
+
+// Fitted moves (fit_arcs) at `feed`: straight moves and G2/G3, their length
+// and time added to `stats`; `at` follows the tool. With `bounds`, every
+// move's end is added to it.
+void write_fitted_moves(GcodeWriter& w, const std::vector<FittedMove>& moves, double feed, ProgramStats& stats,
+                        Vec3& at, Box3* bounds = nullptr);
+
 // The body of pieces_program, for a program of several operations
 // (job_program.hpp): from the safe Z over each piece's start, plunge at the
 // plunge feed, cut (arcs where p.arcs), retract to the safe Z. Uses p's
