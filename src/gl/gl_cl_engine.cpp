@@ -16,6 +16,7 @@
 
 #include "cncstream/gl/offset_tessellation.hpp"
 #include "cncstream/gl/egl_context.hpp"
+#include "cncstream/gl/shader_program.hpp"
 
 namespace cncstream::gl {
 
@@ -99,36 +100,6 @@ bool plane_of(const Vec3& a, const Vec3& b, const Vec3& c, double& gx, double& g
   gx = (uz * vy - uy * vz) / det;
   gy = (ux * vz - uz * vx) / det;
   return true;
-}
-
-GLuint compile(GLenum kind, const char* src) {
-  const GLuint s = glCreateShader(kind);
-  glShaderSource(s, 1, &src, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[1024] = {};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    std::string m = "OpenGL: the depth shader does not compile: ";
-    m += log;
-    throw GlError(m);
-  }
-  return s;
-}
-
-GLuint link_program() {
-  const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader), fs = compile(GL_FRAGMENT_SHADER, kFragmentShader);
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, vs);
-  glAttachShader(p, fs);
-  glLinkProgram(p);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) throw GlError("OpenGL: the depth shader program does not link");
-  return p;
 }
 
 // ---------------------------------------------------------------- geometry
@@ -482,7 +453,7 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   if (opt.max_tile) tile = std::min(tile, opt.max_tile);
   const std::size_t tw = std::min(tile, spec.nx), th = std::min(tile, spec.ny);
 
-  const GLuint program = link_program();
+  const GLuint program = link_shader_program(kVertexShader, kFragmentShader, "depth");
   glUseProgram(program);
   const GLint loc_xy = glGetUniformLocation(program, "xy_map"), loc_z = glGetUniformLocation(program, "z_map");
   glUniform1f(loc_z, static_cast<float>(2.0 / (zhi - zlo)));

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "cncstream/gl/shader_program.hpp"
+
 namespace cncstream::viewer {
 
 namespace {
@@ -99,45 +101,6 @@ uniform vec3 colour;
 out vec4 frag;
 void main() { frag = vec4(colour, 1.0); }
 )";
-
-GLuint compile(GLenum kind, const char* src, const char* what) {
-  const GLuint s = glCreateShader(kind);
-  glShaderSource(s, 1, &src, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    std::array<char, 2048> log{};
-    glGetShaderInfoLog(s, static_cast<GLsizei>(log.size()), nullptr, log.data());
-    glDeleteShader(s);
-    std::string m = "OpenGL: the viewer's ";
-    m += what;
-    m += " shader does not compile: ";
-    m += log.data();
-    throw gl::GlError(m);
-  }
-  return s;
-}
-
-GLuint link(const char* vs_src, const char* fs_src, const char* what) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, vs_src, what), fs = compile(GL_FRAGMENT_SHADER, fs_src, what);
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, vs);
-  glAttachShader(p, fs);
-  glLinkProgram(p);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    glDeleteProgram(p);
-    std::string m = "OpenGL: the viewer's ";
-    m += what;
-    m += " shader program does not link";
-    throw gl::GlError(m);
-  }
-  return p;
-}
 
 // A run of a line strip and its bounds: zoomed in, the renderer draws only
 // the runs that may be in view (a strip of millions of vertices costs
@@ -252,9 +215,9 @@ struct Renderer::Impl {
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
-  impl_->mesh_program = link(kMeshVertex, kMeshFragment, "surface");
-  impl_->path_program = link(kPathVertex, kPathFragment, "tool path");
-  impl_->overlay_program = link(kOverlayVertex, kOverlayFragment, "overlay");
+  impl_->mesh_program = gl::link_shader_program(kMeshVertex, kMeshFragment, "viewer's surface");
+  impl_->path_program = gl::link_shader_program(kPathVertex, kPathFragment, "viewer's tool path");
+  impl_->overlay_program = gl::link_shader_program(kOverlayVertex, kOverlayFragment, "viewer's overlay");
   glGenVertexArrays(1, &impl_->overlay_vao);
   glBindVertexArray(impl_->overlay_vao);
   glGenBuffers(1, &impl_->overlay_vbo);
