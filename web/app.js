@@ -346,7 +346,11 @@ function outcomeText(j) {
   return msg.toLowerCase().startsWith(j.state) ? msg : `${j.state}: ${msg}`;
 }
 function jobTitle(j) { return `${j.file_name || 'job'} #${j.id}`; }
-function toolText(p) { return p && p.tool ? `${p.tool}, stepover ${p.stepover} mm, rows along ${(p.direction || 'x').toUpperCase()}` : 'G-code as uploaded'; }
+function toolText(p) {
+  if (!p || !p.tool) return 'G-code as uploaded';
+  return `${p.rough ? `${p.rough} roughing, then ` : ''}${p.tool}, stepover ${p.stepover} mm, rows along ${(p.direction || 'x').toUpperCase()}` +
+    `${p.strategy === 'raster' ? ' only' : ''}${p.stock && p.stock !== 'auto' ? `, stock ${p.stock}` : ''}`;
+}
 function duration(s) {
   if (!(s >= 0) || !isFinite(s)) return '—';
   s = Math.round(s);
@@ -598,7 +602,16 @@ async function generate() {
       tool, stepover: numberOf('#tp-stepover'), direction: $('#tp-direction').value,
       feed: numberOf('#tp-feed'), plunge_feed: numberOf('#tp-plunge'), rpm: numberOf('#tp-rpm'),
       safe_z: numberOf('#tp-safez', { optional: true }), step: numberOf('#tp-step', { optional: true }) ?? 0,
+      strategy: $('#tp-strategy').value,
     };
+    // Left empty, the daemon's defaults: scallop from the stepover, stock
+    // `auto`, roughing with the finishing cutter when the finish alone would cut too deep.
+    const scallop = numberOf('#tp-scallop', { optional: true });
+    if (scallop != null) body.params.scallop = scallop;
+    for (const [key, id] of [['stock', '#tp-stock'], ['rough', '#tp-rough']]) {
+      const v = $(id).value.trim();
+      if (v) body.params[key] = v;
+    }
   }
   $('#tp-generate').disabled = true;
   try {

@@ -151,9 +151,11 @@ class Tmux {
 };
 
 // X11's auto-repeat: the press, the first repeat after `delay_s`, then one
-// every `period_s` for `hold_s` in all. Returns when the last repeat was sent.
-void hold_key(Tmux::Holder& h, const std::string& key, double hold_s, double delay_s = 0.5, double period_s = 0.03) {
+// every `period_s` for `hold_s` in all. Returns, when the last repeat was
+// sent, how many presses it sent.
+int hold_key(Tmux::Holder& h, const std::string& key, double hold_s, double delay_s = 0.5, double period_s = 0.03) {
   const auto t0 = Clock::now();
+  int presses = 1;
   h.press(key);
   std::this_thread::sleep_until(t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(delay_s)));
   for (int i = 1;; ++i) {
@@ -161,7 +163,9 @@ void hold_key(Tmux::Holder& h, const std::string& key, double hold_s, double del
     if (std::chrono::duration<double>(at - t0).count() > hold_s) break;
     std::this_thread::sleep_until(at);
     h.press(key);
+    ++presses;
   }
+  return presses;
 }
 
 // A key held down in a thread of its own, at X11's pace, until stop(), so the
@@ -315,10 +319,29 @@ TEST_F(JogTerminal, TapsStepExactlyHeldKeyJogsAndStopsOnReleaseZeroAndQuit) {
   EXPECT_NEAR((*mpos_zeroed)[2], 1.0, 1e-3);
 
   // Hold Up for 1.2 s (X11-like repeats), then let go.
+  int presses = 0;
   {
     auto holder = tmux_->holder();
-    hold_key(holder, "Up", 1.2);
+    presses = hold_key(holder, "Up", 1.2);
   }
+  // Every press read before the machine's stop is looked at: on a loaded
+  // machine the repeats can reach the program late and in a burst, after the
+  // lease ran out (a release, and then a second hold: as it should).
+  const auto ups_read = [&] {
+    const auto t = read_trace(trace_);
+    return std::count_if(t.begin(), t.end(), [](const auto& l) { return l.what == "key Up"; });
+  };
+  ASSERT_TRUE(wait_for([&] { return ups_read() == presses; }, 10)) << presses << " sent\n" << read_file(trace_);
+  // ... and the last hold they started let go (its lease ran out).
+  ASSERT_TRUE(wait_for(
+      [&] {
+        const auto t = read_trace(trace_);
+        const TraceLine* r = find_last(t, "release Y+");
+        const TraceLine* h = find_last(t, "jog Y+ held: accepted");
+        return r && h && r > h;
+      },
+      10))
+      << read_file(trace_);
   ASSERT_TRUE(wait_for([&] { return dro_state(dro(), "Idle") && dro().find("released") != std::string::npos; }, 10))
       << dro();
   const auto tr = read_trace(trace_);

@@ -248,6 +248,10 @@ def main_flow(args, out, d):
         fill("#tp-plunge", 500)
         fill("#tp-rpm", 12000)
         fill("#tp-step", 0.25)
+        # Rows only, from the part's top: the page sends the complete job's
+        # fields (the daemon's own tests cut the roughing and the waterlines).
+        Select(p.q("#tp-strategy")).select_by_value("raster")
+        fill("#tp-stock", "none")
         p.shot("02-form")
         p.click("#tp-generate")
 
@@ -256,7 +260,7 @@ def main_flow(args, out, d):
         p.wait("the job to be generated (ready in the queue)", lambda: d.find_elements(By.CSS_SELECTOR, ready), 240)
         job_id = d.execute_script(f"return document.querySelector('{ready}').dataset.job")
         meta = d.execute_script(f"return document.querySelector('{ready} .meta').textContent")
-        assert "ball:6" in meta and "stepover 2 mm" in meta and "along Y" in meta, meta
+        assert "ball:6" in meta and "stepover 2 mm" in meta and "along Y only" in meta and "stock none" in meta, meta
         p.wait("the preview of the job", lambda: p.q("#preview").is_displayed() and p.q("#preview").get_attribute("data-job") == job_id, 30)
         # The preview must have drawn something: count coloured (height map) pixels.
         coloured = d.execute_script("""
