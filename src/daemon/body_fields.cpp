@@ -14,7 +14,6 @@ using nlohmann::json;
 namespace {
 [[noreturn]] void bad(std::string message) { throw ApiError{400, "bad_request", std::move(message)}; }
 
-std::string num_text(double v) { return fmt::format("{:g}", v); }
 }  // namespace
 
 double number_field(const json& b, const char* key, double lo, double hi) {

@@ -17,8 +17,6 @@ namespace {
   throw ApiError{400, "bad_request", "params." + field + ": " + why};
 }
 
-std::string num_text(double v) { return fmt::format("{:g}", v); }
-
 double number(const json& j, const char* key, double dflt, double lo, double hi, bool lo_open = false) {
   if (!j.contains(key) || j.at(key).is_null()) return dflt;
   const auto& v = j.at(key);

@@ -12,7 +12,6 @@
 namespace cncstream::gcode {
 namespace {
 
-constexpr double kMmPerInch = 25.4;
 constexpr double kMaxLineNumber = 10000000;
 constexpr double kMaxToolNumber = 255;
 

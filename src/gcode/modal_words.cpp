@@ -10,8 +10,6 @@ namespace cncstream::gcode {
 
 namespace {
 
-constexpr double kMmPerInch = 25.4;
-
 const char* motion_word(MotionMode m) {
   switch (m) {
     case MotionMode::Rapid: return "G0";

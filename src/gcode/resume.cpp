@@ -74,7 +74,7 @@ std::vector<std::string> resume_preamble(const ParserState& at, const ResumeOpti
     << (m.inverse_time ? "G93" : "G94");
   emit();
   if (!m.inverse_time && at.feed_rate > 0) {
-    l << "F" << num(m.inches ? at.feed_rate / 25.4 : at.feed_rate);
+    l << "F" << num(m.inches ? at.feed_rate / kMmPerInch : at.feed_rate);
     emit();
   }
   switch (m.motion) {

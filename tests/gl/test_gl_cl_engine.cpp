@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -190,14 +191,17 @@ TEST(GlClEngine, TilesGiveTheSameGrid) {
   const Mesh m = load({"gearwheel.bin.stl", 1.0, ""});
   const Cutter c = Cutter::ball(4);
   const XYBounds b = default_bounds(m, c);
-  const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 0.5, 0.5);
+  // Coarse (the property is the tiles' seams, not the accuracy): 1 mm nodes,
+  // offsets within 0.3 mm.
+  const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 1.0, 1.0);
   gl::GlClOptions o;
-  o.tolerance = 0.1;
+  o.tolerance = 0.3;
   gl::GlClStats one, many;
   const ClGrid g1 = gl::compute_cl_grid_gl(m, c, spec, o, &one);
-  o.max_tile = 23;  // not a divisor of the grid: partial tiles at the ends
+  o.max_tile = 11;  // not a divisor of the grid: partial tiles at the ends
   const ClGrid g2 = gl::compute_cl_grid_gl(m, c, spec, o, &many);
   EXPECT_EQ(one.tiles, 1u);
+  std::cout << spec.nx << " x " << spec.ny << " nodes, " << many.tiles << " tiles\n";
   EXPECT_GT(many.tiles, 8u);
   for (std::size_t k = 0; k < g1.z.size(); ++k) {
     ASSERT_NEAR(g1.z[k], g2.z[k], kAbove) << "node " << k;
@@ -212,11 +216,11 @@ TEST(GlClEngine, TrimmingGougesBesideVerticalWalls) {
   const Mesh m = load({"gearwheel.bin.stl", 1.0, ""});
   const Cutter c = Cutter::ball(6);
   const XYBounds b = default_bounds(m, c);
-  const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 0.5, 0.5);
+  const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 1.0, 1.0);
   const ClEngine engine(m, c);
   const ClGrid exact = engine.compute(spec);
   gl::GlClOptions o;
-  o.tolerance = 0.1;
+  o.tolerance = 0.3;
   o.trim = true;
   const ClGrid g = gl::compute_cl_grid_gl(m, c, spec, o);
   std::size_t gouges = 0;
@@ -224,6 +228,7 @@ TEST(GlClEngine, TrimmingGougesBesideVerticalWalls) {
     ASSERT_LE(g.z[k], exact.z[k] + kAbove) << "node " << k;
     if (g.z[k] < exact.z[k] - 1) ++gouges;
   }
+  std::cout << gouges << " of " << g.z.size() << " nodes more than 1 mm below the exact grid\n";
   EXPECT_GT(gouges, 500u);
 }
 

@@ -247,7 +247,7 @@ def main_flow(args, out, d):
         fill("#tp-feed", 2500)
         fill("#tp-plunge", 500)
         fill("#tp-rpm", 12000)
-        fill("#tp-step", 0.25)
+        fill("#tp-step", 1)
         # Rows only, from the part's top: the page sends the complete job's
         # fields (the daemon's own tests cut the roughing and the waterlines).
         Select(p.q("#tp-strategy")).select_by_value("raster")

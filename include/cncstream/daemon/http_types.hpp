@@ -2,6 +2,7 @@
 // A request as the API handlers see it and the response they give, free of
 // Boost.Beast (which stays in http_server.cpp): the handlers, the router and
 // their tests compile without it.
+#include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -21,6 +22,9 @@ inline std::string cat(std::initializer_list<std::string_view> parts) {
   for (auto p : parts) s.append(p);
   return s;
 }
+
+// A number as an error message names it: 0.5, 50, 1e+06.
+inline std::string num_text(double v) { return fmt::format("{:g}", v); }
 
 // JSON text for a response or a WebSocket frame. Bytes that are not UTF-8 (a
 // percent-decoded path, a header, a controller's message) become U+FFFD

@@ -22,6 +22,9 @@ enum class MotionMode { Rapid, Linear, ArcCW, ArcCCW, ProbeToward, ProbeTowardNo
 enum class Plane { XY, ZX, YZ };
 enum class SpindleState { Off, CW, CCW };
 
+// G20's unit: program lengths and feeds in inches are this many mm.
+inline constexpr double kMmPerInch = 25.4;
+
 struct ModalState {
   MotionMode motion = MotionMode::Rapid;
   Plane plane = Plane::XY;
