@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
 # Installs, builds with ASan+UBSan (-Werror) and runs the whole test suite,
-# fuzzes every parser for a bounded, reproducible run, and checks src/ and
-# sim/ with clang-tidy (.clang-tidy; any finding fails).
+# then fuzzes every parser of outside input for a bounded, reproducible run.
 #
 # One build, not two: every test runs under the sanitizers (the library at
-# -O1; the test files and the daemon at -O0), the browser and install tests
-# included; the benchmarks and tools are compiled too so they cannot rot. A
-# second, optimised build ran the same tests again without the sanitizers'
-# checks, at a third of CI's 25-minute budget (docs/PERFORMANCE.md); the demo
-# command builds Release.
+# -O1; the test files, the CLI and the daemon at -O0), the browser and install
+# tests included; the benchmarks and tools are compiled too (at -O0) so they
+# cannot rot. A second, optimised build ran the same tests again without the
+# sanitizers' checks, at a third of CI's 25-minute budget (docs/PERFORMANCE.md);
+# the demo command builds Release.
+#
+# clang-tidy is not run here: its 400 CPU-s put the command over CI's budget
+# on 2 cores (docs/PERFORMANCE.md, "Back inside the budget"). Run it on the
+# build this leaves, before committing: bash tools/tidy.sh build/asan
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -22,25 +25,11 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX
   -DCNCSTREAM_WERROR=ON -DCNCSTREAM_SANITIZE=ON -DCNCSTREAM_BUILD_TOOLS=ON
 cmake --build build/asan -j"$jobs"
 
-lap "ASan+UBSan tests, with clang-tidy beside them at the lowest priority"
-# clang-tidy over src/ and sim/ (.clang-tidy; about 400 CPU-s) takes the CPU
-# time the tests leave idle while they wait on simulated machines and sockets;
-# at nice 19 the tests come first (the step still takes longer: docs/PERFORMANCE.md). Its own session, so
-# that a failing step stops it and its children too.
-setsid nice -n 19 bash tools/tidy.sh build/asan >build/asan/tidy.log 2>&1 &
-tidy_pid=$!
-trap 'kill -- -"$tidy_pid" 2>/dev/null || true' EXIT
+lap "ASan+UBSan tests"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --output-on-failure -j"$jobs" --timeout 1800
 
 lap "Fuzzing (libFuzzer, clang, ASan+UBSan): saved regressions, then a bounded run of each target"
 bash tools/fuzz.sh --ci
-
-lap "clang-tidy (tools/tidy.sh): waiting for the rest of its run"
-tidy_rc=0
-wait "$tidy_pid" || tidy_rc=$?
-trap - EXIT
-cat build/asan/tidy.log
-[[ $tidy_rc -eq 0 ]] || { echo "clang-tidy: findings above (exit $tidy_rc)"; exit 1; }
 
 lap "all passed"
