@@ -348,7 +348,8 @@ function outcomeText(j) {
 function jobTitle(j) { return `${j.file_name || 'job'} #${j.id}`; }
 function toolText(p) {
   if (!p || !p.tool) return 'G-code as uploaded';
-  return `${p.rough ? `${p.rough} roughing, then ` : ''}${p.tool}, stepover ${p.stepover} mm, rows along ${(p.direction || 'x').toUpperCase()}` +
+  const spacing = p.scallop ? `scallop ${p.scallop} mm` : `stepover ${p.stepover} mm`;  // a scallop height sets the spacing
+  return `${p.rough ? `${p.rough} roughing, then ` : ''}${p.tool}, ${spacing}, rows along ${(p.direction || 'x').toUpperCase()}` +
     `${p.strategy === 'raster' ? ' only' : ''}${p.stock && p.stock !== 'auto' ? `, stock ${p.stock}` : ''}`;
 }
 function duration(s) {
@@ -604,7 +605,7 @@ async function generate() {
       safe_z: numberOf('#tp-safez', { optional: true }), step: numberOf('#tp-step', { optional: true }) ?? 0,
       strategy: $('#tp-strategy').value,
     };
-    // Left empty, the daemon's defaults: scallop from the stepover, stock
+    // Left empty, the daemon's defaults: rows at the stepover given, stock
     // `auto`, roughing with the finishing cutter when the finish alone would cut too deep.
     const scallop = numberOf('#tp-scallop', { optional: true });
     if (scallop != null) body.params.scallop = scallop;
