@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 
@@ -57,6 +58,32 @@ AxisSamples axis_samples(double length, double max_step, double lat) {
   for (std::size_t k = 0; k <= n; ++k) a.s.push_back(double(k) * a.d);
   a.uniform = a.s.size();
   if (length - a.s.back() > 0.5 * lat) a.s.push_back(length);
+  return a;
+}
+
+// Rows spaced by the ground between them: from each row the farthest next
+// one the gap allows (a lattice multiple, at least one lattice step), the
+// last at `length`. Spacings are rounded down to a quantum (a lattice
+// multiple) so that runs of rows share one spacing, and so one CL grid.
+AxisSamples gap_samples(double length, double widest, double lat, double v0,
+                        const std::function<double(double, double)>& gap) {
+  AxisSamples a;
+  a.s = {0.0};
+  const double unit = lat > 0 ? lat : 1e-6;
+  const double quantum = std::max(unit, std::floor(widest / 32 / unit) * unit);
+  while (a.s.back() < length - 0.5 * unit) {
+    const double from = a.s.back();
+    double d = std::min(widest, length - from);
+    // The gap only grows as the band narrows: a few rounds settle it.
+    for (int round = 0; round < 8; ++round) {
+      const double allowed = std::min(widest, gap(v0 + from, v0 + from + d));
+      if (d <= allowed) break;
+      d = allowed;
+    }
+    if (from + d < length - 0.5 * unit) d = std::max(unit, std::floor(d / quantum + 1e-9) * quantum);
+    a.s.push_back(std::min(length, from + d));
+  }
+  a.uniform = 0;  // bands are found by the caller
   return a;
 }
 
@@ -193,15 +220,16 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   const AxisSamples us_axis =
       lat > 0 ? axis_samples(u1 - u0, step / o.check_subdivisions, lat)
               : axis_samples(u1 - u0, (u1 - u0) / double(intervals(u1 - u0, step) * std::size_t(o.check_subdivisions)), 0);
-  const AxisSamples vs_axis = axis_samples(v1 - v0, o.stepover, lat);
+  if (o.row_gap && o.keep_grid) throw std::invalid_argument("keep_grid needs evenly spaced rows (no row_gap)");
+  const AxisSamples vs_axis =
+      o.row_gap ? gap_samples(v1 - v0, o.stepover, lat, v0, o.row_gap) : axis_samples(v1 - v0, o.stepover, lat);
   const std::size_t nu = us_axis.s.size(), nrows = vs_axis.s.size();
-  const double du = us_axis.d, dv = vs_axis.d;
+  const double du = us_axis.d;
 
-  // Progress: the CL grid is the first half of the work, the rows the second.
-  const Checkpoint grid_checkpoint =
-      checkpoint ? Checkpoint([&](double f) { checkpoint(0.5 * f); }) : Checkpoint();
-  // Uniform columns and rows come from one CL grid; a shorter last row is a
-  // second one-row grid, and a shorter last column point queries.
+  // Progress: the CL grids are the first half of the work, the rows the second.
+  // Uniform columns come from CL grids, a shorter last column from point
+  // queries. Runs of rows with one spacing share a grid (even rows: one,
+  // and a one-row grid for a shorter last row).
   auto grid_for = [&](double v_first, std::size_t rows, double v_step, const Checkpoint& cp) {
     GridSpec spec;
     spec.nx = along_x ? us_axis.uniform : rows;
@@ -212,13 +240,57 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
     spec.dy = along_x ? (v_step > 0 ? v_step : 1) : (du > 0 ? du : 1);
     return engine.compute(spec, cp);
   };
-  ClGrid grid = grid_for(v0, vs_axis.uniform, dv, grid_checkpoint);
-  std::optional<ClGrid> last_row;
-  if (nrows > vs_axis.uniform) last_row = grid_for(v0 + vs_axis.s.back(), 1, 1, {});
+  struct Band {
+    std::size_t first = 0, count = 0;
+    ClGrid grid;
+  };
+  std::vector<Band> bands;
+  std::vector<std::size_t> band_of(nrows);
+  for (std::size_t r = 0; r < nrows;) {
+    std::size_t e = r;  // last row of the band
+    if (!o.row_gap) {
+      e = r < vs_axis.uniform ? vs_axis.uniform - 1 : r;
+    } else if (r + 1 < nrows) {
+      const double d = vs_axis.s[r + 1] - vs_axis.s[r];
+      e = r + 1;
+      while (e + 1 < nrows && std::fabs(vs_axis.s[e + 1] - vs_axis.s[e] - d) < 1e-9) ++e;
+    }
+    for (std::size_t k = r; k <= e; ++k) band_of[k] = bands.size();
+    bands.push_back({r, e - r + 1, {}});
+    r = e + 1;
+  }
+  std::size_t rows_gridded = 0;
+  for (Band& b : bands) {
+    const double d = !o.row_gap && b.count > 1 ? vs_axis.d
+                     : b.count > 1 ? (vs_axis.s[b.first + b.count - 1] - vs_axis.s[b.first]) / double(b.count - 1)
+                                   : 1;
+    Checkpoint cp;
+    if (checkpoint)
+      cp = [&, before = rows_gridded, n = b.count](double f) {
+        checkpoint(0.5 * (double(before) + f * double(n)) / double(nrows));
+      };
+    b.grid = grid_for(v0 + vs_axis.s[b.first], b.count, d, cp);
+    rows_gridded += b.count;
+  }
+  // A row's across coordinate is its grid's (the same value for even rows).
+  std::vector<double> row_v(nrows);
+  for (std::size_t r = 0; r < nrows; ++r) {
+    const Band& b = bands[band_of[r]];
+    row_v[r] = along_x ? b.grid.spec.y(r - b.first) : b.grid.spec.x(r - b.first);
+  }
 
   RasterPath path;
   path.bounds = along_x ? XYBounds{u0, v0, u1, v1} : XYBounds{v0, u0, v1, u1};
-  path.stepover = dv;
+  path.stepover = 0;
+  path.stepover_min = HUGE_VAL;
+  for (std::size_t r = 0; r + 1 < nrows; ++r) {
+    const double d = vs_axis.s[r + 1] - vs_axis.s[r];
+    path.stepover = std::max(path.stepover, d);
+    // The last interval may be shorter (the bounds' end).
+    if (r + 2 < nrows || nrows == 2) path.stepover_min = std::min(path.stepover_min, d);
+  }
+  if (!o.row_gap) path.stepover = vs_axis.d;
+  if (!o.row_gap || !std::isfinite(path.stepover_min)) path.stepover_min = path.stepover;
   path.step = du * o.check_subdivisions;
   path.samples = nu * nrows;
 
@@ -232,13 +304,13 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   std::vector<std::size_t> row_queries(nrows, 0);
   // Rows are independent: refine and merge them in parallel.
   auto do_row = [&](std::size_t r) {
-    const double v = v0 + vs_axis.s[r];
+    const double v = row_v[r];
     const bool forward = r % 2 == 0;
+    const Band& band = bands[band_of[r]];
     auto cl = [&](std::size_t k) {
       if (k >= us_axis.uniform) return query(u0 + us_axis.s[k], v);
-      const ClGrid& g = r < vs_axis.uniform ? grid : *last_row;
-      const std::size_t gr = r < vs_axis.uniform ? r : 0;
-      return along_x ? g.at(k, gr) : g.at(gr, k);
+      const std::size_t gr = r - band.first;
+      return along_x ? band.grid.at(k, gr) : band.grid.at(gr, k);
     };
     // s: distance travelled along the row, a lattice multiple like u - u0 and u1 - u.
     std::vector<double> ss(nu), zs(nu);
@@ -274,9 +346,9 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   for (std::size_t r = 0; r + 1 < nrows; ++r) {
     const Vec3 a = path.rows[r].back();
     const double u = along_x ? a.x : a.y;
-    const double va = v0 + vs_axis.s[r];
+    const double va = row_v[r];
     auto at = [&](double s) { return query(u, va + s); };
-    const std::vector<double> s = axis_samples(vs_axis.s[r + 1] - vs_axis.s[r], dl, lat).s;
+    const std::vector<double> s = axis_samples(row_v[r + 1] - va, dl, lat).s;
     std::vector<double> z(s.size());
     for (std::size_t k = 0; k < s.size(); ++k) z[k] = at(s[k]);
     path.samples += s.size();
@@ -284,7 +356,7 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
         s, z, refiner, o.tolerance, at, [&](double sv, double zz) { return point(u, va + sv, zz); },
         path.refinement_queries));
   }
-  if (o.keep_grid) path.grid = std::move(grid);
+  if (o.keep_grid) path.grid = std::move(bands.front().grid);
   return path;
 }
 

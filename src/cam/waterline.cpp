@@ -231,6 +231,35 @@ std::vector<Run> steep_runs(const LevelContour& c, const SlopeMap& slope, double
   return out;
 }
 
+// How far above a flat area its level runs: clear of the flat's own CL
+// (which the level's contour must not trace) by more than its flatness.
+constexpr double kAboveFlat = 2e-3;
+
+// The heights of the CL's flat areas: runs of level nodes (slope under half
+// a degree) whose heights lie within a micron-scale band, covering at
+// least min_area; each the band's highest height.
+std::vector<double> flat_heights(const ClGrid& grid, const SlopeMap& slope, double min_area) {
+  const double level = 0.5 * std::numbers::pi / 180, band = 1e-3;
+  std::vector<double> z;
+  for (std::size_t j = 0; j < grid.spec.ny; ++j)
+    for (std::size_t i = 0; i < grid.spec.nx; ++i)
+      if (slope.at(i, j) < level && !grid.on_floor[j * grid.spec.nx + i]) z.push_back(grid.at(i, j));
+  std::sort(z.begin(), z.end());
+  const auto need = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(min_area / (grid.spec.dx * grid.spec.dy))));
+  std::vector<double> out;
+  for (std::size_t i = 0; i < z.size();) {
+    std::size_t j = i;
+    while (j + 1 < z.size() && z[j + 1] - z[i] <= band) ++j;
+    if (j - i + 1 >= need) {
+      out.push_back(z[j]);
+      i = j + 1;
+    } else {
+      ++i;
+    }
+  }
+  return out;
+}
+
 struct LevelPieces {
   std::vector<Run> runs;
   std::size_t contours = 0;
@@ -254,6 +283,18 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
   const double bottom = std::max(o.bottom, lo + 1e-3);
   const double top = std::min(o.top, hi);
   for (std::size_t k = 0; bottom + double(k) * o.z_step < top; ++k) out.levels.push_back(bottom + double(k) * o.z_step);
+  if (o.flat_levels) {
+    const double r = engine.cutter().radius;
+    const double min_area = o.flat_min_area > 0 ? o.flat_min_area : std::numbers::pi * r * r / 4;
+    for (const double f : flat_heights(grid, slope, min_area)) {
+      const double z = f + kAboveFlat;
+      if (z < bottom || z >= top) continue;
+      const bool near = std::any_of(out.levels.begin(), out.levels.end(),
+                                    [&](double l) { return l >= f && l <= z + kAboveFlat; });
+      if (!near) out.levels.push_back(z);
+    }
+    std::sort(out.levels.begin(), out.levels.end());
+  }
   std::reverse(out.levels.begin(), out.levels.end());
   if (out.levels.empty()) return out;
 

@@ -42,6 +42,11 @@ FinishSpacing finish_spacing(const ToolpathParams& p) {
   const bool split = p.strategy == FinishStrategy::SteepShallow;
   const double row_angle = split ? std::min(89.0, p.steep_angle + kOverlapDeg) : p.steep_angle;
   s.stepover = std::cos(radians(row_angle)) * spacing;
+  s.row_widest = spacing;
+  // Spaced row by row, the rows answer for the ground up to the steep
+  // angle only: every node steeper than it has a waterline beside it
+  // (measured by ScallopBound: the overlap would cost 7 % more lines).
+  s.row_angle = radians(p.steep_angle);
   s.z_step = std::sin(radians(std::max(1.0, p.steep_angle - kOverlapDeg))) * spacing;
   // Along the rows the samples must follow the surface: the raster's
   // default, a quarter of the stepover, at most 0.1 mm.
@@ -49,15 +54,19 @@ FinishSpacing finish_spacing(const ToolpathParams& p) {
   return s;
 }
 
-void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine& engine, const XYBounds& region,
-                    const XYLattice& lattice, const FinishSpacing& spacing, const Checkpoint& checkpoint) {
+ClGrid ground_grid(const ClEngine& engine, const XYBounds& region, const FinishSpacing& spacing,
+                   const Checkpoint& checkpoint) {
   const GridSpec spec = GridSpec::covering(region.x0, region.y0, region.x1, region.y1, spacing.grid_step,
                                            spacing.grid_step);
+  return engine.compute(spec, checkpoint);
+}
+
+void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine& engine, const ClGrid& grid,
+                    const XYLattice& lattice, const FinishSpacing& spacing, const Checkpoint& checkpoint) {
   auto part = [&checkpoint](double from, double to) -> Checkpoint {
     if (!checkpoint) return {};
     return [&checkpoint, from, to](double f) { checkpoint(from + (to - from) * f); };
   };
-  const ClGrid grid = engine.compute(spec, part(0, 0.4));
   const SlopeMap slope(grid);
   WaterlineOptions wo;
   wo.z_step = spacing.z_step;
@@ -67,7 +76,7 @@ void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine&
   // Half the tolerance merges straight stretches; arcs take the curves.
   wo.simplify_tolerance = p.tolerance / 2;
   wo.sample_step = std::min(0.05, spacing.grid_step / 2);
-  const WaterlinePath w = build_waterline(engine, grid, slope, wo, part(0.4, 0.95));
+  const WaterlinePath w = build_waterline(engine, grid, slope, wo, part(0, 0.95));
   const SteepSkip shallow = skip_steep(raster_as_one_cut(r.path), slope, radians(p.steep_angle));
   r.finish_pieces = w.pieces;
   r.finish_pieces.insert(r.finish_pieces.end(), shallow.pieces.begin(), shallow.pieces.end());

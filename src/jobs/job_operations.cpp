@@ -275,8 +275,8 @@ OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParam
   OperationSummary o;
   o.name = "finishing";
   o.cutter = r.cutter;
-  o.detail = fmt::format("raster, {} rows {} mm apart along {}", r.path.rows.size(),
-                         format_gcode_number(r.path.stepover, 4), p.direction == RasterDirection::Y ? "Y" : "X");
+  o.detail = fmt::format("raster, {} rows {} mm apart along {}", r.path.rows.size(), row_spacing_text(r.path),
+                         p.direction == RasterDirection::Y ? "Y" : "X");
   if (r.waterline_pieces > 0)
     o.detail = fmt::format("waterlines where steeper than {} degrees ({} levels {} mm apart, {} pieces), then {} with "
                            "{} steep stretches left to them",

@@ -3,8 +3,11 @@
 #include "cncstream/jobs/size_limits.hpp"
 
 #include <chrono>
+#include <memory>
+#include <optional>
 
 #include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/row_spacing.hpp"
 #include "cncstream/cam/thread_limit.hpp"
 #include "cncstream/gcode/gcode_writer.hpp"
 #include "cncstream/jobs/output_file.hpp"
@@ -24,6 +27,11 @@ namespace {
 constexpr double kPathFrom = 0.05, kRoughFrom = 0.5, kGcodeFrom = 0.85, kWriteFrom = 0.97;
 
 }  // namespace
+
+std::string row_spacing_text(const RasterPath& path) {
+  if (path.stepover - path.stepover_min < 1e-9) return format_gcode_number(path.stepover, 4);
+  return format_gcode_number(path.stepover_min, 4) + " to " + format_gcode_number(path.stepover, 4);
+}
 
 double default_max_depth(const Cutter& c) { return c.type == CutterType::Flat ? c.diameter() / 4 : c.radius; }
 
@@ -47,28 +55,41 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     const Box3 box = mesh->bounds();
     const WorkSetup work = work_setup(box, p.origin, p.z_zero);
     const FinishSpacing spacing = finish_spacing(p);
+    const bool along_x = p.direction != RasterDirection::Y;
     RasterOptions ro;
     ro.stepover = spacing.stepover;
     ro.step = spacing.step;
     ro.direction = p.direction;
     ro.tolerance = p.tolerance;
     ro.lattice = work.lattice;
-    ro.keep_grid = true;  // for the preview, then let go
     const XYBounds region = p.bounds.value_or(default_bounds(*mesh, r.cutter));
     {
       // Rows across, points along (the raster's default step), before any is made.
       const double step = spacing.step > 0 ? spacing.step : std::min(spacing.stepover / 4, 0.1);
-      const bool along_x = p.direction != RasterDirection::Y;
       const double w = region.x1 - region.x0, h = region.y1 - region.y0;
       check_grid_memory((along_x ? w : h) / step + 1, (along_x ? h : w) / spacing.stepover + 1, 48, step,
                         "the tool path");
     }
     const bool steep_shallow = p.strategy == FinishStrategy::SteepShallow;
-    r.path = build_raster(engine, region, ro, steep_shallow ? run.nested_checkpoint(0, 0.6) : run.checkpoint());
-    r.preview = height_preview_from_grid(r.path.grid, r.path.bounds, work.offset);
+    const bool by_slope = spacing.row_widest > 0;
+    // The slope of the ground, for the waterlines and the rows' spacing.
+    std::optional<ClGrid> ground;
+    if (steep_shallow || by_slope) ground = ground_grid(engine, region, spacing, run.nested_checkpoint(0, 0.15));
+    if (by_slope) {
+      auto rows = std::make_shared<const RowSpacing>(*ground, along_x, spacing.row_widest, spacing.row_angle);
+      ro.stepover = spacing.row_widest;
+      ro.row_gap = [rows](double va, double vb) { return rows->gap(va, vb); };
+      // Along the rows, as for even rows at the narrowest spacing.
+      if (!(ro.step > 0)) ro.step = std::min(spacing.stepover / 4, 0.1);
+    } else {
+      ro.keep_grid = true;  // for the preview, then let go
+    }
+    const double rows_to = steep_shallow ? 0.65 : 1.0;
+    r.path = build_raster(engine, region, ro, run.nested_checkpoint(ground ? 0.15 : 0, rows_to));
+    r.preview = height_preview_from_grid(by_slope ? *ground : r.path.grid, r.path.bounds, work.offset);
     r.path.grid = ClGrid{};
     if (steep_shallow) {
-      add_waterlines(r, p, engine, region, work.lattice, spacing, run.nested_checkpoint(0.6, 1.0));
+      add_waterlines(r, p, engine, *ground, work.lattice, spacing, run.nested_checkpoint(rows_to, 1.0));
     } else {
       r.finish_pieces = raster_as_one_cut(r.path);
     }
@@ -107,7 +128,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
         steep_shallow ? "cncstream steep-and-shallow finishing" : "cncstream raster finishing",
         "part: " + p.part.stl + " (" + std::to_string(r.facets) + " facets)",
         "tool: " + r.cutter.description() + " [" + r.cutter.spec() + "]",
-        "stepover " + format_gcode_number(r.path.stepover, 4) + " mm along " +
+        "stepover " + row_spacing_text(r.path) + " mm along " +
             (p.direction == RasterDirection::Y ? "Y" : "X") + ", step " + format_gcode_number(r.path.step, 4) +
             " mm, tolerance " + format_gcode_number(p.tolerance, 4) + " mm" +
             (p.arcs ? std::string(", arcs for a controller arc tolerance of ")

@@ -24,6 +24,7 @@
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "move_depth.hpp"
 #include "sim_test_util.hpp"
+#include "support/rs274.hpp"
 
 using namespace cncstream;
 
@@ -151,6 +152,24 @@ TEST(CompleteJob, PlaqueRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
       << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
       << dev.stats.largest_gouge.y;
+
+  // LinuxCNC's interpreter takes the whole program (the tool change's M0,
+  // the roughing's G17 arcs, the rows' G18 arcs) and makes the same moves of
+  // it as ours. (setup.sh installs it; skipped where it is missing.)
+  if (test::rs274_available()) {
+    const auto r = test::run_rs274(prog.gcode);
+    EXPECT_EQ(r.status, 0) << r.output.substr(0, 2000);
+    std::string error;
+    const auto ours = test::our_moves(prog.gcode, error);
+    EXPECT_EQ(error, "");
+    ASSERT_EQ(ours.size(), r.moves.size());
+    for (std::size_t k = 0; k < ours.size(); ++k) {
+      ASSERT_LT(norm(ours[k].to - r.moves[k].to), 1e-4) << k;
+      ASSERT_EQ(ours[k].turn, r.moves[k].turn) << k;
+    }
+  } else {
+    std::cout << "rs274 (linuxcnc-uspace) is not installed: the program was not checked with it\n";
+  }
 }
 
 // A roughing interrupted half way, its result written as the simulator

@@ -3,6 +3,7 @@
 // along each row, every straight link checked against the exact CL surface,
 // collinear points merged within a one-sided tolerance.
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -39,7 +40,14 @@ struct RasterOptions {
   // one they are spaced by lattice multiples (the last interval may be
   // shorter) inside the bounds snapped inward to the lattice.
   std::optional<XYLattice> lattice;
-  bool keep_grid = false;  // keep the CL grid of the rows in RasterPath::grid (for analyses)
+  // Set: rows spaced by the ground between them (row_spacing.hpp):
+  // row_gap(va, vb) is the widest two rows at va < vb (across the rows) may
+  // be apart; `stepover` bounds it too. Each next row is the farthest the
+  // gap allows, on the lattice; rows with equal spacing share a CL grid.
+  std::function<double(double, double)> row_gap;
+  // Keep the CL grid of the rows in RasterPath::grid (for analyses); evenly
+  // spaced rows only (not with row_gap).
+  bool keep_grid = false;
 };
 
 // One pass of the path: a polyline of tool-tip points, cut in order.
@@ -50,6 +58,7 @@ struct RasterPath {
   std::vector<Polyline> links;  // links[k] joins rows[k] to rows[k+1] (checked against the CL)
   XYBounds bounds;
   double stepover = 0;          // actual distances used (the last row or sample may be closer)
+  double stepover_min = 0;      // the narrowest between rows (= stepover for even rows; the last may be closer)
   double step = 0;
   std::size_t samples = 0;      // CL points computed (including check points)
   std::size_t points_before_merge = 0;

@@ -37,6 +37,12 @@ struct WaterlineOptions {
   // where the CL lets it be at the level), so printing moves none of them
   // (beside a CL cliff a rounded half micron is a deep vertical error).
   std::optional<XYLattice> lattice;
+  // A level just above each flat area of the CL (a terrace at least
+  // flat_min_area large, the cutter's disc area / 4 by default): the
+  // waterline there runs at the foot of the walls rising from it, into the
+  // corner the rows beside a wall and the levels a step apart cannot reach.
+  bool flat_levels = true;
+  double flat_min_area = 0;
   double top = HUGE_VAL;          // highest level (tip height); default: the grid's highest CL
   double bottom = -HUGE_VAL;      // lowest level; default: the grid's lowest CL
 };

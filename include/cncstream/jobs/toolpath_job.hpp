@@ -120,6 +120,10 @@ struct ToolpathProgram {
   double seconds_load = 0, seconds_path = 0, seconds_rough = 0, seconds_gcode = 0;
 };
 
+// The rows' spacing in words: "0.4" for even rows, "0.457 to 0.797" for
+// rows spaced by the slope across them.
+std::string row_spacing_text(const RasterPath& path);
+
 // Stages: "load", "tool path", "G-code", "write" (with an output), "done".
 // Throws Cancelled on a stop request.
 ToolpathProgram generate_toolpath(const ToolpathParams& params, const JobControl& control = {});

@@ -137,7 +137,7 @@ std::string toolpath_report(const jobs::ToolpathProgram& r) {
   std::ostringstream o;
   const auto& b = stats.work_bounds;
   o << "tool: " << cutter.description() << " [" << cutter.spec() << "]\n";
-  o << "rows: " << path.rows.size() << " at " << format_gcode_number(path.stepover, 4) << " mm, samples along rows every "
+  o << "rows: " << path.rows.size() << " at " << jobs::row_spacing_text(path) << " mm, samples along rows every "
     << format_gcode_number(path.step, 4) << " mm (" << path.samples << " CL points incl. checks)\n";
   o << "points: " << path.points_before_merge << " sampled, " << path.points_after_merge
     << " after merging collinear points (";
