@@ -11,12 +11,17 @@
 #include <stdexcept>
 
 #include "cncstream/cam/level_contours.hpp"
+#include "cncstream/cam/polyline_simplify.hpp"
 
 namespace cncstream {
 
 namespace {
 
 double xy_dist(const Vec3& a, const Vec3& b) { return std::hypot(a.x - b.x, a.y - b.y); }
+
+// The largest rise of the CL above a level run's chord that is moved out of
+// sideways rather than lifted over (append_lifted).
+constexpr double kSmallSag = 2e-3;
 
 // (x, y) on the lattice: the nearest lattice point where the CL allows the
 // point's height, else the nearest one lifted onto the CL there.
@@ -28,8 +33,11 @@ Vec3 on_lattice(const ClEngine& engine, const std::optional<XYLattice>& lat, Vec
     double x, y, d;
   };
   std::vector<Cand> cands;
-  for (int di = -1; di <= 1; ++di)
-    for (int dj = -1; dj <= 1; ++dj) {
+  // Two lattice steps around: a contour point is on the CL within a micron,
+  // and where the CL rises gently a step beside it may not yet be below the
+  // level; lifting it by that fraction of a micron would break the level.
+  for (int di = -2; di <= 2; ++di)
+    for (int dj = -2; dj <= 2; ++dj) {
       const double x = lat->x0 + (i0 + di) * s, y = lat->y0 + (j0 + dj) * s;
       cands.push_back({x, y, std::hypot(x - p.x, y - p.y)});
     }
@@ -43,28 +51,80 @@ Vec3 on_lattice(const ClEngine& engine, const std::optional<XYLattice>& lat, Vec
   return {cands.front().x, cands.front().y, std::max(p.z, engine.height_at(cands.front().x, cands.front().y))};
 }
 
+// How far (x, y) must move along (nx, ny), from `from` on, for the CL there
+// to be at or below the level (out by doublings, back in by halves); inf
+// past `limit`.
+double free_offset(const ClEngine& engine, double x, double y, double nx, double ny, double level, double from,
+                   double limit, std::size_t& queries) {
+  double lo = from, hi = std::max(from, 1e-4);
+  while (engine.height_at(x + hi * nx, y + hi * ny) > level) {
+    ++queries;
+    lo = hi;
+    hi *= 2;
+    if (hi > limit) return HUGE_VAL;
+  }
+  for (int it = 0; it < 12; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    ++queries;
+    (engine.height_at(x + mid * nx, y + mid * ny) > level ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 // The chord a -> b (a at the level) sampled every `step` with the exact CL;
 // samples the CL rises above are lifted onto it (on the lattice). Appends
-// the points after a. The last resort of keep_level below.
+// the points after a. The last resort of keep_level below. The lifted
+// samples (a CL cliff's face, every step/5) are then thinned along the
+// chord as a raster's row is (within `tolerance` above them, never below):
+// a move between two kept points passes over the dropped ones, and over the
+// samples left at the level, which lie under the level.
 void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, const Vec3& a, const Vec3& b,
-                   double level, double step, Polyline& out, std::size_t& queries) {
+                   double level, double step, double tolerance, Polyline& out, std::size_t& queries) {
   const double len = xy_dist(a, b);
   const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / step)));
+  Polyline chord{a};
   for (std::size_t k = 1; k < n; ++k) {
     const double t = double(k) / double(n);
     Vec3 p{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, level};
     const double cl = engine.height_at(p.x, p.y);
     ++queries;
     if (cl > p.z) {
+      // A sag of a micron or so (the chord's ends are on the contour within
+      // that): the sample moves sideways out of it at the level, so the run
+      // stays level for the merge and the arcs.
+      if (cl - level < kSmallSag && len > 0) {
+        const double nx = -(b.y - a.y) / len, ny = (b.x - a.x) / len;  // left: the free side
+        const double d = free_offset(engine, p.x, p.y, nx, ny, level, 0, step, queries);
+        if (std::isfinite(d)) {
+          const Vec3 q = on_lattice(engine, lat, {p.x + d * nx, p.y + d * ny, level}, queries);
+          if (q.z == level) {
+            chord.push_back(q);
+            continue;
+          }
+        }
+      }
       p.z = cl;
       p = on_lattice(engine, lat, p, queries);
       // On the lattice the CL may be higher still: the point sits on it.
       ++queries;
       p.z = std::max(p.z, engine.height_at(p.x, p.y));
-      out.push_back(p);
+      chord.push_back(p);
     }
   }
-  out.push_back(b);
+  chord.push_back(b);
+  std::vector<double> us(chord.size()), zs(chord.size());
+  bool increasing = true;
+  for (std::size_t k = 0; k < chord.size(); ++k) {
+    us[k] = xy_dist(a, chord[k]);
+    zs[k] = chord[k].z;
+    increasing = increasing && (k == 0 || us[k] > us[k - 1]);
+  }
+  if (chord.size() > 3 && increasing && tolerance > 0) {
+    const std::vector<std::size_t> kept = simplify_profile_above(us, zs, tolerance);
+    for (std::size_t k = 1; k < kept.size(); ++k) out.push_back(chord[kept[k]]);
+  } else {
+    out.insert(out.end(), chord.begin() + 1, chord.end());
+  }
 }
 
 // How far the chord a -> b must move to its left (the free side) for the CL
@@ -81,20 +141,9 @@ double push_needed(const ClEngine& engine, const Vec3& a, const Vec3& b, double 
     const double x = a.x + (b.x - a.x) * t, y = a.y + (b.y - a.y) * t;
     ++queries;
     if (engine.height_at(x + need * nx, y + need * ny) <= level) continue;
-    // Out to where the CL is at or below the level, then back in by halves.
-    double lo = need, hi = std::max(need, 1e-4);
-    while (engine.height_at(x + hi * nx, y + hi * ny) > level) {
-      ++queries;
-      lo = hi;
-      hi *= 2;
-      if (hi > step * 4) return HUGE_VAL;  // not a chord's sag: leave it to the lift
-    }
-    for (int it = 0; it < 12; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      ++queries;
-      (engine.height_at(x + mid * nx, y + mid * ny) > level ? lo : hi) = mid;
-    }
-    need = hi;
+    // Past four steps it is not a chord's sag: left to the lift.
+    need = free_offset(engine, x, y, nx, ny, level, need, step * 4, queries);
+    if (!std::isfinite(need)) return HUGE_VAL;
   }
   return need;
 }
@@ -105,19 +154,22 @@ double push_needed(const ClEngine& engine, const Vec3& a, const Vec3& b, double 
 // (microns), which keeps the run level (an arc fits it) and leaves at most
 // that much. What a few rounds of that cannot clear is lifted instead.
 Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat, Polyline pts, bool closed,
-                    double level, double step, std::size_t& queries) {
+                    double level, double step, double tolerance, std::size_t& queries) {
   const std::size_t n = pts.size();
   if (n < 2) return pts;
   const std::size_t chords = closed ? n : n - 1;
   for (int round = 0; round < 4; ++round) {
     std::vector<double> need(chords, 0);
-    bool any = false, hopeless = false;
+    bool any = false;
     for (std::size_t c = 0; c < chords; ++c) {
       need[c] = push_needed(engine, pts[c], pts[(c + 1) % n], level, step, queries);
+      // A chord no push clears (a cliff of the CL) is left to the lift
+      // below; the others still move (one cliff in a loop must not leave
+      // every chord's micron sag to be lifted, which breaks the level).
+      if (!std::isfinite(need[c])) need[c] = 0;
       any = any || need[c] > 0;
-      hopeless = hopeless || !std::isfinite(need[c]);
     }
-    if (!any || hopeless) break;
+    if (!any) break;
     // Each point moves along the bisector of its chords' left normals, far
     // enough for both.
     Polyline moved = pts;
@@ -151,7 +203,7 @@ Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat,
   for (Vec3& p : pts) p = on_lattice(engine, lat, p, queries);
   Polyline out{pts.front()};
   for (std::size_t c = 0; c < chords; ++c)
-    append_lifted(engine, lat, pts[c], pts[(c + 1) % n], level, step / 5, out, queries);
+    append_lifted(engine, lat, pts[c], pts[(c + 1) % n], level, step / 5, tolerance, out, queries);
   return out;
 }
 
@@ -317,7 +369,8 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
         // Every chord checked against the exact CL (closed loops: the closing
         // chord too; the loop then repeats its first point at its end).
         r.points = simplify_level_run(
-            keep_level(engine, o.lattice, std::move(r.points), r.closed, z, o.sample_step, lp.queries),
+            keep_level(engine, o.lattice, std::move(r.points), r.closed, z, o.sample_step, o.simplify_tolerance,
+                       lp.queries),
             o.simplify_tolerance);
         lp.runs.push_back(std::move(r));
       }
