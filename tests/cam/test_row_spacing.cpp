@@ -1,0 +1,229 @@
+// Finishing by scallop height, piece by piece: rows spaced by the slope
+// across them (RowSpacing, build_raster's row_gap), steep stretches judged
+// along the moves (skip_steep), and the waterline's level at the foot of the
+// walls over a flat area.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/raster.hpp"
+#include "cncstream/cam/row_spacing.hpp"
+#include "cncstream/cam/slope_map.hpp"
+#include "cncstream/cam/steep_shallow.hpp"
+#include "cncstream/cam/waterline.hpp"
+#include "cncstream/geometry/mesh.hpp"
+
+using namespace cncstream;
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180;
+
+// A height field z(y) (the same for every x) as a CL grid.
+ClGrid profile_grid(double (*z)(double), double step) {
+  ClGrid g;
+  g.spec = GridSpec::covering(0, 0, 10, 30, step, step);
+  g.z.resize(g.spec.size());
+  g.on_floor.assign(g.spec.size(), 0);
+  for (std::size_t j = 0; j < g.spec.ny; ++j)
+    for (std::size_t i = 0; i < g.spec.nx; ++i) g.at(i, j) = z(g.spec.y(j));
+  return g;
+}
+
+// Level up to y = 10, a 30 degree ramp up to y = 15, level again, a
+// 70 degree wall from y = 22 to 23, level beyond.
+double ramp_and_wall(double y) {
+  const double t30 = std::tan(30 * kDeg), t70 = std::tan(70 * kDeg);
+  const double ramp = std::clamp(y - 10, 0.0, 5.0) * t30;
+  const double wall = std::clamp(y - 22, 0.0, 1.0) * t70;
+  return ramp + wall;
+}
+
+// An open surface of two triangles a side: the plane z = 0 for y < 10, a
+// ramp of `deg` up to y = 15, level beyond, over x in [0, 30].
+Mesh ramp_mesh(double deg) {
+  Mesh m;
+  const double h = 5 * std::tan(deg * kDeg);
+  const double ys[] = {-5, 10, 15, 35}, zs[] = {0, 0, h, h};
+  for (int k = 0; k < 4; ++k) {
+    m.vertices.push_back({-5, ys[k], zs[k]});
+    m.vertices.push_back({35, ys[k], zs[k]});
+  }
+  for (std::uint32_t k = 0; k < 3; ++k) {
+    const std::uint32_t a = 2 * k;
+    m.triangles.push_back({a, a + 1, a + 3});
+    m.triangles.push_back({a, a + 3, a + 2});
+  }
+  return m;
+}
+
+}  // namespace
+
+TEST(RowSpacing, GapFollowsTheSlopeAcrossTheRowsUpToTheSteepAngle) {
+  const ClGrid g = profile_grid(&ramp_and_wall, 0.25);
+  const double widest = 0.8, steep = 45 * kDeg;
+  const RowSpacing rows(g, true, widest, steep);
+  // Level ground, a grid line beyond either row included.
+  EXPECT_DOUBLE_EQ(rows.gap(2, 2.8), widest);
+  EXPECT_DOUBLE_EQ(rows.gap(17, 17.8), widest);
+  // On the ramp: cos 30 degrees.
+  EXPECT_NEAR(rows.gap(12, 12.7), std::cos(30 * kDeg) * widest, 1e-9);
+  // A band reaching the ramp from the level ground takes the ramp's.
+  EXPECT_NEAR(rows.gap(9, 9.8), std::cos(30 * kDeg) * widest, 1e-9);
+  // The 70 degree wall is the waterlines' ground: it does not count (nor
+  // do the nodes at its kinks, which the central differences make 54
+  // degrees steep).
+  EXPECT_DOUBLE_EQ(rows.gap(22, 22.8), widest);
+  // Slopes along the rows do not count: rows along Y see level ground.
+  const RowSpacing along_y(g, false, widest, steep);
+  EXPECT_DOUBLE_EQ(along_y.gap(3, 3.8), widest);
+  EXPECT_THROW(RowSpacing(g, true, 0, steep), std::invalid_argument);
+  EXPECT_THROW(RowSpacing(g, true, widest, 90 * kDeg), std::invalid_argument);
+}
+
+TEST(RowSpacing, RasterRowsCloseInOverTheRampOnlyAndStayExact) {
+  const Mesh m = ramp_mesh(30);
+  const Cutter ball = parse_cutter_spec("ball:3");
+  const ClEngine engine(m, ball);
+  ClGrid ground = engine.compute(GridSpec::covering(0, 0, 30, 30, 0.25, 0.25));
+  const double widest = 0.8;
+  const RowSpacing spacing(ground, true, widest, 45 * kDeg);
+  RasterOptions o;
+  o.stepover = widest;
+  o.step = 0.1;
+  o.lattice = XYLattice{0.001, 0, 0};
+  o.row_gap = [&spacing](double a, double b) { return spacing.gap(a, b); };
+  const XYBounds b{0, 0, 30, 30};
+  const RasterPath path = build_raster(engine, b, o);
+  ASSERT_GE(path.rows.size(), 30u);
+  EXPECT_NEAR(path.stepover, widest, 1e-9);
+  EXPECT_NEAR(path.stepover_min, std::cos(30 * kDeg) * widest, widest / 32 + 1e-9);
+  EXPECT_NEAR(path.rows.front().front().y, 0, 1e-12);
+  EXPECT_NEAR(path.rows.back().front().y, 30, 1e-9);
+  ASSERT_EQ(path.links.size(), path.rows.size() - 1);
+  std::size_t narrow = 0, wide = 0;
+  for (std::size_t r = 0; r + 1 < path.rows.size(); ++r) {
+    const double ya = path.rows[r].front().y, yb = path.rows[r + 1].front().y;
+    const double d = yb - ya;
+    // On the lattice, never wider than the gap allows.
+    EXPECT_NEAR(std::round(ya / 0.001) * 0.001, ya, 1e-9);
+    EXPECT_LE(d, spacing.gap(ya, yb) + 1e-9) << "rows at " << ya << " and " << yb;
+    // The ball's CL rounds the ramp's kinks within its radius: rows far from
+    // it (beyond the radius and a grid line) are widest apart.
+    if (yb < 10 - 1.5 - 0.6 || (ya > 15 + 1.5 + 0.6 && r + 2 < path.rows.size())) {
+      EXPECT_NEAR(d, widest, 1e-9) << "rows at " << ya << " and " << yb;
+      ++wide;
+    }
+    if (ya > 11 && yb < 14) {
+      EXPECT_LT(d, std::cos(30 * kDeg) * widest + 1e-9);
+      ++narrow;
+    }
+    // Every vertex of a row is on the exact CL (rows of one spacing share
+    // a grid; the vertices are its nodes).
+    for (const Vec3& p : path.rows[r]) ASSERT_NEAR(p.z, engine.height_at(p.x, p.y), 1e-9);
+  }
+  EXPECT_GT(wide, 20u);
+  EXPECT_GE(narrow, 2u);
+  // keep_grid needs even rows.
+  o.keep_grid = true;
+  EXPECT_THROW(build_raster(engine, b, o), std::invalid_argument);
+}
+
+TEST(SkipSteep, AMoveOverLevelGroundBetweenTwoWallsIsNotBridged) {
+  // Level at 0, a steep wall from x = 1 to 2 up to a level top at 5, down
+  // again from x = 8 to 9 (slopes along X this time: rows along X).
+  ClGrid g;
+  g.spec = GridSpec::covering(-2, -2, 12, 2, 0.25, 0.25);
+  g.z.resize(g.spec.size());
+  g.on_floor.assign(g.spec.size(), 0);
+  for (std::size_t j = 0; j < g.spec.ny; ++j)
+    for (std::size_t i = 0; i < g.spec.nx; ++i) {
+      const double x = g.spec.x(i);
+      g.at(i, j) = 5 * (std::clamp(x - 1, 0.0, 1.0) - std::clamp(x - 8, 0.0, 1.0));
+    }
+  const SlopeMap slope(g);
+  // A merged row: up the first wall to a point on it, one long move to a
+  // point on the second wall (over the level top), down to the foot.
+  const Polyline row = {{-1, 0, 0}, {1.5, 0, 2.5}, {8.5, 0, 2.5}, {11, 0, 0}};
+  const SteepSkip s = skip_steep({row}, slope, 45 * kDeg);
+  ASSERT_EQ(s.pieces.size(), 1u);
+  // Each wall's crossing is bridged (the samples up and down it are
+  // steep); the long move over the level top is still cut as it was.
+  EXPECT_EQ(s.bridges, 2u);
+  const Polyline& p = s.pieces[0];
+  bool kept = false;
+  for (std::size_t k = 0; k + 1 < p.size(); ++k) {
+    kept = kept || (p[k].x <= 3 && p[k + 1].x >= 7 && p[k].z == 2.5 && p[k + 1].z == 2.5);
+    EXPECT_FALSE(p[k].x < 1 && p[k + 1].x > 9) << "one bridge over both walls and the level top between them";
+  }
+  EXPECT_TRUE(kept) << "the move over the level top was bridged";
+  EXPECT_EQ(p.front(), row.front());
+  EXPECT_EQ(p.back(), row.back());
+
+  // Across one wall alone: bridged over the wall only (its ends on the
+  // row's moves, a sample before and after the steep ground), the row's own
+  // points before and after kept.
+  const Polyline across = {{-1, 0, 0}, {1.25, 0, 1.25}, {1.75, 0, 3.75}, {4, 0, 5}};
+  const SteepSkip t = skip_steep({across}, slope, 45 * kDeg);
+  ASSERT_EQ(t.pieces.size(), 1u);
+  EXPECT_EQ(t.bridges, 1u);
+  EXPECT_EQ(t.points_skipped, 2u);
+  const Polyline& q = t.pieces[0];
+  EXPECT_EQ(q.front(), across.front());
+  EXPECT_EQ(q.back(), across.back());
+  for (const Vec3& p : q) {
+    EXPECT_DOUBLE_EQ(p.y, 0);
+    // Off the row's own points only over the wall and the cell beside it.
+    const bool own = std::find(across.begin(), across.end(), p) != across.end();
+    if (!own) {
+      EXPECT_GE(p.x, 0.5);
+      EXPECT_LE(p.x, 2.5);
+    }
+  }
+}
+
+TEST(WaterlineLevels, OneRunsAtTheFootOfTheWallsOverAFlatArea) {
+  // A plate 30 x 30 x 2 (the CL drops to the floor beyond it) with a block
+  // 10 x 10 x 5 standing on it: with levels 1.3 mm apart from the floor
+  // none falls near the plate's top, where the ball meets the block's walls.
+  Mesh m;
+  auto box = [&](Vec3 lo, Vec3 hi) {
+    const auto b = static_cast<std::uint32_t>(m.vertices.size());
+    for (int k = 0; k < 8; ++k) m.vertices.push_back({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z});
+    const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                          {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    for (auto& t : f) m.triangles.push_back({b + t[0], b + t[1], b + t[2]});
+  };
+  box({0, 0, 0}, {30, 30, 2});
+  box({10, 10, 2}, {20, 20, 7});
+  const Cutter ball = parse_cutter_spec("ball:3");
+  const ClEngine engine(m, ball);
+  const ClGrid grid = engine.compute(GridSpec::covering(-3, -3, 33, 33, 0.25, 0.25));
+  const SlopeMap slope(grid);
+  WaterlineOptions o;
+  o.z_step = 1.3;
+  const WaterlinePath with = build_waterline(engine, grid, slope, o);
+  o.flat_levels = false;
+  const WaterlinePath without = build_waterline(engine, grid, slope, o);
+  auto has = [](const std::vector<double>& levels, double z) {
+    return std::any_of(levels.begin(), levels.end(), [&](double l) { return std::fabs(l - z) < 1e-9; });
+  };
+  EXPECT_TRUE(has(with.levels, 2.002));
+  EXPECT_FALSE(has(without.levels, 2.002));
+  EXPECT_EQ(with.levels.size(), without.levels.size() + 1);  // the floor has its level already; the top is the top
+  // At that level the ball runs round the block, its side on the walls.
+  std::size_t at_foot = 0;
+  for (const Polyline& pl : with.pieces)
+    for (const Vec3& p : pl)
+      if (std::fabs(p.z - 2.002) < 1e-9) {
+        ++at_foot;
+        // The radius from the block (round its corners).
+        const double dx = std::max({10 - p.x, 0.0, p.x - 20}), dy = std::max({10 - p.y, 0.0, p.y - 20});
+        EXPECT_NEAR(std::hypot(dx, dy), 1.5, 0.01) << p.x << "," << p.y;
+      }
+  EXPECT_GT(at_foot, 8u);
+}
