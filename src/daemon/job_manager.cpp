@@ -818,6 +818,9 @@ void JobManager::resume_plan(std::int64_t id, long from_line, const std::string&
       const std::string plan_id = random_token_hex(12);
       json r = {{"plan_id", plan_id}, {"job", id},          {"from_line", plan->from_line}, {"reason", plan->reason},
                 {"preamble", plan->preamble}, {"lines", plan->lines.size()}, {"expires_in_s", 600}};
+      // The tool the job goes on with: the operator mounts it before confirming.
+      if (const auto& op = plan->operation)
+        r["operation"] = {{"number", op->number}, {"name", op->name}, {"tool", op->tool}, {"cutter", op->cutter}};
       std::erase_if(plans_, [now = steady_s()](const auto& e) { return e.second.expires < now; });
       plans_[plan_id] = PendingPlan{id, client, std::move(*plan), steady_s() + 600};
       respond(Response::json(200, r));

@@ -45,9 +45,10 @@ void GcodeWriter::comment(const std::string& text) {
   const std::size_t width = max_line_ - 2;
   while (clean.size() > width) {
     std::size_t cut = clean.rfind(' ', width);
-    if (cut == std::string::npos || cut == 0) cut = width;
+    const bool at_space = cut != std::string::npos && cut > 0;  // a space just past the width counts too
+    if (!at_space) cut = width;
     lines_.push_back(parenthesized(clean.substr(0, cut)));
-    clean = clean.substr(cut == width ? cut : cut + 1);
+    clean = clean.substr(at_space ? cut + 1 : cut);
   }
   lines_.push_back(parenthesized(clean));
 }

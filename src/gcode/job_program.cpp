@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <string_view>
 #include <stdexcept>
 
 namespace cncstream {
@@ -12,6 +13,77 @@ std::string tool_change_message(const OperationHeader& op) {
       "TOOL CHANGE for {}: mount T{}, {} [{}]. Z0 must stay where it was set (the part's top surface or "
       "the same reference): touch off the new tool there, then resume with cycle start",
       op.name, op.tool, op.cutter.description(), op.cutter.spec());
+}
+
+namespace {
+
+// The text inside a whole-line comment "(...)"; empty when the line is not one.
+std::string_view comment_text(std::string_view line) {
+  if (line.size() < 2 || line.front() != '(' || line.back() != ')') return {};
+  return line.substr(1, line.size() - 2);
+}
+
+bool is_pause(std::string_view line) { return line == "M0" || line == "M6"; }
+
+// "2: finishing with T2, 3.175 mm ball-nose end mill [ball:3.175]"
+std::optional<ProgramOperation> parse_operation(const std::string& text) {
+  ProgramOperation op;
+  const auto colon = text.find(": ");
+  const auto with = text.find(" with T", colon == std::string::npos ? 0 : colon);
+  if (colon == std::string::npos || with == std::string::npos) return std::nullopt;
+  const auto comma = text.find(", ", with);
+  if (comma == std::string::npos) return std::nullopt;
+  try {
+    std::size_t used = 0;
+    op.number = std::stoi(text.substr(0, colon), &used);
+    if (used != colon) return std::nullopt;
+    op.tool = std::stoi(text.substr(with + 7, comma - with - 7), &used);
+    if (used != comma - with - 7) return std::nullopt;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  op.name = text.substr(colon + 2, with - colon - 2);
+  op.cutter = text.substr(comma + 2);
+  return op;
+}
+
+}  // namespace
+
+std::vector<ProgramOperation> program_operations(const std::vector<std::string>& lines) {
+  constexpr std::string_view kOperation = "operation ";
+  std::vector<ProgramOperation> ops;
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    const std::string_view c = comment_text(lines[k]);
+    if (c.substr(0, kOperation.size()) != kOperation) continue;
+    // A long comment goes on in the next comment lines, up to the cutter's "[spec]".
+    std::string text(c.substr(kOperation.size()));
+    for (std::size_t m = k + 1; !text.empty() && text.back() != ']' && m < lines.size() && m <= k + 3; ++m) {
+      const std::string_view more = comment_text(lines[m]);
+      if (more.empty()) break;
+      text.append(" ").append(more);
+    }
+    auto op = parse_operation(text);
+    if (!op) continue;
+    op->first_line = k + 1;
+    op->mounted_line = k + 1;
+    if (!ops.empty() && ops.back().tool != op->tool)
+      // Its tool change: the pause after the comment, before the first move.
+      for (std::size_t m = k + 1; m < lines.size() && m <= k + 16; ++m)
+        if (is_pause(lines[m])) {
+          op->mounted_line = m + 1;
+          break;
+        }
+    ops.push_back(std::move(*op));
+  }
+  return ops;
+}
+
+std::optional<ProgramOperation> operation_after_line(const std::vector<ProgramOperation>& ops, std::size_t line) {
+  if (ops.empty()) return std::nullopt;
+  ProgramOperation in = ops.front();
+  for (const auto& op : ops)
+    if (op.mounted_line <= line) in = op;
+  return in;
 }
 
 JobProgram::JobProgram(JobProgramOptions options) : opt_(std::move(options)), w_(opt_.decimals) {

@@ -54,6 +54,7 @@ ResumePlan plan_resume(const ResumeInput& in, const JobControl& control) {
     throw std::invalid_argument("--from-line " + std::to_string(n) + ": " + in.file.string() + " has only " +
                                 std::to_string(plan.total_lines) + " lines; nothing left to run");
   plan.from_line = n;
+  plan.operation = operation_after_line(program_operations(in.lines), static_cast<std::size_t>(n));
 
   run.stage("state", 0.7, 0.95);
   plan.state = gcode::state_before_line(text, static_cast<std::size_t>(n));

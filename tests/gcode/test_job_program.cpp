@@ -155,3 +155,43 @@ TEST(ProgramPause, M0WordsAndNotes) {
   EXPECT_FALSE(gcode::program_pause_note(lines, 0));
   EXPECT_FALSE(gcode::program_pause_note(lines, 9));
 }
+
+TEST(JobProgram, OperationsAndTheToolInTheSpindleAreReadBackFromTheLines) {
+  JobProgramOptions o;
+  o.safe_z = 8;
+  JobProgram p(o);
+  // A long name wraps its comment over two lines; a bull-nose's description
+  // has commas of its own.
+  p.begin_operation({"roughing", 1, Cutter::bull(6, 1), 16000});
+  write_pieces(p.writer(), square(-2), {}, feeds(), p.stats());
+  p.begin_operation({"rest roughing along the steepest walls of the part", 2, Cutter::ball(3.175), 18000});
+  write_pieces(p.writer(), square(-3), {}, feeds(), p.stats());
+  p.begin_operation({"finishing", 2, Cutter::ball(3.175), 18000});
+  write_pieces(p.writer(), square(-3.5), {}, feeds(), p.stats());
+  const auto lines = lines_of(p.finish());
+
+  const auto ops = program_operations(lines);
+  ASSERT_EQ(ops.size(), 3u);
+  EXPECT_EQ(ops[0].number, 1);
+  EXPECT_EQ(ops[0].name, "roughing");
+  EXPECT_EQ(ops[0].tool, 1);
+  EXPECT_EQ(ops[0].cutter, Cutter::bull(6, 1).description() + " [" + Cutter::bull(6, 1).spec() + "]");
+  EXPECT_EQ(ops[1].name, "rest roughing along the steepest walls of the part");
+  EXPECT_EQ(ops[1].tool, 2);
+  EXPECT_EQ(ops[1].cutter, "3.175 mm ball-nose end mill [ball:3.175]");
+  EXPECT_EQ(ops[2].name, "finishing");
+  // Lines are 1-based: the comment, and the pause of the tool change.
+  EXPECT_EQ(lines[ops[0].first_line - 1].rfind("(operation 1: roughing with T1", 0), 0u);
+  EXPECT_EQ(ops[0].mounted_line, ops[0].first_line);
+  EXPECT_EQ(lines[ops[1].mounted_line - 1], "M0");
+  EXPECT_GT(ops[1].mounted_line, ops[1].first_line);
+  EXPECT_EQ(ops[2].mounted_line, ops[2].first_line);  // the same tool goes on: no pause
+
+  // Up to the pause T1 is in; from it on T2, in either of its operations.
+  EXPECT_EQ(operation_after_line(ops, 0)->number, 1);
+  EXPECT_EQ(operation_after_line(ops, ops[1].mounted_line - 1)->number, 1);
+  EXPECT_EQ(operation_after_line(ops, ops[1].mounted_line)->number, 2);
+  EXPECT_EQ(operation_after_line(ops, ops[2].first_line)->number, 3);
+  EXPECT_EQ(operation_after_line(ops, lines.size())->tool, 2);
+  EXPECT_FALSE(operation_after_line(program_operations({"G0 X1", "(operation x: not ours)"}), 1));
+}

@@ -240,3 +240,53 @@ TEST(ResumeJob, TheWindowCoversThePlannerAndTheLinesAnsweredWithAnError) {
   EXPECT_EQ(past.reason, "the controller last reported the tool at X52.5 Y0 Z-1, on line 56; line 53 was answered "
                          "with an error and never ran: it runs again");
 }
+
+TEST(ResumeJob, AJobProgramsPlanNamesTheOperationAndTheToolItGoesOnWith) {
+  // Two operations, a tool change between them (as JobProgram writes it).
+  jobs::ResumeInput in;
+  in.file = "job.nc";
+  in.file_sha256 = "abc";
+  in.lines = {
+      "G21 G90 G17 G94",                                            // 1
+      "(operation 1: roughing with T1, 6 mm flat end mill [flat:6])",  // 2
+      "T1",                                                         // 3
+      "M3 S12000",                                                  // 4
+      "G0 Z5",                                                      // 5
+      "G0 X0 Y0",                                                   // 6
+      "G1 Z-1 F300",                                                // 7
+      "G1 X10 F800",                                                // 8
+      "G0 Z5",                                                      // 9
+      "(operation 2: finishing with T2, 3.175 mm ball-nose end mill)",  // 10: wrapped
+      "([ball:3.175])",                                             // 11
+      "M5",                                                         // 12
+      "(TOOL CHANGE for finishing: mount T2 ...)",                  // 13
+      "T2",                                                         // 14
+      "M0",                                                         // 15
+      "G21 G90 G17 G94",                                            // 16
+      "M3 S18000",                                                  // 17
+      "G0 X0 Y10",                                                  // 18
+      "G1 Z-1.5 F300",                                              // 19
+      "G1 X10 F800",                                                // 20
+      "G0 Z5",                                                      // 21
+      "M5",                                                         // 22
+      "M2",                                                         // 23
+  };
+  in.from_line = 8;
+  jobs::ResumePlan plan = jobs::plan_resume(in);
+  ASSERT_TRUE(plan.operation);
+  EXPECT_EQ(plan.operation->number, 1);
+  EXPECT_EQ(plan.operation->tool, 1);
+  EXPECT_EQ(plan.operation->cutter, "6 mm flat end mill [flat:6]");
+  // Past the tool change's pause the ball is in the spindle.
+  in.from_line = 19;
+  plan = jobs::plan_resume(in);
+  ASSERT_TRUE(plan.operation);
+  EXPECT_EQ(plan.operation->name, "finishing");
+  EXPECT_EQ(plan.operation->tool, 2);
+  EXPECT_EQ(plan.operation->cutter, "3.175 mm ball-nose end mill [ball:3.175]");
+  // Before it (the pause runs again) the flat still is.
+  in.from_line = 13;
+  EXPECT_EQ(jobs::plan_resume(in).operation->tool, 1);
+  // A program of no operations names none.
+  EXPECT_FALSE(jobs::plan_resume(input()).operation);
+}

@@ -7,6 +7,8 @@
 // tool and resumes with cycle start) or M6 where the controller has one.
 // Bodies are written by the operations' own writers (pieces, roughing ...)
 // into writer(); the totals of every body are summed into stats().
+#include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +38,29 @@ struct OperationHeader {
 // The comment written before a tool change's M0/M6 (also what a streamer
 // shows the operator when the program pauses there).
 std::string tool_change_message(const OperationHeader& op);
+
+// An operation of a job program read back from its lines: the comment
+// begin_operation writes ("operation 2: finishing with T2, 3.175 mm
+// ball-nose end mill [ball:3.175]", wrapped or not) and its tool change.
+struct ProgramOperation {
+  int number = 0;
+  std::string name;
+  int tool = 0;
+  std::string cutter;  // "3.175 mm ball-nose end mill [ball:3.175]"
+  std::size_t first_line = 0;    // 1-based: its comment
+  // 1-based: from this line on its tool is in the spindle (its tool
+  // change's M0/M6; its comment where it needs none: the first operation,
+  // or the same tool going on).
+  std::size_t mounted_line = 0;
+};
+
+// In program order; empty for a program not written by JobProgram.
+std::vector<ProgramOperation> program_operations(const std::vector<std::string>& lines);
+
+// The operation whose tool is in the spindle once `line` (1-based; 0:
+// none yet) has run: the first operation up to its own tool change.
+// Empty for a program without operations.
+std::optional<ProgramOperation> operation_after_line(const std::vector<ProgramOperation>& ops, std::size_t line);
 
 class JobProgram {
  public:

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cncstream/gcode/interpreter.hpp"
+#include "cncstream/gcode/job_program.hpp"
 #include "cncstream/gcode/resume.hpp"
 #include "cncstream/geometry/vec3.hpp"
 #include "cncstream/jobs/job_control.hpp"
@@ -62,6 +63,9 @@ struct ResumePlan {
   long from_line = 0;                // continue after this 1-based line
   std::string reason;                // why that line, for the operator
   gcode::ParserState state;          // the program's state after that line (tool position, modes)
+  // A job program's operation going on after that line (none for other
+  // programs): its tool must be in the spindle, touched off at the same Z0.
+  std::optional<ProgramOperation> operation;
   gcode::ResumeOptions options;      // with the travel height used
   std::vector<std::string> preamble;
   std::vector<std::string> lines;    // preamble, then the file from line from_line + 1

@@ -107,6 +107,11 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
               << "  why line " << n << ": " << plan.reason << "\n"
               << "  tool at line " << n << ": X" << format_gcode_number(p.x) << " Y" << format_gcode_number(p.y)
               << " Z" << format_gcode_number(p.z) << " (work), " << gcode::format_modes(at) << "\n"
+              << (plan.operation ? "  in operation " + std::to_string(plan.operation->number) + " (" +
+                                       plan.operation->name + "): T" + std::to_string(plan.operation->tool) + ", " +
+                                       plan.operation->cutter +
+                                       " must be in the spindle, touched off at the same Z0 as before\n"
+                                 : std::string())
               << "  the controller must be homed with the same work offset as before\n"
               << "  preamble (retract to Z" << format_gcode_number(ro.safe_z) << ", travel, restore, plunge at F"
               << format_gcode_number(ro.plunge_feed) << "):\n";
