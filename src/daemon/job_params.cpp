@@ -129,6 +129,16 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
     }
     if (!(p.rough->diameter() > 0 && p.rough->diameter() <= 50)) bad("rough", "the diameter must be > 0 and <= 50 mm");
   }
+  if (j.contains("rest") && !j.at("rest").is_null()) {
+    if (!j.at("rest").is_string() || j.at("rest").get<std::string>().size() > 64)
+      bad("rest", "expected a cutter such as ball:1");
+    try {
+      p.rest = parse_cutter_spec(j.at("rest").get<std::string>());
+    } catch (const std::exception& e) {
+      bad("rest", e.what());
+    }
+    if (!(p.rest->diameter() > 0 && p.rest->diameter() <= 50)) bad("rest", "the diameter must be > 0 and <= 50 mm");
+  }
   p.rough_max_depth = opt_number(j, "rough_max_depth", 0.01, 100);
   p.leave = number(j, "leave", 0.3, 0, 10);
   p.step_down = opt_number(j, "step_down", 0.01, 100);
@@ -170,7 +180,8 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
                    {"rough", rough.empty() ? json(nullptr) : json(rough)},
                    {"rough_max_depth", opt(p.rough_max_depth)}, {"leave", p.leave},
                    {"step_down", opt(p.step_down)}, {"rough_stepover", p.rough_stepover},
-                   {"rough_feed", opt(p.rough_feed)}, {"tool_change", tool_change}};
+                   {"rough_feed", opt(p.rough_feed)}, {"tool_change", tool_change},
+                   {"rest", p.rest ? json(p.rest->spec()) : json(nullptr)}};
   return out;
 }
 

@@ -49,16 +49,6 @@ HeightFieldStock model_surface(const HeightFieldData& map, const Vec3& work_offs
 
 std::string mm(double v) { return fmt::format("{:.2f} mm", v); }
 
-// A round cutter's roughing stepover: loops close enough that the scallops
-// between them stay under a quarter of the step-down (the roughing allows
-// for a further grid cell, at most a sixth of the radius).
-double round_stepover(const Cutter& c, double step_down) {
-  const double t = std::min(c.corner_radius, step_down / 4);
-  const double reach =
-      c.core_radius() + std::sqrt(c.corner_radius * c.corner_radius - (c.corner_radius - t) * (c.corner_radius - t));
-  return std::clamp(reach - c.radius / 6, 0.1 * c.diameter(), 0.4 * c.diameter());
-}
-
 // The stock before the roughing on a grid over the block (model
 // coordinates): the block's top, or the height map's surface below it.
 HeightFieldStock stock_before(const StockBlock& block, double cell) {
@@ -70,12 +60,6 @@ HeightFieldStock stock_before(const StockBlock& block, double cell) {
         if (const double h = stock_height_at(*block.surface, g.x(i), g.y(j)); std::isfinite(h))
           z[j * g.nx + i] = std::min(h, block.top);
   return HeightFieldStock(g, block.top, std::move(z));
-}
-
-// The stock after a roughing path cut into it.
-HeightFieldStock cut(const HeightFieldStock& stock, const RoughingPath& path) {
-  std::vector<double> z = machine_path(stock.grid(), stock.heights(), {roughing_moves(path)}, path.cutter);
-  return HeightFieldStock(stock.grid(), stock.top(), std::move(z));
 }
 
 // The rest roughing's leave: small, so the ball grown by it fits gaps
@@ -90,6 +74,18 @@ HeightFieldStock cut(const HeightFieldStock& stock, const RoughingPath& path) {
 constexpr double kRestLeave = 0.05;
 
 }  // namespace
+
+double round_stepover(const Cutter& c, double step_down) {
+  const double t = std::min(c.corner_radius, step_down / 4);
+  const double reach =
+      c.core_radius() + std::sqrt(c.corner_radius * c.corner_radius - (c.corner_radius - t) * (c.corner_radius - t));
+  return std::clamp(reach - c.radius / 6, 0.1 * c.diameter(), 0.4 * c.diameter());
+}
+
+HeightFieldStock stock_after(const HeightFieldStock& stock, const RoughingPath& path) {
+  std::vector<double> z = machine_path(stock.grid(), stock.heights(), {roughing_moves(path)}, path.cutter);
+  return HeightFieldStock(stock.grid(), stock.top(), std::move(z));
+}
 
 RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std::vector<Polyline>& finishing,
                             const Vec3& work_offset, const Checkpoint& checkpoint) {
@@ -192,7 +188,7 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
     return fmt::format("X{:.3f} Y{:.3f} (work coordinates; down to Z{:.3f})", e.at.x + work_offset.x,
                        e.at.y + work_offset.y, e.at.z + work_offset.z);
   };
-  const HeightFieldStock roughed = cut(stock_before(block, cell), *s.path);
+  const HeightFieldStock roughed = stock_after(stock_before(block, cell), *s.path);
   const PassDepth after_rough = finishing_depth(roughed);
   s.finish_depth = after_rough.deepest;
   if (after_rough.deepest <= s.finish_max_depth + 1e-9) {
@@ -238,7 +234,7 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
           "with it finds nothing it can cut there: give a smaller --leave or --step-down",
           s.rest.empty() ? "" : " and rest roughing", mm(depth.deepest), where(depth), p.cutter.spec(),
           mm(s.finish_max_depth)));
-    HeightFieldStock after = cut(stock, rest);
+    HeightFieldStock after = stock_after(stock, rest);
     // Bounded from the measure before (cheap), measured again only where a
     // bound is over.
     PassDepth now = pass_depth_bound(after, depth, p.cutter, p.leave, s.finish_max_depth);
@@ -288,35 +284,54 @@ OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParam
   return o;
 }
 
-void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStage& rough, MachiningParams mp) {
-  r.stock = rough.stock.box;
+void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStage* with_stock, const RestStage* rest,
+                 MachiningParams mp) {
+  static const RoughingStage kNoStock;
+  const RoughingStage& rough = with_stock ? *with_stock : kNoStock;
   r.notes = rough.notes;
-  // Rapids and tool changes above the stock, not only the part.
-  const double stock_top = rough.stock.box.hi.z;
-  if (!p.safe_z) {
-    mp.safe_z = std::max(mp.safe_z, stock_top + 5.0);
-  } else if (!(*p.safe_z > stock_top + 0.5)) {
-    throw std::invalid_argument(fmt::format("safe Z {} is not at least 0.5 mm above the stock's top Z {} (work "
-                                            "coordinates)",
-                                            format_gcode_number(*p.safe_z), format_gcode_number(stock_top)));
-  }
   JobProgramOptions jo;
+  jo.header_comments = mp.header_comments;
+  if (with_stock) {
+    r.stock = rough.stock.box;
+    // Rapids and tool changes above the stock, not only the part.
+    const double stock_top = rough.stock.box.hi.z;
+    if (!p.safe_z) {
+      mp.safe_z = std::max(mp.safe_z, stock_top + 5.0);
+    } else if (!(*p.safe_z > stock_top + 0.5)) {
+      throw std::invalid_argument(fmt::format("safe Z {} is not at least 0.5 mm above the stock's top Z {} (work "
+                                              "coordinates)",
+                                              format_gcode_number(*p.safe_z), format_gcode_number(stock_top)));
+    }
+    jo.header_comments.insert(jo.header_comments.begin() + 1,
+                              fmt::format("stock: X {:.3f}..{:.3f} Y {:.3f}..{:.3f} Z {:.3f}..{:.3f} (work coordinates)",
+                                          rough.stock.box.lo.x, rough.stock.box.hi.x, rough.stock.box.lo.y,
+                                          rough.stock.box.hi.y, rough.stock.box.lo.z, rough.stock.box.hi.z));
+  }
   jo.decimals = mp.decimals;
   jo.safe_z = mp.safe_z;
   jo.dwell_s = mp.dwell_s;
   jo.tool_change = p.tool_change;
-  jo.header_comments = mp.header_comments;
-  jo.header_comments.insert(jo.header_comments.begin() + 1,
-                            fmt::format("stock: X {:.3f}..{:.3f} Y {:.3f}..{:.3f} Z {:.3f}..{:.3f} (work coordinates)",
-                                        rough.stock.box.lo.x, rough.stock.box.hi.x, rough.stock.box.lo.y,
-                                        rough.stock.box.hi.y, rough.stock.box.lo.z, rough.stock.box.hi.z));
   {
     const char* finishing = r.waterline_pieces > 0 ? "steep-and-shallow finishing" : "raster finishing";
-    jo.header_comments.front() = !rough.rest.empty() ? fmt::format("cncstream job: Z-level roughing, rest roughing, then {}", finishing)
-                                 : rough.path       ? fmt::format("cncstream job: Z-level roughing, then {}", finishing)
-                                                    : fmt::format("cncstream job: {}", finishing);
+    const std::string then_rest = rest && !rest->pieces.empty() ? ", then rest machining" : "";
+    jo.header_comments.front() =
+        !rough.rest.empty() ? fmt::format("cncstream job: Z-level roughing, rest roughing, then {}{}", finishing, then_rest)
+        : rough.path        ? fmt::format("cncstream job: Z-level roughing, then {}{}", finishing, then_rest)
+                            : fmt::format("cncstream job: {}{}", finishing, then_rest);
   }
-  for (const auto& n : rough.notes) jo.header_comments.push_back(n);
+  if (rest) {
+    const std::string note =
+        rest->pieces.empty()
+            ? fmt::format("rest machining with the {}: the {} leaves nothing more than {} mm it could take",
+                          rest->cutter.spec(), p.cutter.spec(), format_gcode_number(rest->threshold, 3))
+            : fmt::format("rest machining with the {} where the {} cannot reach: {} pieces of rows {} mm apart over "
+                          "{} analysis nodes where it leaves more than {} mm (up to {} mm)",
+                          rest->cutter.spec(), p.cutter.spec(), rest->pieces.size(),
+                          format_gcode_number(rest->stepover, 3), rest->nodes, format_gcode_number(rest->threshold, 3),
+                          format_gcode_number(rest->most_left, 3));
+    r.notes.push_back(note);
+  }
+  for (const auto& n : r.notes) jo.header_comments.push_back(n);
   JobProgram program(jo);
 
   // An operation's lines and time begin with its tool change.
@@ -375,6 +390,28 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
   f.tool = tool;
   f.max_depth = rough.finish_depth;
   summary(std::move(f), at);
+  if (rest && !rest->pieces.empty()) {
+    ++tool;
+    const auto at_rest = begin("rest machining", tool, rest->cutter);
+    OperationSummary o;
+    o.name = "rest machining";
+    o.tool = tool;
+    o.cutter = rest->cutter;
+    std::size_t levels = 0;
+    for (const auto& l : rest->levels) {
+      write_roughing(program.writer(), l, r.work_offset, mp, program.stats());
+      levels += l.levels.size();
+    }
+    o.detail = fmt::format("{}rows {} mm apart where the {} cannot reach ({} pieces)",
+                           levels ? fmt::format("Z-levels where it would cut too deep in one pass ({} levels, leave {} "
+                                                "mm), then ",
+                                                levels, format_gcode_number(rest->level_leave, 3))
+                                  : "",
+                           format_gcode_number(rest->stepover, 3), p.cutter.spec(), rest->pieces.size());
+    write_pieces(program.writer(), rest->pieces, r.work_offset, mp, program.stats());
+    o.max_depth = rest->depth;
+    summary(std::move(o), at_rest);
+  }
   r.gcode = program.finish();
   r.stats = program.stats();
 }

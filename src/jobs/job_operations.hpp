@@ -15,6 +15,7 @@
 #include "cncstream/cam/stock.hpp"
 #include "cncstream/cam/zlevel_roughing.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
+#include "rest_stage.hpp"
 
 namespace cncstream::jobs {
 
@@ -40,6 +41,14 @@ struct RoughingStage {
   std::vector<std::string> notes;
 };
 
+// A round cutter's roughing stepover: loops close enough that the scallops
+// between them stay under a quarter of the step-down (the roughing allows
+// for a further grid cell, at most a sixth of the radius).
+double round_stepover(const Cutter& c, double step_down);
+
+// The stock after a roughing path cut into it.
+HeightFieldStock stock_after(const HeightFieldStock& stock, const RoughingPath& path);
+
 // Throws std::invalid_argument for a stock that does not hold the part, a
 // leave or depth that leaves no room for a level, or a roughing that cannot
 // keep the finishing pass within its depth.
@@ -50,8 +59,10 @@ RoughingStage plan_roughing(const ToolpathParams& p, const Mesh& mesh, const std
 // The finishing operation's summary from its program's stats.
 OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParams& p, const ProgramStats& stats);
 
-// The whole program (roughing, tool change, rest roughing, finishing) into r.gcode, r.stats
-// and r.operations; the notes into r.notes.
-void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStage& rough, MachiningParams mp);
+// The whole program (roughing, tool change, rest roughing, finishing, tool
+// change, rest machining) into r.gcode, r.stats and r.operations; the notes
+// into r.notes. Either stage may be missing (null), not both.
+void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStage* rough, const RestStage* rest,
+                 MachiningParams mp);
 
 }  // namespace cncstream::jobs

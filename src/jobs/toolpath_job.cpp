@@ -16,6 +16,7 @@
 #include "job_operations.hpp"
 #include "job_run.hpp"
 #include "job_text.hpp"
+#include "rest_stage.hpp"
 
 namespace cncstream::jobs {
 
@@ -47,7 +48,10 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     r.facets = mesh->triangles.size();
     r.seconds_load = seconds_since(t0);
 
-    run.stage("tool path", kPathFrom, p.stock ? kRoughFrom : kGcodeFrom);
+    // A rest machining takes the end of the tool path's share.
+    const double rest_share = p.rest ? 0.12 : 0;
+    const double path_to = (p.stock ? kRoughFrom : kGcodeFrom) - rest_share;
+    run.stage("tool path", kPathFrom, path_to);
     t0 = std::chrono::steady_clock::now();
     ClOptions clo;
     clo.floor = p.floor;
@@ -95,6 +99,14 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     }
     r.seconds_path = seconds_since(t0);
 
+    std::optional<RestStage> rest;
+    if (p.rest) {
+      run.stage("rest machining", path_to, path_to + rest_share);
+      t0 = std::chrono::steady_clock::now();
+      rest = plan_rest(p, *mesh, engine, region, work.lattice, run.checkpoint());
+      r.seconds_rest = seconds_since(t0);
+    }
+
     std::optional<RoughingStage> rough;
     if (p.stock) {
       run.stage("roughing", kRoughFrom, kGcodeFrom);
@@ -139,11 +151,11 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
             (xy == XYOrigin::PartMin ? "part minimum" : xy == XYOrigin::PartCenter ? "part centre" : "model origin") +
             ", Z0 at " + (zz == ZZero::PartTop ? "part top" : zz == ZZero::PartBottom ? "part bottom" : "model origin"),
     };
-    if (!rough) {
+    if (!rough && !rest) {
       r.gcode = pieces_program(r.finish_pieces, work.offset, mp, &r.stats);
       r.operations.push_back(finishing_summary(r, p, r.stats));
     } else {
-      compose_job(r, p, *rough, mp);
+      compose_job(r, p, rough ? &*rough : nullptr, rest ? &*rest : nullptr, mp);
     }
     r.seconds_gcode = seconds_since(t0);
 

@@ -68,6 +68,10 @@ struct ToolpathParams {
   std::optional<double> step_down;        // default: the largest that keeps every pass within both depths
   double rough_stepover = 0;              // mm; 0: 40 % of the roughing cutter's diameter
   std::optional<double> rough_feed;       // mm/min; default: feed
+  // Rest machining after the finishing: a smaller cutter, only where the
+  // finishing cutter cannot reach the part (grooves, gaps and inside
+  // corners narrower than it), with a tool change before it.
+  std::optional<Cutter> rest;
   ToolChangeCode tool_change = ToolChangeCode::PauseM0;
   // Not empty: the program is written there (whole or not at all) as the
   // job's last stage.
@@ -76,7 +80,7 @@ struct ToolpathParams {
 
 // One operation of the program, for the plan shown before cutting.
 struct OperationSummary {
-  std::string name;  // "roughing", "rest roughing", "finishing"
+  std::string name;  // "roughing", "rest roughing", "finishing", "rest machining"
   int tool = 1;
   Cutter cutter;
   std::string detail;      // levels, stepover ... in words
@@ -117,14 +121,15 @@ struct ToolpathProgram {
   // What the plan decided and why ("the finishing pass would cut 11.5 mm in
   // one pass, more than ... : roughing first").
   std::vector<std::string> notes;
-  double seconds_load = 0, seconds_path = 0, seconds_rough = 0, seconds_gcode = 0;
+  double seconds_load = 0, seconds_path = 0, seconds_rough = 0, seconds_rest = 0, seconds_gcode = 0;
 };
 
 // The rows' spacing in words: "0.4" for even rows, "0.457 to 0.797" for
 // rows spaced by the slope across them.
 std::string row_spacing_text(const RasterPath& path);
 
-// Stages: "load", "tool path", "G-code", "write" (with an output), "done".
+// Stages: "load", "tool path", "rest machining" (with a rest cutter),
+// "roughing" (with a stock), "G-code", "write" (with an output), "done".
 // Throws Cancelled on a stop request.
 ToolpathProgram generate_toolpath(const ToolpathParams& params, const JobControl& control = {});
 

@@ -27,6 +27,9 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
                   "Scallop height to keep, mm: sets the row stepover and the waterline step (ball or bull-nose; "
                   "replaces --stepover)")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--rest", o.rest,
+                  "Rest machining after the finishing with this smaller cutter, only where the finishing cutter cannot "
+                  "reach (grooves, gaps, inside corners), e.g. ball:1");
   sub->add_option("--feed", o.feed, "Cutting feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--plunge-feed", o.plunge_feed, "Plunge feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--rpm", o.rpm, "Spindle speed (0: no spindle commands)")->check(CLI::NonNegativeNumber)->capture_default_str();
@@ -102,6 +105,7 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   if (o.stock != "none") p.stock = jobs::parse_stock_spec(o.stock);
   p.max_depth = o.max_depth;
   if (!o.rough.empty()) p.rough = parse_cutter_spec(o.rough);
+  if (!o.rest.empty()) p.rest = parse_cutter_spec(o.rest);
   p.rough_max_depth = o.rough_max_depth;
   p.leave = o.leave;
   p.step_down = o.step_down;

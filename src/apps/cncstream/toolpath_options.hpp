@@ -39,6 +39,7 @@ struct ToolpathOptions {
   std::string stock = "auto";
   std::optional<double> max_depth;
   std::string rough;
+  std::string rest;
   std::optional<double> rough_max_depth;
   double leave = 0.3;
   std::optional<double> step_down;
