@@ -158,10 +158,14 @@ Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat,
   const std::size_t n = pts.size();
   if (n < 2) return pts;
   const std::size_t chords = closed ? n : n - 1;
+  // Only chords with an end moved in the round before are measured again
+  // (the others are as they were: clear, or left to the lift).
+  std::vector<std::uint8_t> dirty(chords, 1);
   for (int round = 0; round < 4; ++round) {
     std::vector<double> need(chords, 0);
     bool any = false;
     for (std::size_t c = 0; c < chords; ++c) {
+      if (!dirty[c]) continue;
       need[c] = push_needed(engine, pts[c], pts[(c + 1) % n], level, step, queries);
       // A chord no push clears (a cliff of the CL) is left to the lift
       // below; the others still move (one cliff in a loop must not leave
@@ -173,6 +177,7 @@ Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat,
     // Each point moves along the bisector of its chords' left normals, far
     // enough for both.
     Polyline moved = pts;
+    std::fill(dirty.begin(), dirty.end(), 0);
     for (std::size_t k = 0; k < n; ++k) {
       const bool has_prev = closed || k > 0, has_next = closed || k + 1 < n;
       const std::size_t cp = (k + chords - 1) % chords, cn = k % chords;
@@ -194,6 +199,8 @@ Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat,
       const double d = std::max(dp, dn) / c;
       moved[k].x += d * bx;
       moved[k].y += d * by;
+      if (has_prev) dirty[cp] = 1;
+      if (has_next) dirty[cn] = 1;
     }
     pts = std::move(moved);
   }
