@@ -350,7 +350,8 @@ function toolText(p) {
   if (!p || !p.tool) return 'G-code as uploaded';
   const spacing = p.scallop ? `scallop ${p.scallop} mm` : `stepover ${p.stepover} mm`;  // a scallop height sets the spacing
   return `${p.rough ? `${p.rough} roughing, then ` : ''}${p.tool}, ${spacing}, rows along ${(p.direction || 'x').toUpperCase()}` +
-    `${p.strategy === 'raster' ? ' only' : ''}${p.stock && p.stock !== 'auto' ? `, stock ${p.stock}` : ''}`;
+    `${p.strategy === 'raster' ? ' only' : ''}${p.rest ? `, then ${p.rest} where it cannot reach` : ''}` +
+    `${p.stock && p.stock !== 'auto' ? `, stock ${p.stock}` : ''}`;
 }
 function duration(s) {
   if (!(s >= 0) || !isFinite(s)) return '—';
@@ -609,7 +610,7 @@ async function generate() {
     // `auto`, roughing with the finishing cutter when the finish alone would cut too deep.
     const scallop = numberOf('#tp-scallop', { optional: true });
     if (scallop != null) body.params.scallop = scallop;
-    for (const [key, id] of [['stock', '#tp-stock'], ['rough', '#tp-rough']]) {
+    for (const [key, id] of [['stock', '#tp-stock'], ['rough', '#tp-rough'], ['rest', '#tp-rest']]) {
       const v = $(id).value.trim();
       if (v) body.params[key] = v;
     }

@@ -234,10 +234,18 @@ TEST(JobParams, AbsurdValuesAreRefusedNamingTheField) {
   EXPECT_NE(err({{"tool", "ball:3.175"}, {"stepover", 0.01}, {"step", 0.005}, {"bounds", {-1e5, -1e5, 1e5, 1e5}}})
                 .find("would sample"),
             std::string::npos);
+  EXPECT_NE(err({{"tool", "ball:3.175"}, {"rest", "spoon:1"}}).find("rest"), std::string::npos);
+  EXPECT_NE(err({{"tool", "ball:3.175"}, {"rest", 1}}).find("rest"), std::string::npos);
   const auto ok = check_toolpath_params({{"tool", "ball:3.175"}, {"stepover", 2}}, f, l);
   EXPECT_EQ(ok.canonical["stepover"], 2.0);
   EXPECT_EQ(ok.canonical["origin"], "min");
+  EXPECT_TRUE(ok.canonical["rest"].is_null());
   EXPECT_LT(ok.grid_nodes, 1e6);
+  // A rest cutter is part of what the cache tells apart.
+  const auto rest = check_toolpath_params({{"tool", "ball:3.175"}, {"stepover", 2}, {"rest", "ball:1/32in"}}, f, l);
+  ASSERT_TRUE(rest.params.rest);
+  EXPECT_EQ(rest.canonical["rest"], rest.params.rest->spec());
+  EXPECT_NE(rest.canonical.dump(), ok.canonical.dump());
 }
 
 TEST(Config, PendantsNameTheMachineTheyDrive) {
