@@ -80,7 +80,11 @@ AxisSamples gap_samples(double length, double widest, double lat, double v0,
       if (d <= allowed) break;
       d = allowed;
     }
-    if (from + d < length - 0.5 * unit) d = std::max(unit, std::floor(d / quantum + 1e-9) * quantum);
+    if (from + d < length - 0.5 * unit) {
+      // (A gap under the quantum, on ground nearly as steep as allowed, on the lattice only.)
+      const double q = d >= quantum ? quantum : unit;
+      d = std::max(unit, std::floor(d / q + 1e-9) * q);
+    }
     a.s.push_back(std::min(length, from + d));
   }
   a.uniform = 0;  // bands are found by the caller
@@ -260,23 +264,24 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
     r = e + 1;
   }
   std::size_t rows_gridded = 0;
-  for (Band& b : bands) {
-    const double d = !o.row_gap && b.count > 1 ? vs_axis.d
-                     : b.count > 1 ? (vs_axis.s[b.first + b.count - 1] - vs_axis.s[b.first]) / double(b.count - 1)
-                                   : 1;
+  for (Band& band : bands) {
+    const std::size_t last = band.first + band.count - 1;
+    const double d = !o.row_gap && band.count > 1 ? vs_axis.d
+                     : band.count > 1             ? (vs_axis.s[last] - vs_axis.s[band.first]) / double(band.count - 1)
+                                                  : 1;
     Checkpoint cp;
     if (checkpoint)
-      cp = [&, before = rows_gridded, n = b.count](double f) {
+      cp = [&, before = rows_gridded, n = band.count](double f) {
         checkpoint(0.5 * (double(before) + f * double(n)) / double(nrows));
       };
-    b.grid = grid_for(v0 + vs_axis.s[b.first], b.count, d, cp);
-    rows_gridded += b.count;
+    band.grid = grid_for(v0 + vs_axis.s[band.first], band.count, d, cp);
+    rows_gridded += band.count;
   }
   // A row's across coordinate is its grid's (the same value for even rows).
   std::vector<double> row_v(nrows);
   for (std::size_t r = 0; r < nrows; ++r) {
-    const Band& b = bands[band_of[r]];
-    row_v[r] = along_x ? b.grid.spec.y(r - b.first) : b.grid.spec.x(r - b.first);
+    const Band& band = bands[band_of[r]];
+    row_v[r] = along_x ? band.grid.spec.y(r - band.first) : band.grid.spec.x(r - band.first);
   }
 
   RasterPath path;

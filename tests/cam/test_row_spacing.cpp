@@ -128,6 +128,14 @@ TEST(RowSpacing, RasterRowsCloseInOverTheRampOnlyAndStayExact) {
   }
   EXPECT_GT(wide, 20u);
   EXPECT_GE(narrow, 2u);
+  // A gap under the spacings' quantum (widest / 32) is kept on the lattice,
+  // not rounded down to one lattice step.
+  RasterOptions tight = o;
+  tight.row_gap = [](double, double) { return 0.0137; };
+  const RasterPath dense = build_raster(engine, XYBounds{0, 0, 5, 1}, tight);
+  ASSERT_GE(dense.rows.size(), 3u);
+  EXPECT_NEAR(dense.rows[1].front().y - dense.rows[0].front().y, 0.013, 1e-9);
+  EXPECT_EQ(dense.rows.size(), 78u);  // 76 gaps of 0.013 to 0.988, one of 0.012
   // keep_grid needs even rows.
   o.keep_grid = true;
   EXPECT_THROW(build_raster(engine, b, o), std::invalid_argument);
