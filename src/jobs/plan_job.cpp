@@ -11,6 +11,7 @@
 #include "cncstream/cam/path_machining.hpp"
 #include "cncstream/cam/thread_limit.hpp"
 #include "cncstream/gcode/finishing_program.hpp"
+#include "cncstream/gcode/job_program.hpp"
 #include "cncstream/gcode/program.hpp"
 #include "cncstream/jobs/output_file.hpp"
 #include "job_run.hpp"
@@ -116,6 +117,25 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
     p.program_first = finishing_program(first.path, r.work_offset, header(first.cutter, "1 of 2, finishing", 1));
     p.program_second = pieces.empty() ? std::string()
                                       : pieces_program(pieces, r.work_offset, header(second.cutter, "2 of 2, clean-up", 2));
+    {
+      // Both operations in one program, the tool change between them.
+      JobProgramOptions jo;
+      jo.decimals = mp.decimals;
+      jo.safe_z = mp.safe_z;
+      jo.dwell_s = mp.dwell_s;
+      jo.header_comments = {"cncstream plan: finishing with " + first.cutter.spec() +
+                                (pieces.empty() ? std::string(" (no clean-up needed)")
+                                                : ", then clean-up with " + second.cutter.spec()),
+                            "part: " + so.part.stl, "work origin: XY at the part's min, Z0 at the part's top"};
+      JobProgram job(jo);
+      job.begin_operation({"finishing", 1, first.cutter, mp.rpm});
+      write_pieces(job.writer(), raster_as_one_cut(first.path), r.work_offset, mp, job.stats());
+      if (!pieces.empty()) {
+        job.begin_operation({"clean-up", 2, second.cutter, mp.rpm});
+        write_pieces(job.writer(), pieces, r.work_offset, mp, job.stats());
+      }
+      p.program_job = job.finish();
+    }
     const std::string prog_ball =
         first.cutter.type == CutterType::Ball ? p.program_first : finishing_program(r.ball.path, r.work_offset, mp);
     const std::string prog_rad =
@@ -164,12 +184,15 @@ PlanFiles write_plan(const PlanResult& plan, const fs::path& dir) {
     files.second = dir / (stem + "-2-" + safe_name(second.cutter.spec()) + ".nc");
     write(files.second, plan.program_second);
   }
+  files.job = dir / (stem + "-job.nc");
+  write(files.job, plan.program_job);
 
   nlohmann::json j;
   j["first"] = first.cutter.spec();
   j["second"] = second.cutter.spec();
   j["files"] = {files.first.string()};
   if (cleanup) j["files"].push_back(files.second.string());
+  j["job_file"] = files.job.string();
   j["cleanup_pieces"] = plan.cleanup_pieces.size();
   j["scallop_tol_mm"] = plan.params.selection.scallop_tol;
   for (const auto& op : plan.options)

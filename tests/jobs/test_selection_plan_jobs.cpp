@@ -15,6 +15,7 @@
 
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/geometry/stl.hpp"
+#include "cncstream/gcode/job_program.hpp"
 #include "cncstream/jobs/plan_job.hpp"
 #include "cncstream/jobs/selection_job.hpp"
 #include "cncstream/jobs/selection_report.hpp"
@@ -172,6 +173,21 @@ TEST(PlanJob, SameOptionsAndProgramsAsTheCliWithAnyThreadLimit) {
     EXPECT_EQ(files.second, dir / "plaque-2-ball_3.175.nc");
     EXPECT_EQ(transport::sha256_file(files.first), transport::sha256_hex(plan.program_first));
     EXPECT_TRUE(fs::exists(files.json));
+    // Both as one job: the finishing with T1, the tool change, the clean-up with T2.
+    EXPECT_EQ(files.job, dir / "plaque-job.nc");
+    EXPECT_EQ(transport::sha256_file(files.job), transport::sha256_hex(plan.program_job));
+    std::vector<std::string> lines;
+    std::istringstream in(plan.program_job);
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+    const auto ops = program_operations(lines);
+    ASSERT_EQ(ops.size(), 2u);
+    EXPECT_EQ(ops[0].name, "finishing");
+    EXPECT_EQ(ops[0].tool, 1);
+    EXPECT_NE(ops[0].cutter.find("[bull:3.175:0.79]"), std::string::npos);
+    EXPECT_EQ(ops[1].name, "clean-up");
+    EXPECT_EQ(ops[1].tool, 2);
+    EXPECT_EQ(lines[ops[1].mounted_line - 1], "M0");
+    EXPECT_EQ(std::count(lines.begin(), lines.end(), "M0"), 1);
   }
 }
 

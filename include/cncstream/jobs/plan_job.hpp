@@ -4,7 +4,8 @@
 // clean up with the other only where the residual exceeds the tolerance and
 // the other does better. One G-code program per tool (GRBL has no M6: the
 // operator changes the tool between files), and the predicted machining time
-// and largest residual of ball only, radiused only, and combined.
+// and largest residual of ball only, radiused only, and combined; and both
+// as one job program with the tool change in it.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -40,6 +41,11 @@ struct PlanResult {
   std::vector<Polyline> cleanup_pieces;  // the second cutter's, model coordinates
   std::string program_first;             // T1: finishing with the first cutter
   std::string program_second;            // T2: the clean-up; empty when none is needed
+  // The same as one job (gcode/job_program.hpp): the finishing with T1, the
+  // tool change (M0 and the operator's note, or none without a clean-up),
+  // the clean-up with T2: one program a streamer pauses in, and resume
+  // knows the tool of.
+  std::string program_job;
   std::vector<PlanOption> options;       // ball only, radiused only, combined
 };
 
@@ -49,12 +55,13 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control = {});
 
 struct PlanFiles {
   std::filesystem::path first, second;  // second empty when there is no clean-up
+  std::filesystem::path job;            // both operations in one program
   std::filesystem::path json;
 };
 
 // <part stem>-1-<first cutter>.nc, <part stem>-2-<second cutter>.nc (when
-// there is a clean-up) and plan.json (last) into `dir` (created), each whole
-// or not at all.
+// there is a clean-up), <part stem>-job.nc and plan.json (last) into `dir`
+// (created), each whole or not at all.
 PlanFiles write_plan(const PlanResult& plan, const std::filesystem::path& dir);
 
 }  // namespace cncstream::jobs

@@ -73,6 +73,10 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
                 << ", set its Z zero on the part's top again (the tool length differs), and run file 2.\n";
     else
       std::cout << "no clean-up needed: the " << first.cutter.description() << " leaves nothing above the tolerance\n";
+    std::cout << "wrote " << files.job.string()
+              << (plan.cleanup_pieces.empty() ? " (the same as one job)\n"
+                                               : " (both as one job: it pauses for the tool change with the operator's "
+                                                 "note, and `cncstream resume` knows which tool is in)\n");
     return 0;
   });
 }
