@@ -98,8 +98,10 @@ PointIndex::PointIndex(const Mesh& mesh, const ClPrimitives& prims, const Cutter
   const double w = ext.x1 - ext.x0, h = ext.y1 - ext.y0;
   const double n = static_cast<double>(all.size());
   // Cells about as small as the footprints allow, grown until the lists stay
-  // linear in the number of primitives.
-  cell_ = std::fmax(std::fmax(R, std::sqrt(w * h / n)), 1e-9 * (1 + w + h));
+  // linear in the number of primitives. Half the radius: a cell then lists
+  // what lies within 2.5 radii of its centre rather than 3 (the plaque's
+  // waterlines, 2.5 M queries: 1.65-1.9 s -> 1.4 s on two cores).
+  cell_ = std::fmax(std::fmax(0.5 * R, std::sqrt(w * h / n)), 1e-9 * (1 + w + h));
   auto cell_of = [&](double v, double origin, std::size_t cells) {
     const double k = std::floor((v - origin) / cell_);
     return static_cast<std::size_t>(std::clamp(k, 0.0, static_cast<double>(cells - 1)));
