@@ -156,6 +156,7 @@ std::string toolpath_report(const jobs::ToolpathProgram& r) {
     << format_gcode_number(b.lo.y) << " .. " << format_gcode_number(b.hi.y) << ", Z " << format_gcode_number(b.lo.z) << " .. "
     << format_gcode_number(b.hi.z) << "\n";
   o << "time: load " << format_gcode_number(r.seconds_load, 3) << " s, CL + path " << format_gcode_number(r.seconds_path, 3);
+  if (r.seconds_rest > 0) o << " s, rest machining " << format_gcode_number(r.seconds_rest, 3);
   if (r.seconds_rough > 0) o << " s, roughing " << format_gcode_number(r.seconds_rough, 3);
   o << " s, G-code " << format_gcode_number(r.seconds_gcode, 3) << " s\n";
   return o.str();
