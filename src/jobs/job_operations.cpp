@@ -402,12 +402,14 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
       write_roughing(program.writer(), l, r.work_offset, mp, program.stats());
       levels += l.levels.size();
     }
-    o.detail = fmt::format("{}rows {} mm apart where the {} cannot reach ({} pieces)",
+    o.detail = fmt::format("{}rows {} mm apart where the {} cannot reach ({} pieces), {} pencil passes along the "
+                           "creases there",
                            levels ? fmt::format("Z-levels where it would cut too deep in one pass ({} levels, leave {} "
                                                 "mm), then ",
                                                 levels, format_gcode_number(rest->level_leave, 3))
                                   : "",
-                           format_gcode_number(rest->stepover, 3), p.cutter.spec(), rest->pieces.size());
+                           format_gcode_number(rest->stepover, 3), p.cutter.spec(),
+                           rest->pieces.size() - rest->pencils, rest->pencils);
     write_pieces(program.writer(), rest->pieces, r.work_offset, mp, program.stats());
     o.max_depth = rest->depth;
     summary(std::move(o), at_rest);

@@ -11,6 +11,7 @@
 #include "cncstream/cam/cleanup.hpp"
 #include "cncstream/cam/deviation.hpp"
 #include "cncstream/cam/pass_depth.hpp"
+#include "cncstream/cam/pencil.hpp"
 #include "cncstream/cam/reach.hpp"
 #include "cncstream/cam/stock.hpp"
 #include "job_operations.hpp"
@@ -91,6 +92,22 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
   ro.lattice = lattice;
   const RasterPath rows = build_raster(engine, box, ro, part(0.5, 0.7));
   s.pieces = cleanup_pieces(rows, grid, left, s.threshold, grow, p.direction != RasterDirection::Y);
+  // Then along the creases there (a groove's bottom, where it touches both
+  // faces): the rows leave their cusps right at a crease.
+  PencilOptions po;
+  po.step = std::min(0.1, small.radius / 4);
+  po.lattice = lattice;
+  po.tolerance = p.tolerance;
+  auto where = [&](double x, double y) {
+    const double fi = std::round((x - grid.x0) / grid.dx), fj = std::round((y - grid.y0) / grid.dy);
+    if (fi < 0 || fj < 0 || fi >= double(grid.nx) || fj >= double(grid.ny)) return false;
+    const double v = left[static_cast<std::size_t>(fj) * grid.nx + static_cast<std::size_t>(fi)];
+    return std::isfinite(v) && v > s.threshold;
+  };
+  for (Polyline& pl : pencil_passes(engine, box, po, where)) {
+    s.pieces.push_back(std::move(pl));
+    ++s.pencils;
+  }
 
   // The stock the finishing leaves: its reach limit, its cusps on top (on
   // the part; the reach elsewhere).

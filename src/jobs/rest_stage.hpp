@@ -4,7 +4,8 @@
 // its tip on every node of a dense CL lattice, stands above the part by more
 // than the tolerance: grooves, gaps and inside corners narrower than it),
 // the smaller cutter's rows clipped to those places and the cutter's radius
-// around them. Private to the jobs layer.
+// around them, then pencil passes along the creases there. Private to the
+// jobs layer.
 #include <cstddef>
 #include <vector>
 
@@ -20,6 +21,7 @@ struct RestStage {
   Cutter cutter;
   std::vector<Polyline> pieces;  // model coordinates, in cutting order; empty: nothing left to it
   double stepover = 0;           // of its rows
+  std::size_t pencils = 0;       // the last pieces: pencil passes along the creases there (pencil.hpp)
   std::size_t nodes = 0;         // analysis nodes where the finishing cutter leaves more than `threshold`
   double threshold = 0;          // mm
   double most_left = 0;          // the most the finishing cutter leaves there, mm

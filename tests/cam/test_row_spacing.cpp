@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/pencil.hpp"
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/cam/row_spacing.hpp"
 #include "cncstream/cam/slope_map.hpp"
@@ -234,4 +235,47 @@ TEST(WaterlineLevels, OneRunsAtTheFootOfTheWallsOverAFlatArea) {
         EXPECT_NEAR(std::hypot(dx, dy), 1.5, 0.01) << p.x << "," << p.y;
       }
   EXPECT_GT(at_foot, 8u);
+}
+
+TEST(Pencil, OnePassAlongAVGroovesCreaseOnTheClAndNoneOnAPlane) {
+  // A block's top with a 90-degree V-groove along Y: its walls from x = 16
+  // and x = 24 down to the crease at x = 20, z = 6.
+  Mesh m;
+  const double xs[] = {0, 16, 20, 24, 40}, zs[] = {10, 10, 6, 10, 10};
+  for (int k = 0; k < 5; ++k) {
+    m.vertices.push_back({xs[k], 0, zs[k]});
+    m.vertices.push_back({xs[k], 20, zs[k]});
+  }
+  for (std::uint32_t k = 0; k < 4; ++k) {
+    const std::uint32_t a = 2 * k;
+    m.triangles.push_back({a, a + 2, a + 3});
+    m.triangles.push_back({a, a + 3, a + 1});
+  }
+  const ClEngine engine(m, parse_cutter_spec("ball:2"));
+  PencilOptions o;
+  o.lattice = XYLattice{0.001, 0, 0};
+  const XYBounds b{10, 2, 30, 18};
+  const auto all = [](double, double) { return true; };
+  const std::vector<Polyline> passes = pencil_passes(engine, b, o, all);
+  ASSERT_EQ(passes.size(), 1u);
+  const Polyline& p = passes.front();
+  double y0 = HUGE_VAL, y1 = -HUGE_VAL;
+  for (const Vec3& q : p) {
+    EXPECT_NEAR(q.x, 20, 0.051);  // on the crease's grid line or the one beside it
+    y0 = std::min(y0, q.y);
+    y1 = std::max(y1, q.y);
+  }
+  EXPECT_LT(y0, 2.2);
+  EXPECT_GT(y1, 17.8);
+  // Every move on or above the exact CL (the ball touches both walls at
+  // 1 (sqrt 2 - 1) above the crease, on it; a hair more beside it).
+  for (std::size_t k = 0; k + 1 < p.size(); ++k)
+    for (int s = 0; s <= 20; ++s) {
+      const Vec3 q = p[k] + (p[k + 1] - p[k]) * (s / 20.0);
+      ASSERT_GE(q.z, engine.height_at(q.x, q.y) - 1e-6) << q.x << "," << q.y;
+    }
+  EXPECT_NEAR(p.front().z, 6 + std::sqrt(2.0) - 1, 0.06);
+  // Only where wanted; none on the level top.
+  EXPECT_TRUE(pencil_passes(engine, b, o, [](double, double) { return false; }).empty());
+  EXPECT_TRUE(pencil_passes(engine, XYBounds{1, 2, 12, 18}, o, all).empty());
 }

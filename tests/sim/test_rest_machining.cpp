@@ -93,6 +93,10 @@ TEST(RestMachining, VGrooveCreaseComesDownFromTheBigBallsReachToTheSmallOnes) {
   EXPECT_EQ(prog.operations[1].name, "rest machining");
   EXPECT_EQ(prog.operations[1].tool, 2);
   EXPECT_EQ(prog.operations[1].cutter.spec(), "ball:2");
+  // Rows across the groove, then a pencil pass along its crease.
+  std::printf("%s\n", prog.operations[1].detail.c_str());
+  EXPECT_NE(prog.operations[1].detail.find(" pencil passes"), std::string::npos);
+  EXPECT_EQ(prog.operations[1].detail.find(", 0 pencil passes"), std::string::npos);
   // It takes at most the difference of the two reaches at once.
   EXPECT_LE(prog.operations[1].max_depth, jobs::default_max_depth(prog.operations[1].cutter));
 
