@@ -17,6 +17,7 @@
 #include "cncstream/cam/steep_shallow.hpp"
 #include "cncstream/cam/waterline.hpp"
 #include "cncstream/geometry/mesh.hpp"
+#include "support/v_groove.hpp"
 
 using namespace cncstream;
 
@@ -238,19 +239,7 @@ TEST(WaterlineLevels, OneRunsAtTheFootOfTheWallsOverAFlatArea) {
 }
 
 TEST(Pencil, OnePassAlongAVGroovesCreaseOnTheClAndNoneOnAPlane) {
-  // A block's top with a 90-degree V-groove along Y: its walls from x = 16
-  // and x = 24 down to the crease at x = 20, z = 6.
-  Mesh m;
-  const double xs[] = {0, 16, 20, 24, 40}, zs[] = {10, 10, 6, 10, 10};
-  for (int k = 0; k < 5; ++k) {
-    m.vertices.push_back({xs[k], 0, zs[k]});
-    m.vertices.push_back({xs[k], 20, zs[k]});
-  }
-  for (std::uint32_t k = 0; k < 4; ++k) {
-    const std::uint32_t a = 2 * k;
-    m.triangles.push_back({a, a + 2, a + 3});
-    m.triangles.push_back({a, a + 3, a + 1});
-  }
+  const Mesh m = test::v_groove();
   const ClEngine engine(m, parse_cutter_spec("ball:2"));
   PencilOptions o;
   o.lattice = XYLattice{0.001, 0, 0};

@@ -18,27 +18,11 @@
 #include "cncstream/gcode/program_pause.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "sim_test_util.hpp"
+#include "support/v_groove.hpp"
 
 using namespace cncstream;
 
 namespace {
-
-// The top of a 40 x 20 block at z = 10 with a V-groove along Y: its walls
-// from x = 16 and x = 24 down to the crease at x = 20, z = 6.
-Mesh v_groove() {
-  Mesh m;
-  const double xs[] = {0, 16, 20, 24, 40}, zs[] = {10, 10, 6, 10, 10};
-  for (int k = 0; k < 5; ++k) {
-    m.vertices.push_back({xs[k], 0, zs[k]});
-    m.vertices.push_back({xs[k], 20, zs[k]});
-  }
-  for (std::uint32_t k = 0; k < 4; ++k) {
-    const std::uint32_t a = 2 * k;
-    m.triangles.push_back({a, a + 2, a + 3});
-    m.triangles.push_back({a, a + 3, a + 1});
-  }
-  return m;
-}
 
 struct Result {
   HeightFieldStock stock;
@@ -76,7 +60,7 @@ Result machine(const jobs::ToolpathProgram& prog, const GridSpec& grid, std::siz
 }  // namespace
 
 TEST(RestMachining, VGrooveCreaseComesDownFromTheBigBallsReachToTheSmallOnes) {
-  const Mesh mesh = v_groove();
+  const Mesh mesh = test::v_groove();
   jobs::ToolpathParams p;
   p.part.mesh = std::make_shared<const Mesh>(mesh);
   p.part.stl = "v-groove";
@@ -134,7 +118,7 @@ TEST(RestMachining, VGrooveCreaseComesDownFromTheBigBallsReachToTheSmallOnes) {
 
 TEST(RestMachining, RefusesARestCutterNotSmallerThanTheFinishingOne) {
   jobs::ToolpathParams p;
-  p.part.mesh = std::make_shared<const Mesh>(v_groove());
+  p.part.mesh = std::make_shared<const Mesh>(test::v_groove());
   p.part.stl = "v-groove";
   p.cutter = parse_cutter_spec("ball:2");
   p.rest = parse_cutter_spec("ball:3");
