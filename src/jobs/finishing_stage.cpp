@@ -63,10 +63,6 @@ ClGrid ground_grid(const ClEngine& engine, const XYBounds& region, const FinishS
 
 void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine& engine, const ClGrid& grid,
                     const XYLattice& lattice, const FinishSpacing& spacing, const Checkpoint& checkpoint) {
-  auto part = [&checkpoint](double from, double to) -> Checkpoint {
-    if (!checkpoint) return {};
-    return [&checkpoint, from, to](double f) { checkpoint(from + (to - from) * f); };
-  };
   const SlopeMap slope(grid);
   WaterlineOptions wo;
   wo.z_step = spacing.z_step;
@@ -76,7 +72,7 @@ void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine&
   // Half the tolerance merges straight stretches; arcs take the curves.
   wo.simplify_tolerance = p.tolerance / 2;
   wo.sample_step = std::min(0.05, spacing.grid_step / 2);
-  const WaterlinePath w = build_waterline(engine, grid, slope, wo, part(0, 0.95));
+  const WaterlinePath w = build_waterline(engine, grid, slope, wo, checkpoint_part(checkpoint, 0, 0.95));
   const SteepSkip shallow = skip_steep(raster_as_one_cut(r.path), slope, radians(p.steep_angle));
   r.finish_pieces = w.pieces;
   r.finish_pieces.insert(r.finish_pieces.end(), shallow.pieces.begin(), shallow.pieces.end());

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <stdexcept>
 
 #include "cncstream/cam/cleanup.hpp"
@@ -14,6 +13,7 @@
 #include "cncstream/cam/pencil.hpp"
 #include "cncstream/cam/reach.hpp"
 #include "cncstream/cam/stock.hpp"
+#include "finishing_stage.hpp"
 #include "job_operations.hpp"
 
 namespace cncstream::jobs {
@@ -36,10 +36,6 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
     throw std::invalid_argument(fmt::format("the rest cutter {} must be smaller than the finishing cutter {}: it cuts "
                                             "where that one cannot reach",
                                             small.spec(), big.spec()));
-  auto part = [&checkpoint](double from, double to) -> Checkpoint {
-    if (!checkpoint) return {};
-    return [&checkpoint, from, to](double f) { checkpoint(from + (to - from) * f); };
-  };
   // Where the finishing cutter leaves material: its reach limit over the
   // part on a grid fine enough for the smaller cutter's grooves.
   const double h = std::clamp(small.radius / 2, 0.05, 0.25);
@@ -49,9 +45,10 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
   for (std::size_t k = 0; k < grid.size(); ++k) wanted[k] = design.off_part[k] ? 0 : 1;
   const double pitch = std::min(h, 0.1);
   const double r = big.radius;
-  const ClGrid dense = finish_engine.compute(
-      reach_lattice(grid, region.x0 - r, region.y0 - r, region.x1 + r, region.y1 + r, pitch, pitch), part(0, 0.3));
-  const std::vector<double> reach = reach_heights(dense, big, grid, wanted, part(0.3, 0.5));
+  const GridSpec lattice_around =
+      reach_lattice(grid, region.x0 - r, region.y0 - r, region.x1 + r, region.y1 + r, pitch, pitch);
+  const ClGrid dense = finish_engine.compute(lattice_around, checkpoint_part(checkpoint, 0, 0.3));
+  const std::vector<double> reach = reach_heights(dense, big, grid, wanted, checkpoint_part(checkpoint, 0.3, 0.5));
   std::vector<double> left(grid.size(), std::numeric_limits<double>::quiet_NaN());
   // The reach lattice's own scallop and a micron-scale CL are not rest.
   s.threshold = std::max(2 * p.tolerance, 0.01);
@@ -72,10 +69,15 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
         s.most_left_at = {grid.x(i), grid.y(j), design.z[k]};
       }
     }
-  // Its rows: as the finishing's scallop or stepover asks of its own radius.
-  const double rk = small.corner_radius;
-  s.stepover = p.scallop && rk > 0 ? std::cos(55.0 * std::numbers::pi / 180) * std::sqrt(8 * rk * *p.scallop)
-                                   : p.stepover * small.radius / big.radius;
+  // Its rows: spaced as the finishing's would be for its own radius (the
+  // scallop's spacing), or the stepover scaled by the radii.
+  if (p.scallop && small.corner_radius > 0) {
+    ToolpathParams own = p;
+    own.cutter = small;
+    s.stepover = finish_spacing(own).stepover;
+  } else {
+    s.stepover = p.stepover * small.radius / big.radius;
+  }
   if (s.nodes == 0) return s;
 
   ClOptions clo;
@@ -90,7 +92,7 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
   ro.direction = p.direction;
   ro.tolerance = p.tolerance;
   ro.lattice = lattice;
-  const RasterPath rows = build_raster(engine, box, ro, part(0.5, 0.7));
+  const RasterPath rows = build_raster(engine, box, ro, checkpoint_part(checkpoint, 0.5, 0.7));
   s.pieces = cleanup_pieces(rows, grid, left, s.threshold, grow, p.direction != RasterDirection::Y);
   // Then along the creases there (a groove's bottom, where it touches both
   // faces): the rows leave their cusps right at a crease.
@@ -152,7 +154,7 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
     rr.near = depth.over;
     rr.grid_step = grid_step;
     block.surface = &stock;
-    RoughingPath levels = build_zlevel_roughing(grown, small, block, rr, part(0.7, 0.95));
+    RoughingPath levels = build_zlevel_roughing(grown, small, block, rr, checkpoint_part(checkpoint, 0.7, 0.95));
     if (levels.levels.empty()) break;
     stock = stock_after(stock, levels);
     grid_step = levels.grid.dx / 2;

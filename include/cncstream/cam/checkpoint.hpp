@@ -13,4 +13,11 @@ namespace cncstream {
 
 using Checkpoint = std::function<void(double fraction_done)>;
 
+// A step of a longer computation reporting into `whole` as [from, to] of it
+// (empty when `whole` is). `whole` must outlive the result.
+inline Checkpoint checkpoint_part(const Checkpoint& whole, double from, double to) {
+  if (!whole) return {};
+  return [&whole, from, to](double f) { whole(from + (to - from) * f); };
+}
+
 }  // namespace cncstream
