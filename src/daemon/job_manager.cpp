@@ -625,7 +625,12 @@ void JobManager::resume(std::int64_t id, const std::string& client) {
   auto& j = get(id);
   Machine& m = machine_of(j);
   machines_.require_control(m, client);
-  if (j.row.state != "held") throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state};
+  // A program pause (the M0 of a tool change) holds the machine while the
+  // job stays running; resume is its cycle start.
+  const auto status = m.session->status();
+  const bool program_pause = j.row.state == "running" && status && status->state == protocol::MachineState::Hold;
+  if (j.row.state != "held" && !program_pause)
+    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state};
   if (auto r = m.session->resume(); !r) throw ApiError{409, "refused", r.reason};
 }
 

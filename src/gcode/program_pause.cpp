@@ -47,6 +47,8 @@ bool only_t_word(const std::string& words) {
 
 }  // namespace
 
+bool has_no_words(const std::string& line) { return words_of(line).empty(); }
+
 bool is_program_pause(const std::string& line) {
   const std::string w = words_of(line);
   for (std::size_t i = 0; i + 1 < w.size(); ++i) {

@@ -182,6 +182,36 @@ TEST(DaemonApi, HoldResumeAndStopARunningJob) {
   std::filesystem::remove_all(dir);
 }
 
+// A tool change's M0 holds the machine while the job runs on: the job says
+// so, and its resume is the cycle start that goes on.
+TEST(DaemonApi, ResumeGoesOnAfterTheProgramsToolChangePause) {
+  const auto dir = temp_dir("pause");
+  auto cfg = test_config(dir);
+  cfg.machines = {sim_machine("sim1")};
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return machines_ready(h); }, 30));
+  const auto f = upload(h,
+                        "G21 G90\nG0 Z5\nG1 X10 F1000\n(TOOL CHANGE: mount T2)\nM0\nG1 X0 F1000\nG1 Y5\nM2\n",
+                        "pause.nc");
+  auto r = h.post("/api/v1/jobs", {{"machine", "sim1"}, {"file", f["id"]}});
+  ASSERT_EQ(r.status, 201) << r.body;
+  const auto id = r.j()["id"].get<std::int64_t>();
+  const std::string base = "/api/v1/jobs/" + std::to_string(id);
+  ASSERT_TRUE(wait_state(h, id, "ready", 30));
+  ASSERT_EQ(h.post("/api/v1/machines/sim1/control").status, 200);
+  ASSERT_EQ(h.post(base + "/start").status, 202);
+  ASSERT_TRUE(wait_for([&] { return job(h, id)["message"].get<std::string>().starts_with("paused at line 5"); }, 30))
+      << job(h, id).dump();
+  EXPECT_EQ(job(h, id)["state"], "running");
+  EXPECT_EQ(with_client(d.http, "other").post(base + "/resume").status, 409);  // control is still needed
+  ASSERT_EQ(h.post(base + "/resume").status, 202) << h.post(base + "/resume").body;
+  ASSERT_TRUE(wait_state(h, id, "done", 30)) << job(h, id).dump();
+  EXPECT_EQ(job(h, id)["progress"]["last_answered_line"], 8);
+  d.shutdown();
+  std::filesystem::remove_all(dir);
+}
+
 TEST(DaemonApi, QueueKeepsItsOrderAndNothingStartsByItself) {
   const auto dir = temp_dir("queue");
   RunningDaemon d(test_config(dir));

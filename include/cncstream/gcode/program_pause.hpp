@@ -11,6 +11,10 @@ namespace cncstream::gcode {
 // Whether the line's words (comments left out) hold M0 (or M00).
 bool is_program_pause(const std::string& line);
 
+// Whether the line holds no words at all (blank or comments only): a
+// streamer may leave it out, so no answer marks its place.
+bool has_no_words(const std::string& line);
+
 // If lines[index] is a program pause: the text of the comment lines just
 // before it (T words between them are skipped), in order, joined by a
 // space; an empty string if there are none. nullopt if it is not a pause
