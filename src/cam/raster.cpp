@@ -116,10 +116,15 @@ struct Sample {
 // suspicious intervals get an exact point query at their midpoint; where the
 // surface is off the chord there by more than eps (measured across the
 // chord), the midpoint is kept and both halves are examined the same way.
+// Samples from another engine (a grid_source) stand above the exact surface
+// by up to its error: there a midpoint is kept when it is above the chord
+// (the chord would cut into the part) or lower than that error allows (a
+// wall's step is in the interval), or every interval would be split.
 struct StepRefiner {
   const ClEngine& engine;
   double rk;
   double lattice = 0;       // midpoints are snapped to multiples of this (0: exact halves)
+  double below_allowance = 0;  // > 0: how far (vertically) the samples may stand above the exact surface
   double eps = 1e-4;        // mm of possible chord sag accepted
   double min_width = 1e-4;  // mm; narrower intervals are not split (no lattice)
 
@@ -137,6 +142,7 @@ struct StepRefiner {
   bool off_chord(double ua, double za, double ub, double zb, double um, double zm) const {
     const double slope = (zb - za) / (ub - ua);
     const double chord = za + slope * (um - ua);
+    if (below_allowance > 0) return (zm - chord) / std::sqrt(1 + slope * slope) > eps || chord - zm > below_allowance;
     return std::fabs(zm - chord) / std::sqrt(1 + slope * slope) > eps;
   }
 
@@ -242,7 +248,7 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
     spec.y0 = along_x ? v_first : u0;
     spec.dx = along_x ? (du > 0 ? du : 1) : (v_step > 0 ? v_step : 1);
     spec.dy = along_x ? (v_step > 0 ? v_step : 1) : (du > 0 ? du : 1);
-    return engine.compute(spec, cp);
+    return o.grid_source ? o.grid_source(spec, cp) : engine.compute(spec, cp);
   };
   struct Band {
     std::size_t first = 0, count = 0;
@@ -306,7 +312,7 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   };
   const StepRefiner refiner{engine, engine.cutter().corner_radius, lat};
   path.rows.resize(nrows);
-  std::vector<std::size_t> row_queries(nrows, 0);
+  std::vector<std::size_t> row_queries(nrows, 0), row_raised(nrows, 0);
   // Rows are independent: refine and merge them in parallel.
   auto do_row = [&](std::size_t r) {
     const double v = row_v[r];
@@ -325,8 +331,21 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
       zs[k] = cl(idx);
     }
     auto along = [&](double s) { return forward ? u0 + s : u0 + (us_axis.s.back() - s); };
+    // Another engine's grid can be below the exact surface (the depth
+    // buffer in the slivers beside walls): there the exact height decides,
+    // before the row is refined (a wall's step is found where it is).
+    StepRefiner row_refiner = refiner;
+    if (o.grid_source) {
+      double above = 0;  // the most a node stands above the exact surface
+      for (std::size_t k = 0; k < nu; ++k) {
+        const double e = query(along(ss[k]), v);
+        if (e > zs[k]) zs[k] = e, ++row_raised[r];
+        above = std::max(above, zs[k] - e);
+      }
+      row_refiner.below_allowance = 2 * above + row_refiner.eps;
+    }
     path.rows[r] = pass_polyline(
-        ss, zs, refiner, o.tolerance, [&](double s) { return query(along(s), v); },
+        ss, zs, row_refiner, o.tolerance, [&](double s) { return query(along(s), v); },
         [&](double s, double z) { return point(along(s), v, z); }, row_queries[r]);
   };
   std::atomic<std::size_t> rows_done{0};
@@ -343,6 +362,7 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
     path.points_before_merge += steps_per_row;
     path.points_after_merge += path.rows[r].size();
     path.refinement_queries += row_queries[r];
+    path.raised_to_exact += row_raised[r];
   }
 
   // Links between rows run across them at the row ends, sampled with point

@@ -1,5 +1,5 @@
 // Files: upload (spooled to disk by the server, hashed and classified on the
-// worker pool), list, get, delete.
+// worker pool), list, get, download, delete.
 #include <boost/asio/post.hpp>
 
 #include "cncstream/daemon/api.hpp"
@@ -43,6 +43,16 @@ void Api::file_routes() {
     const auto f = files_.get(r.params.at(0));
     if (!f) throw ApiError{404, "not_found", "no file '" + r.params.at(0).substr(0, 64) + "'"};
     res(Response::json(200, file_json(*f)));
+  });
+  // The bytes as uploaded (the viewer shows an STL job's part from them).
+  router_.add("GET", "/api/v1/files/{id}/content", [this](Request& r, const Respond& res) {
+    const auto f = files_.get(r.params.at(0));
+    const auto path = f ? files_.content_path(f->id) : std::nullopt;
+    if (!path) throw ApiError{404, "not_found", "no file '" + r.params.at(0).substr(0, 64) + "'"};
+    Response resp;
+    resp.content_type = f->kind == "stl" ? "model/stl" : "text/plain; charset=us-ascii";
+    resp.file = *path;
+    res(std::move(resp));
   });
   router_.add("DELETE", "/api/v1/files/{id}", [this](Request& r, const Respond& res) {
     const std::string& id = r.params.at(0);

@@ -19,6 +19,9 @@
 
 namespace cncstream::daemon {
 
+// The start of a job message that says where the program pauses (a tool change).
+constexpr const char* kPausedAt = "paused at line ";
+
 using nlohmann::json;
 namespace fs = std::filesystem;
 
@@ -95,7 +98,7 @@ JobManager::JobManager(boost::asio::io_context& io, boost::asio::thread_pool& po
   l.started = [this](const std::string& m, std::int64_t id) { on_started(m, id); };
   l.progress = [this](const std::string& m, const protocol::JobProgress& p) { on_progress(m, p); };
   l.state = [this](const std::string& m, const std::string& s) { on_state(m, s); };
-  l.holding = [this](const std::string& m, long answered) { on_holding(m, answered); };
+  l.holding = [this](const std::string& m, bool holds, long answered) { on_holding(m, holds, answered); };
   l.ended = [this](const std::string& m, protocol::JobOutcome o, long line, const std::string& t) {
     on_ended(m, o, line, t);
   };
@@ -632,6 +635,10 @@ void JobManager::resume(std::int64_t id, const std::string& client) {
   if (j.row.state != "held" && !program_pause)
     throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + j.row.state};
   if (auto r = m.session->resume(); !r) throw ApiError{409, "refused", r.reason};
+  if (program_pause && j.row.message.starts_with(kPausedAt)) {
+    j.row.message.clear();  // the pause is over
+    publish_job(j);
+  }
 }
 
 void JobManager::stop(std::int64_t id) {
@@ -689,9 +696,17 @@ void JobManager::on_progress(const std::string& machine, const protocol::JobProg
   }
 }
 
-void JobManager::on_holding(const std::string& machine, long answered) {
+void JobManager::on_holding(const std::string& machine, bool holds, long answered) {
   auto* j = running_on(machine);
   if (!j || !j->program) return;
+  if (!holds) {
+    // Moving again (cycle start from here, the pendant or the panel): the pause's message is over.
+    if (j->row.message.starts_with(kPausedAt)) {
+      j->row.message.clear();
+      publish_job(*j);
+    }
+    return;
+  }
   static const std::vector<long> kNoSourceLines;
   const auto& lines = j->resume ? j->resume->lines : j->program->lines;
   const auto& sources = j->resume ? j->resume->source_lines : kNoSourceLines;
@@ -699,7 +714,7 @@ void JobManager::on_holding(const std::string& machine, long answered) {
   if (!pause) return;
   // The program asks something of the operator (a tool change): say it
   // where the job is shown; resume (cycle start) goes on.
-  std::string msg = cat({"paused at line ", std::to_string(pause->line), ": ",
+  std::string msg = cat({kPausedAt, std::to_string(pause->line), ": ",
                          pause->note.empty() ? std::string("program pause (M0)") : pause->note,
                          " (resume to go on)"});
   if (j->row.message == msg) return;

@@ -286,10 +286,10 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
       hub_.publish_status(name, WsHub::frame(status_frame(m)));
       // The executing line moves with the planner (Bf:), not only with answers.
       if (m.session->job_active()) push_progress(name, m);
-      if (m.session->job_active() && m.session->status() &&
-          m.session->status()->state == protocol::MachineState::Hold && m.session->engine() &&
+      if (m.session->job_active() && m.session->status() && m.session->engine() &&
           m.session->engine()->progress().state == protocol::JobState::Running && listener_.holding)
-        listener_.holding(name, m.session->engine()->progress().last_answered_line);
+        listener_.holding(name, m.session->status()->state == protocol::MachineState::Hold,
+                          m.session->engine()->progress().last_answered_line);
       return;
     case EventKind::LineAnswered: push_progress(name, m); return;
     case EventKind::JobState:

@@ -49,7 +49,10 @@ std::optional<ProgramOperation> parse_operation(const std::string& text) {
 
 }  // namespace
 
-std::vector<ProgramOperation> program_operations(const std::vector<std::string>& lines) {
+namespace {
+
+template <class Lines>
+std::vector<ProgramOperation> operations_of(const Lines& lines) {
   constexpr std::string_view kOperation = "operation ";
   std::vector<ProgramOperation> ops;
   for (std::size_t k = 0; k < lines.size(); ++k) {
@@ -76,6 +79,13 @@ std::vector<ProgramOperation> program_operations(const std::vector<std::string>&
     ops.push_back(std::move(*op));
   }
   return ops;
+}
+
+}  // namespace
+
+std::vector<ProgramOperation> program_operations(const std::vector<std::string>& lines) { return operations_of(lines); }
+std::vector<ProgramOperation> program_operations(std::span<const std::string_view> lines) {
+  return operations_of(lines);
 }
 
 std::optional<ProgramOperation> operation_after_line(const std::vector<ProgramOperation>& ops, std::size_t line) {

@@ -607,6 +607,11 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
     }
   st.triangles += batch.triangles();
   glDeleteProgram(program);
+  if (opt.lift_to_bound) {
+    st.lifted = st.height_error_bound + 2 * st.depth_quantum;
+    for (std::size_t k = 0; k < grid.z.size(); ++k)
+      if (!grid.on_floor[k]) grid.z[k] += st.lifted;
+  }
   if (stats_out) *stats_out = st;
   return grid;
 }

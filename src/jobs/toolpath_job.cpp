@@ -76,6 +76,13 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     }
     const bool steep_shallow = p.strategy == FinishStrategy::SteepShallow;
     const bool by_slope = spacing.row_widest > 0;
+    if (p.raster_grid) {
+      if (steep_shallow || p.rest)
+        throw std::invalid_argument("another CL engine makes only the raster finishing's grid: steep-and-shallow "
+                                    "finishing and rest machining need the exact engine's point queries (use "
+                                    "--strategy raster, without --rest)");
+      ro.grid_source = [&](const GridSpec& spec, const Checkpoint&) { return p.raster_grid(*mesh, r.cutter, spec); };
+    }
     // The slope of the ground, for the waterlines and the rows' spacing.
     std::optional<ClGrid> ground;
     if (steep_shallow || by_slope) ground = ground_grid(engine, region, spacing, run.nested_checkpoint(0, 0.15));
@@ -151,6 +158,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
             (xy == XYOrigin::PartMin ? "part minimum" : xy == XYOrigin::PartCenter ? "part centre" : "model origin") +
             ", Z0 at " + (zz == ZZero::PartTop ? "part top" : zz == ZZero::PartBottom ? "part bottom" : "model origin"),
     };
+    if (p.grid_note) mp.header_comments.push_back(p.grid_note());
     if (!rough && !rest) {
       r.gcode = pieces_program(r.finish_pieces, work.offset, mp, &r.stats);
       r.operations.push_back(finishing_summary(r, p, r.stats));

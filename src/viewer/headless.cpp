@@ -122,7 +122,7 @@ DeviationLegend legend_of(const CutSurface& cut) {
 RgbImage screenshot(const Scene& scene, NamedView view, int width, int height, std::string* gl_renderer) {
   std::optional<DeviationLegend> legend;
   int legend_w = 0;
-  if (scene.cut) {
+  if (scene.cut && scene.cut->stats.tolerance > 0) {  // compared with a design (not a bare stock)
     legend = legend_of(*scene.cut);
     const auto [w, h] = deviation_legend_size(*legend);
     if (h + 32 <= height && w + 32 < width / 2) legend_w = w + 32;

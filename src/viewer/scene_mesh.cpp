@@ -86,7 +86,9 @@ TriangleMesh cutter_surface(const Cutter& cutter, const Vec3& tip, double length
   return out;
 }
 
-CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const Mesh& design, double tolerance) {
+namespace {
+
+void check_height_field(const GridSpec& grid, const std::vector<float>& heights) {
   if (grid.nx < 2 || grid.ny < 2) throw std::invalid_argument("viewer: a cut result needs at least 2 x 2 nodes");
   if (heights.size() != grid.size())
     throw std::invalid_argument(std::string("viewer: the cut result has ")
@@ -94,21 +96,24 @@ CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, 
                                     .append(" heights for a grid of ")
                                     .append(std::to_string(grid.size()))
                                     .append(" nodes"));
-  double top = -std::numeric_limits<double>::infinity();
-  std::vector<double> z(heights.begin(), heights.end());
-  for (const double v : z)
-    if (std::isfinite(v)) top = std::max(top, v);
-  if (!std::isfinite(top)) throw std::invalid_argument("viewer: the cut result has no height anywhere");
-  const HeightFieldStock stock(grid, top, z);
-  const DeviationResult dev = compare_to_design(stock, design_heights(design, grid), tolerance);
+}
 
-  CutSurface out;
-  out.stats = dev.stats;
-  const DeviationScale scale{tolerance, dev.stats.has_gouge ? std::max(0.0, -dev.stats.largest_gouge.value) : 0.0,
-                             std::max(0.0, dev.stats.largest_excess.value)};
+double highest(const std::vector<float>& heights) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (const float v : heights)
+    if (std::isfinite(v)) top = std::max(top, static_cast<double>(v));
+  if (!std::isfinite(top)) throw std::invalid_argument("viewer: the cut result has no height anywhere");
+  return top;
+}
+
+// A height field's top surface, each node coloured by colour_of(node index).
+template <class ColourOf>
+TriangleMesh height_field_surface(const GridSpec& grid, const std::vector<float>& heights, double top,
+                                  ColourOf colour_of) {
+  TriangleMesh out;
   const std::size_t nx = grid.nx, ny = grid.ny;
   auto h = [&](std::size_t i, std::size_t j) { return static_cast<double>(heights[j * nx + i]); };
-  out.mesh.vertices.reserve(grid.size());
+  out.vertices.reserve(grid.size());
   for (std::size_t j = 0; j < ny; ++j)
     for (std::size_t i = 0; i < nx; ++i) {
       const double zc = h(i, j);
@@ -123,12 +128,9 @@ CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, 
                               grid.dx * static_cast<double>((i > 0) + (i + 1 < nx)));
       const double sy = slope(i, j > 0 ? j - 1 : j, i, j + 1 < ny ? j + 1 : j,
                               grid.dy * static_cast<double>((j > 0) + (j + 1 < ny)));
-      const std::size_t k = j * nx + i;
-      const Rgb c = dev.off_part[k] || !std::isfinite(dev.deviation[k]) ? DeviationPalette::off_part
-                                                                          : scale.colour(dev.deviation[k]);
       const Vec3 p{grid.x(i), grid.y(j), std::isfinite(zc) ? zc : top};
-      out.mesh.vertices.push_back(vertex(p, normalized(Vec3{-sx, -sy, 1}), c));
-      if (std::isfinite(zc)) out.mesh.bounds.add(p);
+      out.vertices.push_back(vertex(p, normalized(Vec3{-sx, -sy, 1}), colour_of(j * nx + i)));
+      if (std::isfinite(zc)) out.bounds.add(p);
     }
   // Two triangles per cell; a triangle touching a node without a value is left out.
   for (std::size_t j = 0; j + 1 < ny; ++j)
@@ -136,10 +138,39 @@ CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, 
       const auto a = static_cast<std::uint32_t>(j * nx + i), b = a + 1, c = a + static_cast<std::uint32_t>(nx),
                  d = c + 1;
       auto valid = [&](std::uint32_t v) { return std::isfinite(heights[v]); };
-      if (valid(a) && valid(b) && valid(d)) out.mesh.indices.insert(out.mesh.indices.end(), {a, b, d});
-      if (valid(a) && valid(d) && valid(c)) out.mesh.indices.insert(out.mesh.indices.end(), {a, d, c});
+      if (valid(a) && valid(b) && valid(d)) out.indices.insert(out.indices.end(), {a, b, d});
+      if (valid(a) && valid(d) && valid(c)) out.indices.insert(out.indices.end(), {a, d, c});
     }
   return out;
+}
+
+}  // namespace
+
+CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const DesignHeights& design,
+                       double tolerance) {
+  check_height_field(grid, heights);
+  const double top = highest(heights);
+  const HeightFieldStock stock(grid, top, std::vector<double>(heights.begin(), heights.end()));
+  const DeviationResult dev = compare_to_design(stock, design, tolerance);
+  CutSurface out;
+  out.stats = dev.stats;
+  const DeviationScale scale{tolerance, dev.stats.has_gouge ? std::max(0.0, -dev.stats.largest_gouge.value) : 0.0,
+                             std::max(0.0, dev.stats.largest_excess.value)};
+  out.mesh = height_field_surface(grid, heights, top, [&](std::size_t k) {
+    return dev.off_part[k] || !std::isfinite(dev.deviation[k]) ? DeviationPalette::off_part
+                                                               : scale.colour(dev.deviation[k]);
+  });
+  return out;
+}
+
+CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const Mesh& design, double tolerance) {
+  check_height_field(grid, heights);
+  return cut_surface(grid, heights, design_heights(design, grid), tolerance);
+}
+
+TriangleMesh stock_surface(const GridSpec& grid, const std::vector<float>& heights, Rgb colour) {
+  check_height_field(grid, heights);
+  return height_field_surface(grid, heights, highest(heights), [&](std::size_t) { return colour; });
 }
 
 }  // namespace cncstream::viewer

@@ -38,6 +38,36 @@ void LiveCursor::set_progress(double segments_done) {
   if (wake) wake();
 }
 
+void LiveCursor::set_cut(std::shared_ptr<const TriangleMesh> surface) {
+  std::function<void()> wake;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    pending_.cut = std::move(surface);
+    wake = wake_;
+  }
+  if (wake) wake();
+}
+
+void LiveCursor::set_cutter(const Cutter& cutter) {
+  std::function<void()> wake;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    pending_.tool = cutter;
+    wake = wake_;
+  }
+  if (wake) wake();
+}
+
+void LiveCursor::set_status(std::string text) {
+  std::function<void()> wake;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    pending_.status = std::move(text);
+    wake = wake_;
+  }
+  if (wake) wake();
+}
+
 LiveCursor::Update LiveCursor::take() {
   const std::lock_guard<std::mutex> lock(mutex_);
   Update u = pending_;
@@ -289,11 +319,24 @@ void run_window(Scene& scene, const WindowOptions& options) {
   } detach{options.live};
 
   glfwSetWindowRefreshCallback(win, [](GLFWwindow* w) { state_of(w).dirty = true; });
+  std::string live_status;
   while (!glfwWindowShouldClose(win)) {
     if (options.live) {
       const LiveCursor::Update u = options.live->take();
       if (u.cutter) scene.cutter_at = u.cutter, s.dirty = true;
       if (u.progress) scene.progress = *u.progress, s.dirty = true;
+      if (u.cut) {
+        if (!scene.cut) scene.cut.emplace();
+        scene.cut->mesh = *u.cut;
+        renderer.set_cut(scene.cut->mesh);
+        s.dirty = true;
+      }
+      if (u.tool) {
+        scene.cutter = *u.tool;
+        renderer.set_cutter(cutter_surface(*scene.cutter, {}));
+        s.dirty = true;
+      }
+      if (u.status) live_status = std::move(*u.status), s.dirty = true;
     }
     if (!s.dirty) {
       // Input and LiveCursor's wake-ups end the wait; the timeout is a
@@ -316,6 +359,7 @@ void run_window(Scene& scene, const WindowOptions& options) {
     // The readout: the depth under the cursor before the slider covers it
     // (none while a drag draws at half resolution: no depth in the window).
     std::string title = options.title;
+    if (!live_status.empty()) title += "  |  " + live_status;
     const int px = static_cast<int>(s.mouse_x), py = static_cast<int>(s.mouse_y);
     if (!half && px >= 0 && py >= 0 && px < s.camera.width() && py < s.camera.height()) {
       float depth = 1.0f;

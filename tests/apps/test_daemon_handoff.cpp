@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "app_run.hpp"
+#include "daemon_process.hpp"
 #include "cncstream/transport/port_lock.hpp"
 #include "sim/pty_process.hpp"
 
@@ -23,61 +24,6 @@ using namespace apptest;
 namespace tr = cncstream::transport;
 
 namespace {
-
-// cncstreamd on a loopback port of its choosing (--listen 127.0.0.1:0): the
-// address is learned from the lock file it writes for the machine's port.
-class DaemonProcess {
- public:
-  explicit DaemonProcess(const std::vector<std::string>& args) {
-    log_ = temp_dir() / ("cncstreamd" + std::to_string(counter()++) + ".log");
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-      const int null = ::open("/dev/null", O_RDONLY);
-      ::dup2(null, 0);
-      // The daemon's journal goes to this test's state folder, not the user's.
-      ::setenv("XDG_STATE_HOME", (temp_dir() / "daemon-state").c_str(), 1);
-      std::vector<std::string> a = args;
-      static std::string exe = std::string(CNCSTREAM_BINARY_DIR) + "/cncstreamd";
-      std::vector<char*> argv{exe.data()};
-      for (auto& s : a) argv.push_back(s.data());
-      argv.push_back(nullptr);
-      ::execv(exe.c_str(), argv.data());
-      ::_exit(127);
-    }
-  }
-  ~DaemonProcess() {
-    if (pid_ <= 0) return;
-    ::kill(pid_, SIGTERM);
-    // A clean stop within 10 s, else it is killed (and the test has failed elsewhere).
-    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-    while (::waitpid(pid_, nullptr, WNOHANG) == 0) {
-      if (std::chrono::steady_clock::now() > end) {
-        ::kill(pid_, SIGKILL);
-        ::waitpid(pid_, nullptr, 0);
-        break;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  }
-  pid_t pid() const { return pid_; }
-  std::string log() const {
-    std::ifstream f(log_);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-  }
-
- private:
-  static int& counter() {
-    static int c = 0;
-    return c;
-  }
-  pid_t pid_ = -1;
-  fs::path log_;
-};
 
 // The daemon's lock on `port`, once it has opened it (deadline 30 s).
 std::optional<tr::PortOwner> wait_for_daemon_lock(const std::string& port, pid_t daemon) {

@@ -1,6 +1,6 @@
 // `cncstream view` end to end: a screenshot without a window (EGL, no X) of
-// the plaque with a program placed by its header's work origin, and the
-// errors a person meets first.
+// the plaque with a program placed by its header's work origin, the errors a
+// person meets first, and the window following a job on the daemon.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -9,7 +9,18 @@
 #include <string>
 #include <vector>
 
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <thread>
+
 #include "app_run.hpp"
+#include "daemon_process.hpp"
+#include "support/loopback_http.hpp"
+#include "support/private_x_server.hpp"
+#include "support/slot_program.hpp"
 #include "cncstream/cam/deviation.hpp"
 #include "cncstream/cam/height_field_io.hpp"
 #include "cncstream/geometry/stl.hpp"
@@ -51,6 +62,79 @@ class ScopedEnv {
 // suppression can name (the GL and viewer tests run without the leak check
 // too): the rendering child runs without it.
 constexpr const char* kRenderChildAsan = "detect_leaks=0:abort_on_error=1";
+
+// `cncstream ARGS` in the background (its output to a log file), for a
+// command that runs beside the test's own steps.
+class CncstreamInBackground {
+ public:
+  explicit CncstreamInBackground(const std::vector<std::string>& args) {
+    static int n = 0;
+    log_ = temp_dir() / ("background" + std::to_string(n++) + ".log");
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+      const int null = ::open("/dev/null", O_RDONLY);
+      ::dup2(null, 0);
+      ::setenv("XDG_STATE_HOME", (temp_dir() / "state").c_str(), 1);
+      static std::string exe = std::string(CNCSTREAM_BINARY_DIR) + "/cncstream";
+      std::vector<std::string> a = args;
+      std::vector<char*> argv{exe.data()};
+      for (auto& s : a) argv.push_back(s.data());
+      argv.push_back(nullptr);
+      ::execv(exe.c_str(), argv.data());
+      ::_exit(127);
+    }
+  }
+  ~CncstreamInBackground() {
+    if (pid_ > 0 && !exited_) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+  }
+  CncstreamInBackground(const CncstreamInBackground&) = delete;
+  CncstreamInBackground& operator=(const CncstreamInBackground&) = delete;
+
+  std::string out() const {
+    std::ifstream f(log_);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+  }
+  // Whether its output says `text` within `timeout_s` (false at once if it has ended without).
+  bool wait_output(const std::string& text, double timeout_s) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < end) {
+      if (out().find(text) != std::string::npos) return true;
+      if (exited()) return out().find(text) != std::string::npos;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return false;
+  }
+  // Its exit code, or -1 when it has not ended within `timeout_s`.
+  int wait_exit(double timeout_s) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (!exited() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return exited_ && WIFEXITED(status_) ? WEXITSTATUS(status_) : -1;
+  }
+
+ private:
+  bool exited() {
+    if (!exited_ && ::waitpid(pid_, &status_, WNOHANG) == pid_) exited_ = true;
+    return exited_;
+  }
+  pid_t pid_ = -1;
+  int status_ = 0;
+  bool exited_ = false;
+  fs::path log_;
+};
+
+// The number after `label` in `text` (NaN when it is not there).
+double number_after(const std::string& text, const std::string& label) {
+  const auto at = text.find(label);
+  return at == std::string::npos ? NAN : std::atof(text.c_str() + at + label.size());
+}
 
 }  // namespace
 
@@ -100,6 +184,17 @@ TEST(ViewCommand, BadInputIsAClearError) {
   r = run_cncstream({"view", plaque(), "--screenshot", (temp_dir() / "x.png").string(), "--size", "0x10"});
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_TRUE(r.has("WIDTHxHEIGHT")) << r.out;
+  r = run_cncstream({"view", "--follow", "sim1", "--program", "x.nc"});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.has("--follow takes the program and the cut from the daemon's job")) << r.out;
+  r = run_cncstream({"view", plaque(), "--until-done"});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.has("go with --follow MACHINE")) << r.out;
+  // No daemon there: the address in the message.
+  r = run_cncstream({"view", "--follow", "sim1", "--daemon", "http://127.0.0.1:1", "--screenshot",
+                     (temp_dir() / "x.png").string()});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.has("127.0.0.1:1")) << r.out;
 }
 
 TEST(ViewCommand, CutScreenshotCarriesTheDeviationMapsLegend) {
@@ -129,4 +224,102 @@ TEST(ViewCommand, CutScreenshotCarriesTheDeviationMapsLegend) {
     }
   EXPECT_TRUE(gouge_swatch);
   EXPECT_TRUE(excess_swatch);
+}
+
+// The window attached to a job on the daemon: it waits for the start, shows
+// the tool change's pause, follows to the end (--until-done closes it) and
+// has cut the slot's volume; then one frame of the finished job.
+TEST(ViewFollow, TheWindowFollowsADaemonJobThroughItsToolChangeToItsEnd) {
+  const PrivateXServer x;
+  ASSERT_FALSE(x.display().empty()) << "Xvfb did not start (scripts/setup.sh installs xvfb)";
+  const ScopedEnv display("DISPLAY", x.display().c_str());
+  const ScopedEnv asan("ASAN_OPTIONS", kRenderChildAsan);
+  DaemonProcess daemon({"--listen", "127.0.0.1:0", "--data", (temp_dir() / "follow-data").string(), "--machine",
+                        "sim1=sim,sim_speed=1"});
+  const unsigned short port = daemon.listen_port();
+  ASSERT_NE(port, 0) << daemon.log();
+  loopback::Http h;
+  h.port = port;
+  h.headers["X-Client-Id"] = "follow-test";
+  auto wait = [](const std::function<bool()>& ok, double timeout_s) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (!ok() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return ok();
+  };
+  ASSERT_TRUE(wait([&] { return h.get("/api/v1/machines/sim1").j().value("link", "") == "ready"; }, 30)) << daemon.log();
+  const auto file = h.request("POST", "/api/v1/files?name=slot.nc", testparts::kSlotProgram,
+                              {{"Content-Type", "application/octet-stream"}});
+  ASSERT_EQ(file.status, 201) << file.body;
+  const auto created = h.post("/api/v1/jobs", {{"machine", "sim1"}, {"file", file.j()["id"]}});
+  ASSERT_EQ(created.status, 201) << created.body;
+  const std::string id = std::to_string(created.j()["id"].get<long>());
+  const std::string job = "/api/v1/jobs/" + id;
+  ASSERT_TRUE(wait([&] { return h.get(job).j()["state"] == "ready"; }, 30)) << h.get(job).body;
+  ASSERT_EQ(h.post("/api/v1/machines/sim1/control").status, 200);
+  const std::string api = "http://127.0.0.1:" + std::to_string(port);
+
+  CncstreamInBackground view({"view", "--follow", "sim1", "--daemon", api, "--until-done", "--size", "320x240"});
+  ASSERT_TRUE(view.wait_output("following job " + id + " on sim1", 60)) << view.out();
+  EXPECT_TRUE(view.wait_output("stock 601 x 401 nodes at 0.050 mm", 10)) << view.out();
+  ASSERT_EQ(h.post(job + "/start").status, 202);
+  EXPECT_TRUE(view.wait_output("job " + id + " running", 30)) << view.out();
+  // The tool change's pause, on the daemon and in the viewer; resume goes on.
+  ASSERT_TRUE(view.wait_output("paused at line 16: TOOL CHANGE: mount T2", 30)) << view.out() << daemon.log();
+  ASSERT_EQ(h.post(job + "/resume").status, 202);
+  ASSERT_EQ(view.wait_exit(60), 0) << view.out();
+  const std::string out = view.out();
+  EXPECT_NE(out.find("job " + id + " done, line 19 of 19"), std::string::npos) << out;
+  const std::string done = "job " + id + " done: ";
+  ASSERT_NE(out.find(done), std::string::npos) << out;
+  const std::string summary = out.substr(out.find(done));
+  EXPECT_EQ(summary.find(done + "6 of 6 segments run"), 0u) << summary;
+  const double slot = (10 * 6 + M_PI * 9) * 2;  // the 6 mm flat's slot, 10 mm long and 2 mm deep
+  EXPECT_NEAR(number_after(summary, "segments run, "), slot, 0.03 * slot) << summary;
+
+  // One frame of the finished job, without a window: the stock with its slot.
+  const ScopedEnv no_display("DISPLAY", nullptr);
+  const fs::path png = temp_dir() / "follow.png";
+  const auto r = run_cncstream({"view", "--follow", "sim1", "--daemon", api, "--job", id, "--screenshot", png.string(),
+                                "--size", "320x240"});
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NEAR(number_after(r.out, done + "6 of 6 segments run, "), slot, 0.03 * slot) << r.out;
+  const cncstream::RgbImage img = cncstream::read_png(png);
+  int stock = 0;
+  for (int yy = 0; yy < img.height(); ++yy)
+    for (int xx = 0; xx < img.width(); ++xx) {
+      const auto c = img.get(xx, yy);
+      stock += c.r > c.b + 30 && c.g > c.b + 10;  // the stock's warm colour, shaded
+    }
+  EXPECT_GT(stock, 320 * 240 / 10);
+  // Following a machine without a job says so.
+  const auto none = run_cncstream({"view", "--follow", "sim1", "--daemon", api, "--screenshot", png.string()});
+  EXPECT_EQ(none.code, 1) << none.out;
+  EXPECT_TRUE(none.has("no job to follow on machine 'sim1' at " + api)) << none.out;
+}
+
+// `toolpath --engine gl`: the raster's CL grid from the depth buffer (EGL,
+// no X), said in the report and in the program's header; where it cannot
+// serve, a clear error.
+TEST(ToolpathGlEngine, TheRasterFromTheDepthBufferAndWhereItCannotServe) {
+  const std::string gear = std::string(CNCSTREAM_SHARED_MESHES) + "/gearwheel.bin.stl";
+  const fs::path nc = temp_dir() / "gear_gl.nc";
+  const ScopedEnv no_display("DISPLAY", nullptr);
+  const ScopedEnv asan("ASAN_OPTIONS", kRenderChildAsan);
+  auto r = run_cncstream({"toolpath", gear, "--tool", "ball:3", "--stepover", "2", "--strategy", "raster", "--stock",
+                          "none", "--engine", "gl", "--gl-tolerance", "0.1", "-o", nc.string()},
+                         300);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("CL grid: the depth buffer (")) << r.out;
+  EXPECT_TRUE(r.has("nodes were still below the exact surface")) << r.out;
+  std::ifstream f(nc);
+  std::stringstream text;
+  text << f.rdbuf();
+  EXPECT_NE(text.str().find("(CL grid of the rows: the depth buffer [GL engine], tessellation tolerance 0.1)\n(mm,"),
+            std::string::npos);
+  r = run_cncstream({"toolpath", gear, "--tool", "ball:3", "--engine", "gl", "-o", nc.string()});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.has("steep-and-shallow finishing and rest machining need the exact engine's point queries")) << r.out;
+  r = run_cncstream({"toolpath", gear, "--tool", "ball:3", "--gl-tolerance", "0.1", "-o", nc.string()});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.has("--gl-tolerance applies to --engine gl only")) << r.out;
 }

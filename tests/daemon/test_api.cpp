@@ -208,6 +208,7 @@ TEST(DaemonApi, ResumeGoesOnAfterTheProgramsToolChangePause) {
   ASSERT_EQ(h.post(base + "/resume").status, 202) << h.post(base + "/resume").body;
   ASSERT_TRUE(wait_state(h, id, "done", 30)) << job(h, id).dump();
   EXPECT_EQ(job(h, id)["progress"]["last_answered_line"], 8);
+  EXPECT_EQ(job(h, id)["message"].get<std::string>().find("paused"), std::string::npos) << job(h, id).dump();
   d.shutdown();
   std::filesystem::remove_all(dir);
 }

@@ -1,10 +1,8 @@
 // The window on a private Xvfb server: it opens a 3.3 core context, draws,
 // shows the timeline in its title, and follows a live job through the
-// LiveCursor seam (set from another thread, as the daemon's client will).
+// LiveCursor seam (set from another thread, as the daemon's client does):
+// the cutter's position and tool, the timeline, the cut, a status line.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cstdlib>
 #include <string>
@@ -12,51 +10,10 @@
 #include <vector>
 
 #include "cncstream/viewer/window.hpp"
+#include "support/private_x_server.hpp"
 
 using namespace cncstream;
 using namespace cncstream::viewer;
-
-namespace {
-
-// Xvfb on a display it picks itself (-displayfd): no fixed number to clash
-// with other test runs, and its answer says it is ready.
-class PrivateXServer {
- public:
-  PrivateXServer() {
-    int fds[2];
-    if (::pipe(fds) != 0) return;
-    pid_t pid = ::fork();
-    if (pid == 0) {
-      ::close(fds[0]);
-      const std::string fd = std::to_string(fds[1]);
-      ::execlp("Xvfb", "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "640x480x24", "-nolisten", "tcp",
-               static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
-    ::close(fds[1]);
-    pid_ = pid;
-    std::string number;
-    char c = 0;
-    while (::read(fds[0], &c, 1) == 1 && c != '\n') number += c;
-    ::close(fds[0]);
-    if (!number.empty()) display_ = ":" + number;
-  }
-  ~PrivateXServer() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGTERM);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  PrivateXServer(const PrivateXServer&) = delete;
-  PrivateXServer& operator=(const PrivateXServer&) = delete;
-  const std::string& display() const { return display_; }
-
- private:
-  pid_t pid_ = -1;
-  std::string display_;
-};
-
-}  // namespace
 
 TEST(ViewerWindow, DrawsAndFollowsALiveJob) {
   const PrivateXServer x;
@@ -83,11 +40,17 @@ TEST(ViewerWindow, DrawsAndFollowsALiveJob) {
       // The job reports from its own thread; the window wakes for it.
       job = std::thread([&live] {
         live.set_cutter_position({5, 0, 0});
+        // The material removed so far and the tool changed to.
+        GridSpec g{0, -5, 1, 1, 11, 11};
+        live.set_cut(std::make_shared<const TriangleMesh>(stock_surface(g, std::vector<float>(g.size(), -1.0f))));
+        live.set_cutter(Cutter::flat(6));
+        live.set_status("job 7 running, line 6 of 100");
         live.set_progress(5);
       });
       return true;
     }
-    return title.find("segment 5 of 100") == std::string::npos;
+    return title.find("segment 5 of 100") == std::string::npos || title.find("job 7 running") == std::string::npos ||
+           !scene.cut || !scene.cutter || scene.cutter->type != CutterType::Flat;
   };
   run_window(scene, o);
   if (job.joinable()) job.join();
@@ -100,4 +63,7 @@ TEST(ViewerWindow, DrawsAndFollowsALiveJob) {
   ASSERT_TRUE(scene.cutter_at);
   EXPECT_EQ(scene.cutter_at->x, 5);
   EXPECT_EQ(scene.progress, 5);
+  ASSERT_TRUE(scene.cut);
+  EXPECT_EQ(scene.cut->mesh.triangles(), 200u);
+  EXPECT_EQ(scene.cutter->radius, 3);
 }

@@ -48,6 +48,11 @@ struct RasterOptions {
   // Keep the CL grid of the rows in RasterPath::grid (for analyses); evenly
   // spaced rows only (not with row_gap).
   bool keep_grid = false;
+  // Set: where the rows' CL grids come from instead of the engine's exact
+  // grid (the thesis's depth buffer, for comparing the two). Point queries
+  // (a shorter last column, steep intervals) still ask the engine, and a
+  // node below the exact surface is raised to it (one point query a node).
+  std::function<ClGrid(const GridSpec&, const Checkpoint&)> grid_source;
 };
 
 // One pass of the path: a polyline of tool-tip points, cut in order.
@@ -64,6 +69,7 @@ struct RasterPath {
   std::size_t points_before_merge = 0;
   std::size_t points_after_merge = 0;
   std::size_t refinement_queries = 0;  // point queries spent on steep intervals
+  std::size_t raised_to_exact = 0;     // with a grid_source: its nodes below the exact surface
   // With RasterOptions::keep_grid: the exact CL grid the rows were sampled
   // from (rows at the stepover, the check step along them; a shorter last
   // row or column is not in it).

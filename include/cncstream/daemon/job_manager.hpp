@@ -128,7 +128,7 @@ class JobManager {
   void on_started(const std::string& machine, std::int64_t journal_id);
   void on_progress(const std::string& machine, const protocol::JobProgress& p);
   void on_state(const std::string& machine, const std::string& state);
-  void on_holding(const std::string& machine, long last_answered_line);
+  void on_holding(const std::string& machine, bool holds, long last_answered_line);
   void on_ended(const std::string& machine, protocol::JobOutcome o, long last_line, const std::string& text);
   void on_verified(const std::string& machine, SimVerifyReport rep);
   void on_start_failed(const std::string& machine, const std::string& why);

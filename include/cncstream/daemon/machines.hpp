@@ -60,9 +60,9 @@ struct MachineJobListener {
   std::function<void(const std::string& machine, std::int64_t journal_id)> started;
   std::function<void(const std::string& machine, const protocol::JobProgress&)> progress;
   std::function<void(const std::string& machine, const std::string& state_text)> state;  // "running"/"held"
-  // The machine holds by itself while its job runs (M0, a pendant, the
-  // door); the job's last answered line.
-  std::function<void(const std::string& machine, long last_answered_line)> holding;
+  // A status report while the machine's job runs: whether the machine holds
+  // by itself (M0, a pendant, the door), and the job's last answered line.
+  std::function<void(const std::string& machine, bool holds, long last_answered_line)> holding;
   std::function<void(const std::string& machine, protocol::JobOutcome, long last_line, const std::string& text)> ended;
   std::function<void(const std::string& machine, SimVerifyReport)> verified;
   std::function<void(const std::string& machine, bool ok, const std::string& why)> start_failed;

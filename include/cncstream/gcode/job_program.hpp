@@ -9,7 +9,9 @@
 // into writer(); the totals of every body are summed into stats().
 #include <cstddef>
 #include <optional>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "cncstream/cam/cutter.hpp"
@@ -56,6 +58,7 @@ struct ProgramOperation {
 
 // In program order; empty for a program not written by JobProgram.
 std::vector<ProgramOperation> program_operations(const std::vector<std::string>& lines);
+std::vector<ProgramOperation> program_operations(std::span<const std::string_view> lines);
 
 // The operation whose tool is in the spindle once `line` (1-based; 0:
 // none yet) has run: the first operation up to its own tool change.

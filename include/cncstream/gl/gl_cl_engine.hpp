@@ -37,6 +37,10 @@ struct GlClOptions {
   std::size_t max_tile = 0;       // framebuffer side in pixels; 0: the GL's limit, at most 4096
   bool skip_coplanar_edges = true; // leave out manifold edges between coplanar facets (their face offsets meet)
   int egl_platform = 0x31DD;      // EGL_PLATFORM_SURFACELESS_MESA
+  // Raise every node off the floor by the tessellation's bound below the
+  // exact surface and two depth steps, so none is below it (outside the rim
+  // slivers): a grid to cut from rather than to compare.
+  bool lift_to_bound = false;
 };
 
 struct GlClStats {
@@ -48,6 +52,7 @@ struct GlClStats {
   double sliver_width = 0;        // mm, see CutterCap
   double height_error_bound = 0;  // mm, the tessellation's bound below the exact surface
   double depth_quantum = 0;       // mm, one step of the depth mapping near the top
+  double lifted = 0;              // mm every node off the floor was raised (lift_to_bound)
 };
 
 // Throws std::invalid_argument for a bad spec or tolerance, GlError when no

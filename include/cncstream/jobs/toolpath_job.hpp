@@ -4,6 +4,7 @@
 // `cncstream toolpath` and the main streaming command.
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -73,6 +74,12 @@ struct ToolpathParams {
   // corners narrower than it), with a tool change before it.
   std::optional<Cutter> rest;
   ToolChangeCode tool_change = ToolChangeCode::PauseM0;
+  // Set: the raster finishing's CL grids come from here instead of the exact
+  // engine (the CLI's --engine gl: the depth buffer), and `grid_note` (asked
+  // after them) says so in the program's header. Raster finishing only:
+  // steep-and-shallow and rest machining work from exact point queries.
+  std::function<ClGrid(const Mesh&, const Cutter&, const GridSpec&)> raster_grid;
+  std::function<std::string()> grid_note;
   // Not empty: the program is written there (whole or not at all) as the
   // job's last stage.
   std::filesystem::path output;

@@ -53,5 +53,13 @@ struct CutSurface {
 // tolerance pale green, off the design grey. Throws std::invalid_argument
 // for a size mismatch or a grid smaller than 2 x 2.
 CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const Mesh& design, double tolerance);
+// As above with the design's heights on `grid` already sampled (a live cut
+// redrawn many times over one grid samples the design once).
+CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const DesignHeights& design,
+                       double tolerance);
+
+// A stock's top surface without a design to compare with: one colour, shaded.
+inline constexpr Rgb kStockColour{214, 188, 146};
+TriangleMesh stock_surface(const GridSpec& grid, const std::vector<float>& heights, Rgb colour = kStockColour);
 
 }  // namespace cncstream::viewer

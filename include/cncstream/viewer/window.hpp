@@ -8,6 +8,7 @@
 // Frames are drawn only when something changed: an idle viewer takes no CPU
 // from a streamer beside it.
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -25,16 +26,23 @@ class NoDisplayError : public std::runtime_error {
 };
 
 // The seam for following a live job: another thread (the daemon's
-// WebSocket client) sets where the cutter is and how far the program has
-// run; the window picks it up at its next frame.
+// WebSocket client) sets where the cutter is and which, how far the program
+// has run, the material removed so far and a line of status; the window
+// picks them up at its next frame.
 class LiveCursor {
  public:
   void set_cutter_position(const Vec3& tip);
   void set_progress(double segments_done);
+  void set_cut(std::shared_ptr<const TriangleMesh> surface);
+  void set_cutter(const Cutter& cutter);  // after a tool change
+  void set_status(std::string text);  // shown in the title
 
   struct Update {
     std::optional<Vec3> cutter;
     std::optional<double> progress;
+    std::shared_ptr<const TriangleMesh> cut;
+    std::optional<Cutter> tool;
+    std::optional<std::string> status;
   };
   // What was set since the last take (nothing: both empty).
   Update take();

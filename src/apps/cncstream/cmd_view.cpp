@@ -1,7 +1,8 @@
 // `cncstream view [PART.stl] [--program FILE.nc] [--cut RESULT.f32 --design
 //  PART.stl] [--cutter SPEC --at X,Y,Z] [--screenshot OUT.png --view iso
-//  --size 1280x800]`: the 3-D viewer (src/viewer/), in a window or one frame
-// without one.
+//  --size 1280x800] [--follow MACHINE --daemon URL]`: the 3-D viewer
+// (src/viewer/), in a window or one frame without one; --follow attaches it
+// to a job on the daemon (view_follow.hpp).
 #include <fmt/core.h>
 
 #include <charconv>
@@ -21,6 +22,7 @@
 #include "cncstream/viewer/headless.hpp"
 #include "cncstream/viewer/window.hpp"
 #include "commands.hpp"
+#include "view_follow.hpp"
 
 namespace cncstream::app {
 
@@ -64,8 +66,8 @@ std::string read_program_text(const std::string& path) {
   return text;
 }
 
-// The work origin a cncstream program names in its header ("work origin: XY
-// at part minimum, Z0 at part top"), so its path can be drawn on the part.
+}  // namespace
+
 std::optional<jobs::WorkSetup> program_work_origin(const std::string& text, const Box3& part) {
   const auto at = text.find("(work origin: XY at ");
   if (at > 4096) return std::nullopt;  // in the header, or not at all (npos)
@@ -81,14 +83,15 @@ std::optional<jobs::WorkSetup> program_work_origin(const std::string& text, cons
   return jobs::work_setup(part, xy, z);
 }
 
-}  // namespace
-
 void register_view(CLI::App& app, CommandRegistry& registry) {
   struct Opts {
     std::string part, program, cut, design, cutter, at, screenshot, view = "iso", size = "1280x800";
     std::string colour = "feed", program_offset = "auto";
     double tolerance = 0.05, arc_tolerance = 0.002;
     std::optional<double> timeline;
+    std::string follow, daemon;
+    std::optional<long> job;
+    bool until_done = false;
   };
   auto o = std::make_shared<Opts>();
   auto* sub = app.add_subcommand("view", "Show a part, a program, a simulated cut and the cutter in 3-D (or one frame: --screenshot)");
@@ -111,10 +114,39 @@ void register_view(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("--screenshot", o->screenshot, "Render one frame to this PNG without a window (EGL, no X)");
   sub->add_option("--view", o->view, "top, front, side or iso")->check(CLI::IsMember({"top", "front", "side", "iso"}));
   sub->add_option("--size", o->size, "WIDTHxHEIGHT of the window or screenshot, pixels");
+  sub->add_option("--follow", o->follow,
+                  "Follow a job on this machine of the daemon: its program, the cutter where the machine is, the "
+                  "material removed as it runs (with --screenshot: one frame of it now)");
+  sub->add_option("--daemon", o->daemon, "The daemon's URL for --follow (default $CNCSTREAM_DAEMON or "
+                                         "http://127.0.0.1:8420)");
+  sub->add_option("--job", o->job, "The job to follow (default: the machine's current job, else its next one)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--until-done", o->until_done, "With --follow: close the window when the job has ended");
   registry.add(sub, [o] {
     using namespace viewer;
     const NamedView view = parse_named_view(o->view);
     const auto [width, height] = parse_view_size(o->size);
+    if (!o->follow.empty()) {
+      if (!o->program.empty() || !o->cut.empty() || !o->design.empty() || o->timeline || !o->at.empty())
+        throw std::invalid_argument("--follow takes the program and the cut from the daemon's job: leave out "
+                                    "--program, --cut, --design, --timeline and --at");
+      FollowOptions fo;
+      fo.daemon = o->daemon;
+      fo.machine = o->follow;
+      fo.job = o->job;
+      fo.part = o->part;
+      if (!o->cutter.empty()) fo.cutter = parse_cutter_spec(o->cutter);
+      fo.tolerance = o->tolerance;
+      fo.arc_tolerance = o->arc_tolerance;
+      fo.until_done = o->until_done;
+      fo.screenshot = o->screenshot;
+      fo.view = view;
+      fo.width = width;
+      fo.height = height;
+      return follow_job_in_viewer(fo);
+    }
+    if (!o->daemon.empty() || o->job || o->until_done)
+      throw std::invalid_argument("--daemon, --job and --until-done go with --follow MACHINE");
     Scene scene;
     std::optional<Mesh> part;
     if (!o->part.empty()) {

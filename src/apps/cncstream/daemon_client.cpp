@@ -330,4 +330,26 @@ std::optional<nlohmann::json> DaemonSocket::read(double timeout_s) {
   return std::nullopt;
 }
 
+double num_or(const nlohmann::json& j, const char* key, double fallback) {
+  if (!j.is_object()) return fallback;
+  const auto it = j.find(key);
+  return it != j.end() && it->is_number() ? it->get<double>() : fallback;
+}
+
+std::string str_or(const nlohmann::json& j, const char* key, const std::string& fallback) {
+  if (!j.is_object()) return fallback;
+  const auto it = j.find(key);
+  return it != j.end() && it->is_string() ? it->get<std::string>() : fallback;
+}
+
+nlohmann::json obj_or(const nlohmann::json& j, const char* key) {
+  if (!j.is_object()) return nlohmann::json::object();
+  const auto it = j.find(key);
+  return it != j.end() && it->is_object() ? *it : nlohmann::json::object();
+}
+
+bool job_state_is_final(const std::string& s) {
+  return s == "done" || s == "failed" || s == "stopped" || s == "interrupted" || s == "cancelled";
+}
+
 }  // namespace cncstream::app

@@ -93,4 +93,13 @@ class DaemonSocket {
 // Percent-encodes a query value.
 std::string url_encode(const std::string& text);
 
+// Fields of the daemon's JSON, or the fallback when absent, null or of
+// another type (json::value() throws on a key that is present but null).
+double num_or(const nlohmann::json& j, const char* key, double fallback);
+std::string str_or(const nlohmann::json& j, const char* key, const std::string& fallback = {});
+nlohmann::json obj_or(const nlohmann::json& j, const char* key);  // an empty object as the fallback
+
+// A job state the job never leaves (done, failed, stopped, interrupted, cancelled).
+bool job_state_is_final(const std::string& state);
+
 }  // namespace cncstream::app

@@ -39,32 +39,8 @@ extern "C" void handoff_on_sigint(int) {
   if (g_handoff_sigints >= 2) (void)std::signal(SIGINT, SIG_DFL);
 }
 
-bool handoff_terminal_state(const std::string& s) {
-  return s == "done" || s == "failed" || s == "stopped" || s == "interrupted" || s == "cancelled";
-}
-
 // The local run's words for how a job ended.
 std::string handoff_outcome_word(const std::string& state) { return state == "done" ? "completed" : state; }
-
-double num_or(const json& j, const char* key, double fallback) {
-  if (!j.is_object()) return fallback;
-  const auto it = j.find(key);
-  return it != j.end() && it->is_number() ? it->get<double>() : fallback;
-}
-
-std::string str_or(const json& j, const char* key, const std::string& fallback = {}) {
-  if (!j.is_object()) return fallback;
-  const auto it = j.find(key);
-  return it != j.end() && it->is_string() ? it->get<std::string>() : fallback;
-}
-
-// The object at `key`, or an empty one (absent, null or another type):
-// json::value() throws on a key that is present but null.
-json obj_or(const json& j, const char* key) {
-  if (!j.is_object()) return json::object();
-  const auto it = j.find(key);
-  return it != j.end() && it->is_object() ? *it : json::object();
-}
 
 std::optional<protocol::Axes> axes_of(const json& j, const char* key) {
   if (!j.is_object() || !j.contains(key) || !j[key].is_array() || j[key].size() < 3) return std::nullopt;
@@ -245,7 +221,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
   for (;;) {
     const std::string st = str_or(j, "state");
     if (st == "ready") break;
-    if (handoff_terminal_state(st)) {
+    if (job_state_is_final(st)) {
       std::cerr << "cncstream: the daemon's job #" << job_id << " " << st << " before it ran: "
                 << str_or(j, "message", "(no message)") << "\n";
       return 1;
@@ -429,7 +405,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
   };
 
   auto last_poll = Clock::now() - std::chrono::seconds(1);
-  while (!handoff_terminal_state(job_state)) {
+  while (!job_state_is_final(job_state)) {
     // Messages for up to a tenth of a second, then the keys, Ctrl-C and a poll.
     if (ws) {
       try {
