@@ -1,6 +1,7 @@
 #pragma once
-// The cncstreamd program as a child process, for tests that run the
-// programs the way an operator does. Its output goes to a log file.
+// Programs of this build as child processes, for tests that run them the way
+// an operator does: cncstreamd, or a cncstream command that runs beside the
+// test's own steps. Their output goes to a log file.
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -18,13 +19,14 @@
 
 namespace apptest {
 
-// cncstreamd with `args`; its journal goes to the tests' state folder. With
-// --listen 127.0.0.1:0 it takes a port of its choosing: listen_port() reads
-// it from the log (or a lock file it writes for a machine's port says it).
-class DaemonProcess {
+// `program` (a file of the build folder) with `args`, stdin /dev/null, its
+// journal in `state` under the tests' folder (not the user's). Stopped
+// (SIGTERM, then SIGKILL after 10 s) when destroyed, if still running.
+class BackgroundProgram {
  public:
-  explicit DaemonProcess(const std::vector<std::string>& args) {
-    log_ = temp_dir() / ("cncstreamd" + std::to_string(counter()++) + ".log");
+  BackgroundProgram(const std::string& program, const std::vector<std::string>& args, const std::string& state) {
+    static int counter = 0;
+    log_ = temp_dir() / (program + std::to_string(counter++) + ".log");
     pid_ = ::fork();
     if (pid_ == 0) {
       const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -32,10 +34,9 @@ class DaemonProcess {
       ::dup2(fd, 2);
       const int null = ::open("/dev/null", O_RDONLY);
       ::dup2(null, 0);
-      // The daemon's journal goes to this test's state folder, not the user's.
-      ::setenv("XDG_STATE_HOME", (temp_dir() / "daemon-state").c_str(), 1);
+      ::setenv("XDG_STATE_HOME", (temp_dir() / state).c_str(), 1);
+      std::string exe = std::string(CNCSTREAM_BINARY_DIR) + "/" + program;
       std::vector<std::string> a = args;
-      static std::string exe = std::string(CNCSTREAM_BINARY_DIR) + "/cncstreamd";
       std::vector<char*> argv{exe.data()};
       for (auto& s : a) argv.push_back(s.data());
       argv.push_back(nullptr);
@@ -43,12 +44,12 @@ class DaemonProcess {
       ::_exit(127);
     }
   }
-  ~DaemonProcess() {
-    if (pid_ <= 0) return;
+  ~BackgroundProgram() {
+    if (pid_ <= 0 || exited()) return;
     ::kill(pid_, SIGTERM);
     // A clean stop within 10 s, else it is killed (and the test has failed elsewhere).
     const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-    while (::waitpid(pid_, nullptr, WNOHANG) == 0) {
+    while (!exited()) {
       if (std::chrono::steady_clock::now() > end) {
         ::kill(pid_, SIGKILL);
         ::waitpid(pid_, nullptr, 0);
@@ -57,7 +58,50 @@ class DaemonProcess {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }
+  BackgroundProgram(const BackgroundProgram&) = delete;
+  BackgroundProgram& operator=(const BackgroundProgram&) = delete;
+
   pid_t pid() const { return pid_; }
+  std::string log() const {
+    std::ifstream f(log_);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+  }
+  // Whether its output says `text` within `timeout_s` (false at once if it has ended without).
+  bool wait_output(const std::string& text, double timeout_s) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < end) {
+      if (log().find(text) != std::string::npos) return true;
+      if (exited()) return log().find(text) != std::string::npos;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return false;
+  }
+  // Its exit code, or -1 when it has not ended within `timeout_s`.
+  int wait_exit(double timeout_s) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (!exited() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return exited_ && WIFEXITED(status_) ? WEXITSTATUS(status_) : -1;
+  }
+
+ private:
+  bool exited() {
+    if (!exited_ && ::waitpid(pid_, &status_, WNOHANG) == pid_) exited_ = true;
+    return exited_;
+  }
+  pid_t pid_ = -1;
+  int status_ = 0;
+  bool exited_ = false;
+  fs::path log_;
+};
+
+// cncstreamd with `args`. With --listen 127.0.0.1:0 it takes a port of its
+// choosing: listen_port() reads it from the log (a lock file it writes for a
+// machine's port says it too).
+class DaemonProcess : public BackgroundProgram {
+ public:
+  explicit DaemonProcess(const std::vector<std::string>& args) : BackgroundProgram("cncstreamd", args, "daemon-state") {}
   // The port from its "listening on 127.0.0.1:PORT" line, once it is up
   // (0 when it has not said so within `timeout_s`).
   unsigned short listen_port(double timeout_s = 30) const {
@@ -70,20 +114,6 @@ class DaemonProcess {
     }
     return 0;
   }
-  std::string log() const {
-    std::ifstream f(log_);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-  }
-
- private:
-  static int& counter() {
-    static int c = 0;
-    return c;
-  }
-  pid_t pid_ = -1;
-  fs::path log_;
 };
 
 }  // namespace apptest

@@ -9,10 +9,6 @@
 #include <string>
 #include <vector>
 
-#include <fcntl.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <chrono>
 #include <thread>
 
@@ -62,73 +58,6 @@ class ScopedEnv {
 // suppression can name (the GL and viewer tests run without the leak check
 // too): the rendering child runs without it.
 constexpr const char* kRenderChildAsan = "detect_leaks=0:abort_on_error=1";
-
-// `cncstream ARGS` in the background (its output to a log file), for a
-// command that runs beside the test's own steps.
-class CncstreamInBackground {
- public:
-  explicit CncstreamInBackground(const std::vector<std::string>& args) {
-    static int n = 0;
-    log_ = temp_dir() / ("background" + std::to_string(n++) + ".log");
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-      const int null = ::open("/dev/null", O_RDONLY);
-      ::dup2(null, 0);
-      ::setenv("XDG_STATE_HOME", (temp_dir() / "state").c_str(), 1);
-      static std::string exe = std::string(CNCSTREAM_BINARY_DIR) + "/cncstream";
-      std::vector<std::string> a = args;
-      std::vector<char*> argv{exe.data()};
-      for (auto& s : a) argv.push_back(s.data());
-      argv.push_back(nullptr);
-      ::execv(exe.c_str(), argv.data());
-      ::_exit(127);
-    }
-  }
-  ~CncstreamInBackground() {
-    if (pid_ > 0 && !exited_) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  CncstreamInBackground(const CncstreamInBackground&) = delete;
-  CncstreamInBackground& operator=(const CncstreamInBackground&) = delete;
-
-  std::string out() const {
-    std::ifstream f(log_);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-  }
-  // Whether its output says `text` within `timeout_s` (false at once if it has ended without).
-  bool wait_output(const std::string& text, double timeout_s) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < end) {
-      if (out().find(text) != std::string::npos) return true;
-      if (exited()) return out().find(text) != std::string::npos;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return false;
-  }
-  // Its exit code, or -1 when it has not ended within `timeout_s`.
-  int wait_exit(double timeout_s) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (!exited() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    return exited_ && WIFEXITED(status_) ? WEXITSTATUS(status_) : -1;
-  }
-
- private:
-  bool exited() {
-    if (!exited_ && ::waitpid(pid_, &status_, WNOHANG) == pid_) exited_ = true;
-    return exited_;
-  }
-  pid_t pid_ = -1;
-  int status_ = 0;
-  bool exited_ = false;
-  fs::path log_;
-};
 
 // The number after `label` in `text` (NaN when it is not there).
 double number_after(const std::string& text, const std::string& label) {
@@ -258,16 +187,17 @@ TEST(ViewFollow, TheWindowFollowsADaemonJobThroughItsToolChangeToItsEnd) {
   ASSERT_EQ(h.post("/api/v1/machines/sim1/control").status, 200);
   const std::string api = "http://127.0.0.1:" + std::to_string(port);
 
-  CncstreamInBackground view({"view", "--follow", "sim1", "--daemon", api, "--until-done", "--size", "320x240"});
-  ASSERT_TRUE(view.wait_output("following job " + id + " on sim1", 60)) << view.out();
-  EXPECT_TRUE(view.wait_output("stock 601 x 401 nodes at 0.050 mm", 10)) << view.out();
+  BackgroundProgram view("cncstream", {"view", "--follow", "sim1", "--daemon", api, "--until-done", "--size", "320x240"},
+                         "state");
+  ASSERT_TRUE(view.wait_output("following job " + id + " on sim1", 60)) << view.log();
+  EXPECT_TRUE(view.wait_output("stock 601 x 401 nodes at 0.050 mm", 10)) << view.log();
   ASSERT_EQ(h.post(job + "/start").status, 202);
-  EXPECT_TRUE(view.wait_output("job " + id + " running", 30)) << view.out();
+  EXPECT_TRUE(view.wait_output("job " + id + " running", 30)) << view.log();
   // The tool change's pause, on the daemon and in the viewer; resume goes on.
-  ASSERT_TRUE(view.wait_output("paused at line 16: TOOL CHANGE: mount T2", 30)) << view.out() << daemon.log();
+  ASSERT_TRUE(view.wait_output("paused at line 16: TOOL CHANGE: mount T2", 30)) << view.log() << daemon.log();
   ASSERT_EQ(h.post(job + "/resume").status, 202);
-  ASSERT_EQ(view.wait_exit(60), 0) << view.out();
-  const std::string out = view.out();
+  ASSERT_EQ(view.wait_exit(60), 0) << view.log();
+  const std::string out = view.log();
   EXPECT_NE(out.find("job " + id + " done, line 19 of 19"), std::string::npos) << out;
   const std::string done = "job " + id + " done: ";
   ASSERT_NE(out.find(done), std::string::npos) << out;
