@@ -253,3 +253,33 @@ TEST(ToolpathGlEngine, TheRasterFromTheDepthBufferAndWhereItCannotServe) {
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_TRUE(r.has("--gl-tolerance applies to --engine gl only")) << r.out;
 }
+
+// `cncstream FILE sim --view`: the window beside the streaming session (on
+// a private X server); without a terminal it closes when the job ends. The
+// material it cut is the slot's, and for an STL job the simulator's own.
+TEST(ViewBesideTheJob, TheWindowFollowsTheLocalSessionAndAgreesWithTheSimulator) {
+  const PrivateXServer x;
+  ASSERT_FALSE(x.display().empty()) << "Xvfb did not start (scripts/setup.sh installs xvfb)";
+  const ScopedEnv display("DISPLAY", x.display().c_str());
+  const ScopedEnv asan("ASAN_OPTIONS", kRenderChildAsan);
+  const fs::path nc = temp_dir() / "slot_view.nc";
+  std::ofstream(nc) << testparts::kSlotProgram;
+  auto r = run_cncstream({nc.string(), "sim", "--yes", "--view", "--sim-speed", "max"}, 120);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("viewer: stock 601 x 401 nodes at 0.050 mm")) << r.out;
+  const double slot = (10 * 6 + M_PI * 9) * 2;
+  EXPECT_NEAR(number_after(r.out, "viewer: 6 of 6 segments cut into the stock, "), slot, 0.03 * slot) << r.out;
+
+  // An STL job: the part colours the cut; the stock is the simulator's (the part's box).
+  r = run_cncstream({plaque(), "sim", "--tool", "ball:3.175", "--stepover", "4", "--strategy", "raster", "--stock",
+                     "none", "--yes", "--view", "--sim-speed", "max"},
+                    300);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has(", coloured by deviation from the part")) << r.out;
+  const double viewer = number_after(r.out.substr(r.out.find("segments cut into the stock, ")),
+                                     "segments cut into the stock, ");
+  const auto removed = r.out.find(" mm^3 removed in ");
+  ASSERT_NE(removed, std::string::npos) << r.out;
+  const double sim = number_after(r.out.substr(r.out.rfind("sim: ", removed)), "sim: ");
+  EXPECT_NEAR(viewer, sim, 0.02 * sim) << r.out;  // grids of 0.2 and 0.1 mm
+}

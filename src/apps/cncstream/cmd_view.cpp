@@ -22,6 +22,7 @@
 #include "cncstream/viewer/headless.hpp"
 #include "cncstream/viewer/window.hpp"
 #include "commands.hpp"
+#include "live_view.hpp"
 #include "view_follow.hpp"
 
 namespace cncstream::app {
@@ -55,16 +56,6 @@ std::pair<int, int> parse_view_size(const std::string& text) {
   return {w, h};
 }
 
-// Read in one piece (a 5-million-line program is over 100 MB).
-std::string read_program_text(const std::string& path) {
-  std::ifstream f(path, std::ios::binary | std::ios::ate);
-  if (!f) throw std::runtime_error(path + ": cannot open the program");
-  std::string text(static_cast<std::size_t>(f.tellg()), '\0');
-  f.seekg(0);
-  if (!f.read(text.data(), static_cast<std::streamsize>(text.size())))
-    throw std::runtime_error(path + ": cannot read the program");
-  return text;
-}
 
 }  // namespace
 

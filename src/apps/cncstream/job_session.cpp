@@ -1,5 +1,7 @@
 #include "job_session.hpp"
 
+#include <fmt/core.h>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +21,7 @@
 #include "cncstream/transport/port_discovery.hpp"
 #include "keyboard_control.hpp"
 #include "live_panel.hpp"
+#include "live_view.hpp"
 #include "cncstream/session/simulator_port.hpp"
 #include "cncsim/number_text.hpp"
 
@@ -52,6 +55,9 @@ void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
   sub->add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines without a terminal")
       ->check(CLI::PositiveNumber);
   sub->add_option("--timeout", o.timeout_s, "Give up after this many seconds (0: never)")->check(CLI::NonNegativeNumber);
+  sub->add_flag("--view", o.view,
+                "Show the job in the 3-D viewer as it runs: the cutter where the machine is, the material its moves "
+                "remove (a window; closing it does not stop the job)");
 }
 
 void add_sim_machine_options(CLI::App* sub, SimCliOptions& o) {
@@ -274,8 +280,30 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
                     "\n  (no terminal: the machine stays paused until cycle start on the controller or a pendant)");
     }
   };
+  // The viewer beside the job: the program, the part and the stock as it is cut.
+  std::unique_ptr<LiveScene> live;
+  viewer::LiveCursor cursor;
+  std::unique_ptr<LiveFeed> feed;
+  if (c.view) {
+    live = make_live_scene(read_program_text(job.file.string()), verify ? std::optional<Mesh>(verify->design) : std::nullopt, true,
+                           verify ? std::optional<Cutter>(verify->cutter) : std::nullopt,
+                           verify ? verify->stock : std::nullopt, s.tolerance, 0.002);
+    if (live->cut) live->scene.cut = live->cut_surface();
+    live->scene.progress = 0;
+    panel.message("viewer: " + live->stock_text());
+    feed = std::make_unique<LiveFeed>(*live, cursor);
+  }
   ro.on_tick = [&](const session::MachineSnapshot& snap) {
     announce_pause(snap);
+    if (feed) {
+      if (snap.status && snap.status->wpos) {
+        const auto& w = *snap.status->wpos;
+        feed->position({w[0], w[1], w[2]});
+      }
+      feed->progress(segments_before_line(*live->scene.program, snap.progress.executing_line),
+                     fmt::format("{} line {} of {}", protocol::to_string(snap.progress.state),
+                                 snap.progress.executing_line, job.total_lines));
+    }
     view.title = title + " (" + snap.profile + ")";
     view.job_state = protocol::to_string(snap.progress.state);
     view.line = snap.progress.last_answered_line;
@@ -303,7 +331,8 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     keys = std::make_unique<KeyboardControl>(runner);  // restores the terminal when the job ends
     if (!keys->active()) keys.reset();
     interactive = keys != nullptr;
-    r = runner.run(job);
+    if (feed) r = run_with_viewer(*live, cursor, *feed, title, interactive, [&] { return runner.run(job); });
+    else r = runner.run(job);
     keys.reset();
   } catch (...) {
     keys.reset();

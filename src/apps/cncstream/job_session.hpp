@@ -25,6 +25,7 @@ struct ConnectionOptions {
   std::string serial = "115200";
   std::string profile, journal;
   bool no_journal = false, check = false, check_only = false, verbose = false, yes = false;
+  bool view = false;  // the 3-D viewer beside the job (live_view.hpp)
   double progress_interval_s = 5;  // plain progress lines without a TTY
   double timeout_s = 0;            // give up after this long (0: never)
 };

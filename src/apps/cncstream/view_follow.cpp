@@ -21,6 +21,7 @@
 #include "cncstream/viewer/live_cut.hpp"
 #include "cncstream/viewer/window.hpp"
 #include "daemon_client.hpp"
+#include "live_view.hpp"
 
 namespace cncstream::app {
 
@@ -55,12 +56,8 @@ long pick_job(const DaemonClient& api, const FollowOptions& o) {
 // the lines before the one executing; the whole program once it is done.
 double segments_done(const viewer::Toolpath& path, const std::string& state, const json& progress) {
   if (state == "done") return static_cast<double>(path.size());
-  const double executing = num_or(progress, "executing_line", num_or(progress, "last_answered_line", 0));
-  if (!(executing > 1)) return 0;
-  const auto line = static_cast<std::uint32_t>(executing) - 1;  // 0-based, in progress
-  const auto it = std::lower_bound(path.segments.begin(), path.segments.end(), line,
-                                   [](const viewer::SegmentInfo& s, std::uint32_t l) { return s.line < l; });
-  return static_cast<double>(it - path.segments.begin());
+  return segments_before_line(
+      path, static_cast<long>(num_or(progress, "executing_line", num_or(progress, "last_answered_line", 0))));
 }
 
 std::string job_status_text(long id, const std::string& state, const json& progress, double total_lines,
@@ -75,31 +72,21 @@ std::string job_status_text(long id, const std::string& state, const json& progr
 // Everything the follower knows of the job and shows of it.
 struct Followed {
   long id = 0;
-  std::string state, file_name;
+  std::string state, file_name, message;
   json progress;
   double total_lines = 0;
-  Vec3 offset{};  // work coordinates -> the scene's frame
-  viewer::Scene scene;
-  std::optional<viewer::LiveCut> cut;
-  std::optional<DesignHeights> design;
-  double tolerance = 0.05;
+  std::unique_ptr<LiveScene> live;
 
-  // The stock as it stands: coloured by its deviation from the part, or plain without one.
-  viewer::CutSurface cut_surface() const {
-    const std::vector<float> h = cut->heights();
-    if (design) return viewer::cut_surface(cut->grid(), h, *design, tolerance);
-    return {viewer::stock_surface(cut->grid(), h), {}};
-  }
-  std::string summary(double done) const {
-    std::string s = fmt::format("job {} {}: {:.0f} of {} segments run", id, state, done, scene.program->size());
-    if (cut) s += fmt::format(", {:.1f} mm3 removed", cut->removed_volume());
+  std::string status() const { return job_status_text(id, state, progress, total_lines, message); }
+  std::string summary(double done, double removed) const {
+    std::string s = fmt::format("job {} {}: {:.0f} of {} segments run", id, state, done, live->scene.program->size());
+    if (live->cut) s += fmt::format(", {:.1f} mm3 removed", removed);
     return s;
   }
 };
 
 Followed load_followed(const DaemonClient& api, const FollowOptions& o) {
   Followed f;
-  f.tolerance = o.tolerance;
   f.id = pick_job(api, o);
   const std::string jpath = "/api/v1/jobs/" + std::to_string(f.id);
   json job = api.get(jpath);
@@ -117,6 +104,7 @@ Followed load_followed(const DaemonClient& api, const FollowOptions& o) {
   }
   f.state = str_or(job, "state");
   f.file_name = str_or(job, "file_name");
+  f.message = str_or(job, "message");
   f.progress = obj_or(job, "progress");
   f.total_lines = num_or(obj_or(job, "program"), "lines", 0);
   const std::string program = api.get_text(jpath + "/gcode");
@@ -131,67 +119,39 @@ Followed load_followed(const DaemonClient& api, const FollowOptions& o) {
     so.scale = num_or(params, "scale", 1);
     part = parse_stl(api.get_text("/api/v1/files/" + str_or(job, "file") + "/content"), f.file_name, so).mesh;
   }
-  viewer::ToolpathOptions to;
-  to.arc_tolerance = o.arc_tolerance;
-  if (part)
-    if (const auto ws = program_work_origin(program, part->bounds())) to.offset = -ws->offset;
-  f.offset = to.offset;
-  f.scene.program = viewer::build_toolpath(program, to);
-
-  std::vector<viewer::MountedCutter> cutters = viewer::program_cutters(program);
-  if (cutters.empty() && o.cutter) cutters.push_back({0, *o.cutter});
-  if (!cutters.empty()) {
-    f.scene.cutter = cutters.front().cutter;
-    std::optional<Box3> stock = viewer::program_stock(program);
-    if (stock) stock = Box3{stock->lo + f.offset, stock->hi + f.offset};
-    viewer::LiveCutOptions lo;
-    lo.work_z0 = f.offset.z;
-    f.cut.emplace(*f.scene.program, std::move(cutters), stock, lo);
-    if (part) f.design = design_heights(*part, f.cut->grid());
-  } else {
+  f.live = make_live_scene(program, std::move(part), false, o.cutter, std::nullopt, o.tolerance, o.arc_tolerance);
+  if (!f.live->cut)
     std::cout << "note: the program names no cutter: give --cutter SPEC to see the material it removes" << std::endl;
-  }
-  // With the removed material shown, the part is inside the stock (the cut's
-  // colours compare with it); without, the part itself.
-  if (part && !f.cut) f.scene.part = viewer::part_surface(*part);
   return f;
 }
 
-bool same_cutter(const Cutter& a, const Cutter& b) {
-  return a.type == b.type && a.radius == b.radius && a.corner_radius == b.corner_radius;
-}
-
-// Brings the cut up to `target`, and the scene's timeline and cutter with it.
-void catch_up(Followed& f, double target) {
-  if (f.cut) {
-    f.cut->advance(target);
-    f.scene.cutter = f.cut->cutter_in_spindle();
-  }
-  f.scene.progress = target;
-}
-
 int screenshot_of_job(const DaemonClient& api, Followed& f, const FollowOptions& o) {
-  catch_up(f, segments_done(*f.scene.program, f.state, f.progress));
-  if (f.cut) f.scene.cut = f.cut_surface();
+  LiveScene& s = *f.live;
+  const double done = segments_done(*s.scene.program, f.state, f.progress);
+  if (s.cut) {
+    s.cut->advance(done);
+    s.scene.cutter = s.cut->cutter_in_spindle();
+    s.scene.cut = s.cut_surface();
+  }
+  s.scene.progress = done;
   if (f.state == "running" || f.state == "held") {
     const json m = api.get("/api/v1/machines/" + url_encode(o.machine));
-    if (const auto wpos = vec3_of(obj_or(m, "status"), "wpos")) f.scene.cutter_at = *wpos + f.offset;
+    if (const auto wpos = vec3_of(obj_or(m, "status"), "wpos")) s.scene.cutter_at = *wpos + s.offset;
   }
   std::string renderer;
-  const RgbImage img = viewer::screenshot(f.scene, o.view, o.width, o.height, &renderer);
+  const RgbImage img = viewer::screenshot(s.scene, o.view, o.width, o.height, &renderer);
   jobs::write_file_atomically(o.screenshot, [&](const std::filesystem::path& file) { write_png(file, img); });
-  std::cout << f.summary(f.scene.progress) << "\n";
-  if (f.design) std::cout << f.scene.cut->stats.summary() << "\n";
-  std::cout << "screenshot " << o.screenshot << ": " << o.width << " x " << o.height << ", "
-            << renderer << std::endl;
+  std::cout << f.summary(done, s.cut ? s.cut->removed_volume() : 0) << "\n";
+  if (s.design) std::cout << s.scene.cut->stats.summary() << "\n";
+  std::cout << "screenshot " << o.screenshot << ": " << o.width << " x " << o.height << ", " << renderer << std::endl;
   return 0;
 }
 
-// The WebSocket side of a window: runs until `stop` or the job's end (and
-// then, with until_done, closes the window through `close`).
-void feed_window(const DaemonClient& api, Followed& f, const FollowOptions& o, viewer::LiveCursor& live,
-                 const std::atomic<bool>& stop, std::atomic<bool>& close, std::atomic<bool>& lost) {
-  std::string message;
+// The WebSocket side of a window: reports into `feed` until `stop` or the
+// job's end (then, with until_done, it closes the window through `close`).
+void follow_socket(const DaemonClient& api, Followed& f, const FollowOptions& o, LiveFeed& feed,
+                   viewer::LiveCursor& live, const std::atomic<bool>& stop, std::atomic<bool>& close,
+                   std::atomic<bool>& lost) {
   try {
     DaemonSocket ws(api);
     ws.send(json{{"type", "subscribe"}, {"machines", json::array({o.machine})}, {"id", 1}});
@@ -199,53 +159,32 @@ void feed_window(const DaemonClient& api, Followed& f, const FollowOptions& o, v
     const json job = api.get("/api/v1/jobs/" + std::to_string(f.id));
     f.state = str_or(job, "state");
     f.progress = obj_or(job, "progress");
-    message = str_or(job, "message");
-    double target = segments_done(*f.scene.program, f.state, f.progress);
-    std::string said_state, shown_status;
-    double shown_progress = -1;
-    Cutter shown_cutter = f.scene.cutter.value_or(Cutter{});
-    auto last_surface = Clock::now() - std::chrono::seconds(1);
-    bool surface_stale = false;
+    f.message = str_or(job, "message");
+    std::string said;
     while (!stop) {
-      const bool behind = f.cut && static_cast<double>(f.cut->segments_cut()) < std::floor(target);
-      if (const auto m = ws.read(behind ? 0.001 : 0.1)) {
-        const std::string type = str_or(*m, "type");
-        if (type == "status" && str_or(*m, "machine") == o.machine) {
-          if (const auto wpos = vec3_of(*m, "wpos")) live.set_cutter_position(*wpos + f.offset);
-        } else if (type == "job" && m->contains("job") && (*m)["job"] == f.id) {
-          f.state = str_or(*m, "state");
-          f.progress = obj_or(*m, "progress");
-          message = str_or(*m, "message");
-          target = std::max(target, segments_done(*f.scene.program, f.state, f.progress));
-        }
+      const viewer::Toolpath& path = *f.live->scene.program;
+      if (f.state + f.message != said) {  // on the terminal: each new state or message
+        said = f.state + f.message;
+        std::cout << f.status() << std::endl;
       }
-      if (f.cut && static_cast<double>(f.cut->segments_cut()) < std::floor(target)) {
-        // In slices, so the socket is read between them while a late viewer catches up.
-        f.cut->advance(target, 2000);
-        surface_stale = true;
-        if (!same_cutter(f.cut->cutter_in_spindle(), shown_cutter)) live.set_cutter(shown_cutter = f.cut->cutter_in_spindle());
-      }
-      const bool caught_up = !f.cut || static_cast<double>(f.cut->segments_cut()) >= std::floor(target);
-      const bool ended = job_state_is_final(f.state) && caught_up;
-      if (surface_stale && (ended || Clock::now() - last_surface > std::chrono::milliseconds(250))) {
-        live.set_cut(std::make_shared<const viewer::TriangleMesh>(f.cut_surface().mesh));
-        last_surface = Clock::now();
-        surface_stale = false;
-      }
-      // Only what changed wakes the window.
-      const double shown = f.cut ? static_cast<double>(f.cut->segments_cut()) : std::floor(target);
-      if (shown != shown_progress) live.set_progress(shown_progress = shown);
-      const std::string status = job_status_text(f.id, f.state, f.progress, f.total_lines, message);
-      if (status != shown_status) live.set_status(shown_status = status);
-      if (f.state + message != said_state) {  // on the terminal: each new state or message
-        said_state = f.state + message;
-        std::cout << status << std::endl;
-      }
-      if (ended) {
-        std::cout << f.summary(shown) << std::endl;
+      if (job_state_is_final(f.state)) {
+        feed.end(segments_done(path, f.state, f.progress), f.status());
+        feed.wait_ended();
+        std::cout << f.summary(feed.segments_cut(), feed.removed_volume()) << std::endl;
         if (o.until_done) close = true;
-        live.set_status(status);  // wakes the window (to close it)
+        live.set_status(f.status());  // wakes the window (to close it)
         return;
+      }
+      feed.progress(segments_done(path, f.state, f.progress), f.status());
+      const auto m = ws.read(0.25);
+      if (!m) continue;
+      const std::string type = str_or(*m, "type");
+      if (type == "status" && str_or(*m, "machine") == o.machine) {
+        if (const auto wpos = vec3_of(*m, "wpos")) feed.position(*wpos);
+      } else if (type == "job" && m->contains("job") && (*m)["job"] == f.id) {
+        f.state = str_or(*m, "state");
+        f.progress = obj_or(*m, "progress");
+        f.message = str_or(*m, "message");
       }
     }
   } catch (const std::exception& e) {
@@ -262,19 +201,16 @@ int follow_job_in_viewer(const FollowOptions& o) {
   const DaemonClient api(parse_daemon_address(o.daemon.empty() ? default_daemon_address() : o.daemon),
                          "cncstream-view-" + std::to_string(::getpid()), daemon_token_from_env());
   Followed f = load_followed(api, o);
-  const viewer::Toolpath& path = *f.scene.program;
+  LiveScene& s = *f.live;
+  const viewer::Toolpath& path = *s.scene.program;
   std::cout << "following job " << f.id << " on " << o.machine << " at " << api.address().url() << " ("
             << (f.file_name.empty() ? "unnamed" : f.file_name) << "): " << path.lines << " lines, " << path.size()
-            << " segments, " << f.state << std::endl;
-  if (f.cut)
-    std::cout << "stock " << f.cut->grid().nx << " x " << f.cut->grid().ny << " nodes at "
-              << fmt::format("{:.3f}", f.cut->grid().dx) << " mm" << (f.design ? ", coloured by deviation from the part" : "")
-              << std::endl;
+            << " segments, " << f.state << "\n"
+            << s.stock_text() << std::endl;
   if (!o.screenshot.empty()) return screenshot_of_job(api, f, o);
 
-  // The window starts with what has run already; the feeder brings the rest.
-  catch_up(f, segments_done(path, f.state, f.progress));
-  if (f.cut) f.scene.cut = f.cut_surface();
+  // The window starts with the stock as it is; the feed cuts what has run.
+  if (s.cut) s.scene.cut = s.cut_surface();
   viewer::LiveCursor live;
   std::atomic<bool> stop{false}, close{false}, lost{false};
   viewer::WindowOptions wo;
@@ -284,16 +220,17 @@ int follow_job_in_viewer(const FollowOptions& o) {
   wo.title = "cncstream view: " + o.machine;
   wo.live = &live;
   wo.after_frame = [&](const std::string&) { return !close; };
-  std::thread feeder([&] { feed_window(api, f, o, live, stop, close, lost); });
-  struct JoinFeeder {
+  LiveFeed feed(s, live);
+  std::thread socket([&] { follow_socket(api, f, o, feed, live, stop, close, lost); });
+  struct JoinSocket {
     std::atomic<bool>& stop;
     std::thread& t;
-    ~JoinFeeder() {
+    ~JoinSocket() {
       stop = true;
       t.join();
     }
-  } join{stop, feeder};
-  viewer::run_window(f.scene, wo);
+  } join{stop, socket};
+  viewer::run_window(s.scene, wo);
   return lost ? 1 : 0;
 }
 
