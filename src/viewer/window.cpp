@@ -18,54 +18,30 @@
 
 namespace cncstream::viewer {
 
+void LiveCursor::set(const std::function<void(Update&)>& change) {
+  std::function<void()> wake;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    change(pending_);
+    wake = wake_;
+  }
+  if (wake) wake();
+}
+
 void LiveCursor::set_cutter_position(const Vec3& tip) {
-  std::function<void()> wake;
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    pending_.cutter = tip;
-    wake = wake_;
-  }
-  if (wake) wake();
+  set([&](Update& u) { u.cutter = tip; });
 }
-
 void LiveCursor::set_progress(double segments_done) {
-  std::function<void()> wake;
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    pending_.progress = segments_done;
-    wake = wake_;
-  }
-  if (wake) wake();
+  set([&](Update& u) { u.progress = segments_done; });
 }
-
 void LiveCursor::set_cut(std::shared_ptr<const TriangleMesh> surface) {
-  std::function<void()> wake;
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    pending_.cut = std::move(surface);
-    wake = wake_;
-  }
-  if (wake) wake();
+  set([&](Update& u) { u.cut = std::move(surface); });
 }
-
 void LiveCursor::set_cutter(const Cutter& cutter) {
-  std::function<void()> wake;
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    pending_.tool = cutter;
-    wake = wake_;
-  }
-  if (wake) wake();
+  set([&](Update& u) { u.tool = cutter; });
 }
-
 void LiveCursor::set_status(std::string text) {
-  std::function<void()> wake;
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    pending_.status = std::move(text);
-    wake = wake_;
-  }
-  if (wake) wake();
+  set([&](Update& u) { u.status = std::move(text); });
 }
 
 LiveCursor::Update LiveCursor::take() {
@@ -322,7 +298,7 @@ void run_window(Scene& scene, const WindowOptions& options) {
   std::string live_status;
   while (!glfwWindowShouldClose(win)) {
     if (options.live) {
-      const LiveCursor::Update u = options.live->take();
+      LiveCursor::Update u = options.live->take();
       if (u.cutter) scene.cutter_at = u.cutter, s.dirty = true;
       if (u.progress) scene.progress = *u.progress, s.dirty = true;
       if (u.cut) {

@@ -164,7 +164,7 @@ TEST(ViewFollow, TheWindowFollowsADaemonJobThroughItsToolChangeToItsEnd) {
   const ScopedEnv display("DISPLAY", x.display().c_str());
   const ScopedEnv asan("ASAN_OPTIONS", kRenderChildAsan);
   DaemonProcess daemon({"--listen", "127.0.0.1:0", "--data", (temp_dir() / "follow-data").string(), "--machine",
-                        "sim1=sim,sim_speed=1"});
+                        "sim1=sim,sim_speed=5"});
   const unsigned short port = daemon.listen_port();
   ASSERT_NE(port, 0) << daemon.log();
   loopback::Http h;

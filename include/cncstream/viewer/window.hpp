@@ -50,6 +50,8 @@ class LiveCursor {
   void on_change(std::function<void()> wake);
 
  private:
+  // Applies `change` to what is pending, then wakes the window.
+  void set(const std::function<void(Update&)>& change);
   std::mutex mutex_;
   Update pending_;
   std::function<void()> wake_;

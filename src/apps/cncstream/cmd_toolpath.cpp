@@ -24,7 +24,7 @@ struct DepthBufferGrids {
 
 // The raster's CL grids from the GL engine, lifted by its bound so the rows
 // stand on or above the exact CL (the raster raises a node still below).
-void use_depth_buffer(jobs::ToolpathParams& params, double tolerance, std::shared_ptr<DepthBufferGrids> stats) {
+void use_depth_buffer(jobs::ToolpathParams& params, double tolerance, const std::shared_ptr<DepthBufferGrids>& stats) {
   gl::GlClOptions glo;
   glo.tolerance = tolerance;
   glo.floor = params.floor;

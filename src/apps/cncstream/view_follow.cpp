@@ -3,10 +3,8 @@
 
 #include <unistd.h>
 
-#include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -14,11 +12,9 @@
 
 #include <fmt/core.h>
 
-#include "cncstream/cam/deviation.hpp"
 #include "cncstream/geometry/stl.hpp"
 #include "cncstream/jobs/output_file.hpp"
 #include "cncstream/viewer/headless.hpp"
-#include "cncstream/viewer/live_cut.hpp"
 #include "cncstream/viewer/window.hpp"
 #include "daemon_client.hpp"
 #include "live_view.hpp"
@@ -28,7 +24,6 @@ namespace cncstream::app {
 namespace {
 
 using json = nlohmann::json;
-using Clock = std::chrono::steady_clock;
 
 std::optional<Vec3> vec3_of(const json& j, const char* key) {
   if (!j.is_object() || !j.contains(key) || !j[key].is_array() || j[key].size() < 3) return std::nullopt;
