@@ -18,7 +18,7 @@ class PointIndex {
   PointIndex(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter);
   // Max drop height at (x, y), or kNoContact.
   double drop(double x, double y) const;
-  std::size_t entries() const { return items_.size(); }
+  std::size_t entries() const { return entries_.size(); }
 
  private:
   enum Kind : std::uint32_t { kFace = 0, kEdge = 1u << 30, kVertex = 2u << 30 };
@@ -31,9 +31,14 @@ class PointIndex {
   CutterShape cutter_;
   double x0_ = 0, y0_ = 0, cell_ = 1;
   std::size_t nx_ = 0, ny_ = 0;
-  std::vector<std::uint32_t> offset_;
-  std::vector<std::uint32_t> items_;
-  std::vector<double> item_tops_;  // top(items_[k]), so a query reads no vertex
+  // A cell's items, each with the most it can give in the cell (rounded up),
+  // so a query reads no vertex and stops early.
+  struct Entry {
+    std::uint32_t item;
+    float bound;
+  };
+  std::vector<std::uint32_t> offset_;  // cell k: entries_[offset_[k], offset_[k + 1])
+  std::vector<Entry> entries_;
   // Prepared once: a query evaluates many primitives, and preparing them
   // (square roots, normals) costs more than evaluating them.
   std::vector<FaceOffset> faces_;

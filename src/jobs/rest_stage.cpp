@@ -14,7 +14,7 @@
 #include "cncstream/cam/reach.hpp"
 #include "cncstream/cam/stock.hpp"
 #include "finishing_stage.hpp"
-#include "job_operations.hpp"
+#include "roughing_stage.hpp"
 
 namespace cncstream::jobs {
 

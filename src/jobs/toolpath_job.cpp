@@ -2,6 +2,8 @@
 
 #include "cncstream/jobs/size_limits.hpp"
 
+#include <oneapi/tbb/task_group.h>
+
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -17,6 +19,7 @@
 #include "job_run.hpp"
 #include "job_text.hpp"
 #include "rest_stage.hpp"
+#include "roughing_stage.hpp"
 
 namespace cncstream::jobs {
 
@@ -83,6 +86,31 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
                                     "--strategy raster, without --rest)");
       ro.grid_source = [&](const GridSpec& spec, const Checkpoint&) { return p.raster_grid(*mesh, r.cutter, spec); };
     }
+    // Operations that need nothing of the finishing run beside it: the
+    // roughing's path when a roughing cutter is asked for (else whether one
+    // is needed comes from the finishing), the rest machining. TBB gives
+    // them the cores the finishing's serial stretches leave (the plaque's
+    // complete job: 2.8 s -> 2.0 s on two cores). They check for a stop;
+    // their progress shows in their stage after the finishing.
+    const Checkpoint stop_only = [&run](double) { run.check(); };
+    std::optional<RoughingStage> rough;
+    std::optional<RestStage> rest;
+    double rough_beside_s = 0, rest_beside_s = 0;
+    tbb::task_group beside;
+    r.stages_overlap = (p.stock && p.rough) || p.rest;
+    if (p.stock && p.rough)
+      beside.run([&] {
+        const auto t = std::chrono::steady_clock::now();
+        rough = roughing_from_stock(p, *mesh, work.offset, true, stop_only);
+        rough_beside_s = seconds_since(t);
+      });
+    if (p.rest)
+      beside.run([&] {
+        const auto t = std::chrono::steady_clock::now();
+        rest = plan_rest(p, *mesh, engine, region, work.lattice, stop_only);
+        rest_beside_s = seconds_since(t);
+      });
+
     // The slope of the ground, for the waterlines and the rows' spacing.
     std::optional<ClGrid> ground;
     if (steep_shallow || by_slope) ground = ground_grid(engine, region, spacing, run.nested_checkpoint(0, 0.15));
@@ -106,20 +134,16 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     }
     r.seconds_path = seconds_since(t0);
 
-    std::optional<RestStage> rest;
-    if (p.rest) {
-      run.stage("rest machining", path_to, path_to + rest_share);
-      t0 = std::chrono::steady_clock::now();
-      rest = plan_rest(p, *mesh, engine, region, work.lattice, run.checkpoint());
-      r.seconds_rest = seconds_since(t0);
-    }
+    if (p.rest) run.stage("rest machining", path_to, path_to + rest_share);
+    beside.wait();
+    r.seconds_rest = rest_beside_s;
 
-    std::optional<RoughingStage> rough;
     if (p.stock) {
       run.stage("roughing", kRoughFrom, kGcodeFrom);
       t0 = std::chrono::steady_clock::now();
-      rough = plan_roughing(p, *mesh, r.finish_pieces, work.offset, run.checkpoint());
-      r.seconds_rough = seconds_since(t0);
+      if (!rough) rough = roughing_from_stock(p, *mesh, work.offset, false, run.checkpoint());
+      check_roughing(*rough, p, *mesh, r.finish_pieces, work.offset, run.checkpoint());
+      r.seconds_rough = rough_beside_s + seconds_since(t0);
     }
 
     run.stage("G-code", kGcodeFrom, end_of_gcode);

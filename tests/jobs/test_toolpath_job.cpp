@@ -1,6 +1,7 @@
 // The tool path job called directly, as a daemon's worker would: progress,
-// cancellation from another thread, a mesh instead of a file, and a result
-// that does not depend on the thread limit.
+// cancellation from another thread (the operations beside the finishing
+// too), a mesh instead of a file, and a result that does not depend on the
+// thread limit.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -16,6 +17,7 @@
 #include "cncstream/geometry/stl.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "jobs_test_util.hpp"
+#include "support/v_groove.hpp"
 
 using namespace cncstream;
 using namespace jobstest;
@@ -79,6 +81,10 @@ TEST(ToolpathJob, StopFromAnotherThreadCancelsAndWritesNothing) {
   const fs::path dir = temp_dir("cancel");
   jobs::ToolpathParams p = plaque_params();
   p.output = dir / "plaque.nc";
+  // From the block with a roughing cutter: the roughing's path runs beside
+  // the finishing, and the stop must end it too.
+  p.stock = jobs::StockSpec{};
+  p.rough = parse_cutter_spec("flat:6");
 
   std::stop_source stop;
   std::mutex mutex;
@@ -133,6 +139,31 @@ TEST(ToolpathJob, StopFromAnotherThreadCancelsAndWritesNothing) {
   // No output, complete-looking or partial.
   EXPECT_FALSE(fs::exists(p.output));
   EXPECT_TRUE(fs::is_empty(dir));
+}
+
+TEST(ToolpathJob, OperationsBesideTheFinishingGiveTheSameProgramAsOneThread) {
+  // The roughing's path and the rest machining run beside the finishing;
+  // with one thread they run after it. The program is the same either way.
+  jobs::ToolpathParams p;
+  p.part.mesh = std::make_shared<const Mesh>(test::v_groove());
+  p.part.stl = "v-groove";
+  p.cutter = parse_cutter_spec("ball:6");
+  p.rough = parse_cutter_spec("flat:6");
+  p.rest = parse_cutter_spec("ball:2");
+  p.stock = jobs::StockSpec{};
+  p.stepover = 1.0;
+  p.step = 0.1;
+  p.bounds = XYBounds{3, 3, 37, 17};
+  const jobs::ToolpathProgram beside = jobs::generate_toolpath(p);
+  jobs::JobControl one;
+  one.threads = 1;
+  const jobs::ToolpathProgram after = jobs::generate_toolpath(p, one);
+  EXPECT_TRUE(beside.stages_overlap);
+  std::vector<std::string> names;
+  for (const auto& o : beside.operations) names.push_back(o.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"roughing", "rest roughing", "finishing", "rest machining"}));
+  EXPECT_EQ(beside.gcode, after.gcode);
+  EXPECT_EQ(beside.notes, after.notes);
 }
 
 TEST(ToolpathJob, StopRequestedBeforeTheStartCancelsAtOnce) {

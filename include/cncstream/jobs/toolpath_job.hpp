@@ -128,7 +128,11 @@ struct ToolpathProgram {
   // What the plan decided and why ("the finishing pass would cut 11.5 mm in
   // one pass, more than ... : roughing first").
   std::vector<std::string> notes;
+  // Each stage's own wall time. The rest machining and a roughing asked for
+  // (p.rough) run beside the finishing's CL + path: then the times overlap
+  // (stages_overlap) and add up to more than the whole.
   double seconds_load = 0, seconds_path = 0, seconds_rough = 0, seconds_rest = 0, seconds_gcode = 0;
+  bool stages_overlap = false;
 };
 
 // The rows' spacing in words: "0.4" for even rows, "0.457 to 0.797" for

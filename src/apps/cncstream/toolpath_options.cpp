@@ -158,7 +158,9 @@ std::string toolpath_report(const jobs::ToolpathProgram& r) {
   o << "time: load " << format_gcode_number(r.seconds_load, 3) << " s, CL + path " << format_gcode_number(r.seconds_path, 3);
   if (r.seconds_rest > 0) o << " s, rest machining " << format_gcode_number(r.seconds_rest, 3);
   if (r.seconds_rough > 0) o << " s, roughing " << format_gcode_number(r.seconds_rough, 3);
-  o << " s, G-code " << format_gcode_number(r.seconds_gcode, 3) << " s\n";
+  o << " s, G-code " << format_gcode_number(r.seconds_gcode, 3) << " s";
+  if (r.stages_overlap) o << " (the roughing's path and the rest machining ran beside the CL + path)";
+  o << "\n";
   return o.str();
 }
 
