@@ -415,58 +415,123 @@ constexpr std::size_t kSearchSpan = 48;
 
 namespace {
 
+// One step of the greedy fit of points[..last]: the longest arc from i, else
+// a line to the next point; returns the index the move ends at. It depends
+// on i and last alone, so two greedy runs that meet at an index go on alike
+// (fit_range's chunks rely on it).
+std::size_t fit_step(const Fitter& fitter, const std::vector<Vec3>& points, std::size_t i, std::size_t last,
+                     const ArcFitOptions& o, FittedMove& move) {
+  const std::size_t min_span = std::max<std::size_t>(2, o.min_segments);
+  std::optional<FittedMove> best;
+  std::size_t best_j = i + 1;
+  if (o.tolerance > 0 && i + min_span <= last) {
+    // Longest arc from i: spans doubling while they fit, then halving back
+    // between the longest that fitted and the next that did not. Short
+    // spans may not fit where longer ones do (noise; a convex run under
+    // the controller's few long chords), so failures are passed over up to
+    // kSearchSpan points before the first fit.
+    std::size_t ok = 0, bad = 0, span = min_span;
+    while (i + span <= last) {
+      if (auto a = fitter.arc(i, i + span)) {
+        ok = span;
+        best = a;
+        bad = 0;
+      } else {
+        bad = span;
+        if (ok > 0 || span >= kSearchSpan) break;
+      }
+      if (i + span == last) break;
+      span = std::min(2 * span, last - i);
+    }
+    if (ok > 0 && bad > ok + 1) {
+      std::size_t lo = ok, hi = bad;
+      while (hi > lo + 1) {
+        const std::size_t mid = lo + (hi - lo) / 2;
+        if (auto a = fitter.arc(i, i + mid)) {
+          lo = mid;
+          best = a;
+        } else {
+          hi = mid;
+        }
+      }
+      ok = lo;
+    }
+    if (best) best_j = i + ok;
+  }
+  if (best) {
+    move = *best;
+  } else {
+    move = FittedMove{};
+    move.to = points[i + 1];
+  }
+  return best_j;
+}
+
+// The moves of a greedy run from `from` on until it reaches `until` (or
+// last), each with the index it starts at.
+struct GreedyRun {
+  std::vector<std::size_t> starts;  // increasing
+  std::vector<FittedMove> moves;
+  std::size_t end = 0;              // the index the last move ends at
+};
+
+GreedyRun greedy_run(const Fitter& fitter, const std::vector<Vec3>& points, std::size_t from, std::size_t until,
+                     std::size_t last, const ArcFitOptions& o) {
+  GreedyRun r;
+  std::size_t i = from;
+  FittedMove m;
+  while (i < until && i < last) {
+    r.starts.push_back(i);
+    i = fit_step(fitter, points, i, last, o, m);
+    r.moves.push_back(m);
+  }
+  r.end = i;
+  return r;
+}
+
+// Stretches longer than this are fitted in chunks, in parallel.
+constexpr std::size_t kChunkPoints = 2048;
+
 // The greedy fit of points[first..last] (the longest arc from each point,
-// else a line to the next).
+// else a line to the next). A long stretch (a raster's rows and links, all
+// at one height over a flat border, have no corner to cut them at) is
+// fitted in chunks in parallel, each a greedy run from its first point until
+// the next chunk's; the runs are then stitched: from where one run ends the
+// fit goes on one step at a time until it meets an index the next run
+// started a move at, and takes that run's moves from there. The greedy step
+// depends only on its index, so the result is the serial fit's.
 void fit_range(const Fitter& fitter, const std::vector<Vec3>& points, std::size_t first, std::size_t last,
                const ArcFitOptions& o, std::vector<FittedMove>& out) {
-  const std::size_t min_span = std::max<std::size_t>(2, o.min_segments);
-  const bool possible = o.tolerance > 0;
+  const std::size_t chunks = o.parallel ? (last - first + kChunkPoints - 1) / kChunkPoints : 1;
+  if (chunks <= 1) {
+    GreedyRun r = greedy_run(fitter, points, first, last, last, o);
+    out.insert(out.end(), r.moves.begin(), r.moves.end());
+    return;
+  }
+  std::vector<GreedyRun> runs(chunks);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    const std::size_t from = first + c * kChunkPoints;
+    runs[c] = greedy_run(fitter, points, from, std::min(last, from + kChunkPoints), last, o);
+  });
   std::size_t i = first;
+  FittedMove m;
+  for (std::size_t c = 0; c < chunks && i < last; ++c) {
+    const GreedyRun& r = runs[c];
+    // Meet the run: step on until an index it started a move at, or past it.
+    auto at = std::lower_bound(r.starts.begin(), r.starts.end(), i);
+    while (i < r.end && (at == r.starts.end() || *at != i)) {
+      i = fit_step(fitter, points, i, last, o, m);
+      out.push_back(m);
+      at = std::lower_bound(at, r.starts.end(), i);
+    }
+    if (i >= r.end) continue;
+    const auto k = static_cast<std::size_t>(at - r.starts.begin());
+    out.insert(out.end(), r.moves.begin() + static_cast<std::ptrdiff_t>(k), r.moves.end());
+    i = r.end;
+  }
   while (i < last) {
-    std::optional<FittedMove> best;
-    std::size_t best_j = i + 1;
-    if (possible && i + min_span <= last) {
-      // Longest arc from i: spans doubling while they fit, then halving back
-      // between the longest that fitted and the next that did not. Short
-      // spans may not fit where longer ones do (noise; a convex run under
-      // the controller's few long chords), so failures are passed over up to
-      // kSearchSpan points before the first fit.
-      std::size_t ok = 0, bad = 0, span = min_span;
-      while (i + span <= last) {
-        if (auto a = fitter.arc(i, i + span)) {
-          ok = span;
-          best = a;
-          bad = 0;
-        } else {
-          bad = span;
-          if (ok > 0 || span >= kSearchSpan) break;
-        }
-        if (i + span == last) break;
-        span = std::min(2 * span, last - i);
-      }
-      if (ok > 0 && bad > ok + 1) {
-        std::size_t lo = ok, hi = bad;
-        while (hi > lo + 1) {
-          const std::size_t mid = lo + (hi - lo) / 2;
-          if (auto a = fitter.arc(i, i + mid)) {
-            lo = mid;
-            best = a;
-          } else {
-            hi = mid;
-          }
-        }
-        ok = lo;
-      }
-      if (best) best_j = i + ok;
-    }
-    if (best) {
-      out.push_back(*best);
-    } else {
-      FittedMove line;
-      line.to = points[i + 1];
-      out.push_back(line);
-    }
-    i = best_j;
+    i = fit_step(fitter, points, i, last, o, m);
+    out.push_back(m);
   }
 }
 

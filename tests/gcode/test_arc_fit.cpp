@@ -402,3 +402,44 @@ TEST(ArcFit, MaterialRightNeverCrossesIntoTheWall) {
   }
   EXPECT_GT(arcs, 100);
 }
+
+TEST(ArcFit, LongStretchFittedInParallelChunksIsTheSerialFit) {
+  // A raster at one height over level ground: rows along X with bumps (ZX
+  // arcs) and noise, joined by links along Y at the same height, so no point
+  // is a corner that would cut the stretch: the fit runs in chunks on
+  // several threads and stitches them (arc_fit.cpp). The moves must be the
+  // serial fit's, exactly.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> noise(-2e-4, 2e-4);
+  std::vector<Vec3> pts;
+  const double step = 0.05, z0 = 1.0;
+  for (int row = 0; row < 12; ++row) {
+    const double y = row * 0.5;
+    for (int k = 0; k <= 2000; ++k) {
+      const double x = row % 2 ? 100 - k * step : k * step;
+      // A bump of radius 4 every 20 mm, 1 mm high; level ground between.
+      const double u = std::fmod(x, 20.0) - 10.0;
+      double z = z0;
+      if (std::fabs(u) < 2.8) z += std::sqrt(16 - u * u) - 3.0 + (row % 3 == 0 ? noise(rng) : 0.0);
+      pts.push_back({std::round(x * 1000) / 1000, y, std::max(z0, std::round(z * 1000) / 1000)});
+    }
+  }
+  ASSERT_GT(pts.size(), 20000u);
+  for (const bool one_sided : {false, true}) {
+    ArcFitOptions o = two_sided(0.01);
+    o.material_below = o.material_right = one_sided;
+    ArcFitOptions serial = o;
+    serial.parallel = false;
+    const std::vector<FittedMove> par = fit_arcs(pts, o), ser = fit_arcs(pts, serial);
+    int arcs = 0;
+    ASSERT_EQ(par.size(), ser.size()) << "one-sided " << one_sided;
+    for (std::size_t k = 0; k < par.size(); ++k) {
+      const FittedMove &a = par[k], &b = ser[k];
+      ASSERT_TRUE(a.arc == b.arc && a.to == b.to && a.plane == b.plane && a.clockwise == b.clockwise &&
+                  a.center_offset == b.center_offset && a.radius == b.radius && a.sweep == b.sweep)
+          << "move " << k << " of " << par.size() << ", one-sided " << one_sided;
+      arcs += a.arc;
+    }
+    EXPECT_GT(arcs, 100) << "one-sided " << one_sided;  // the bumps (level ground stays lines)
+  }
+}

@@ -40,6 +40,9 @@ struct ArcFitOptions {
   // from them to the left. Runs in G18/G19 follow material_below (or are
   // two-sided without it).
   bool material_right = false;
+  // Long stretches fitted in chunks on several threads, stitched into the
+  // serial fit's moves exactly (false: one thread, for comparison).
+  bool parallel = true;
 };
 
 struct FittedMove {
