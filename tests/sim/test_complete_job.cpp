@@ -1,9 +1,10 @@
-// The complete job of the plaque from its block: Z-level roughing with a
-// 6 mm flat, a tool change, raster finishing with a 3.175 mm ball, in one
-// program, run line by line in the simulator with the job's tool table and
-// the operator's cycle start at the pause: nothing below the design, no move
-// deeper than its cutter's maximum depth, the finishing pass within its
-// depth of the roughed surface, and the plaque finished.
+// The complete job of the plaque (and of a shared mesh, a gear) from its
+// block: Z-level roughing with a flat, a tool change, finishing with a
+// 3.175 mm ball, in one program, run line by line in the simulator with the
+// job's tool table and the operator's cycle start at the pause: nothing
+// below the design, no move deeper than its cutter's maximum depth, the
+// finishing pass within its depth of the roughed surface, and the part
+// finished.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -20,6 +22,7 @@
 #include "cncsim/removal.hpp"
 #include "cncstream/cam/deviation.hpp"
 #include "cncstream/cam/height_field_io.hpp"
+#include "cncstream/cam/zlevel_roughing.hpp"
 #include "cncstream/gcode/program_pause.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "move_depth.hpp"
@@ -58,6 +61,9 @@ Cut run(const jobs::ToolpathProgram& prog, HeightFieldStock start, double tolera
         double leave = 0.3) {
   cncsim::MachineOptions mo;
   mo.instant_waits = true;
+  // Where the operator left it: above the stock (the machine's zero is the
+  // part's top, inside a stock with a margin above it).
+  mo.start_position = Vec3{0, 0, prog.stock->hi.z + 5};
   cncsim::Machine m(mo);
   cncsim::MaterialRemoval removal(std::move(start), prog.operations.front().cutter);
   cncsim::ToolTable tools;
@@ -65,8 +71,11 @@ Cut run(const jobs::ToolpathProgram& prog, HeightFieldStock start, double tolera
   Cut c{removal.stock(), {}, 0};
   c.depth.rim = std::max(0.01, tolerance);
   // The finishing cutter's side cut of the skin the roughing left beside a
-  // wall is as tall as the wall, a leave wide: not its depth of cut.
-  if (prog.operations.size() > 1) c.depth.rim_of[static_cast<int>(prog.operations.size())] = leave + 0.01;
+  // wall is as tall as the wall, a leave wide (and the roughing's regions'
+  // tolerance): not its depth of cut.
+  if (prog.operations.size() > 1) {
+    c.depth.rim_of[static_cast<int>(prog.operations.size())] = leave + RoughingParams{}.tolerance + 0.01;
+  }
   int op = 1;
   m.set_tool_observer([&](int t) { removal.set_cutter(tools.at(t)); });
   m.set_motion_observer([&](const Vec3& a, const Vec3& b, bool) { c.depth.cut(removal, op, removal.cutter(), a, b); });
@@ -103,6 +112,35 @@ void print_deepest(const Cut& c) {
     std::cout << "  operation " << t << " deepest " << c.depth.deepest.at(t) << " mm from " << ab.first.x << "," << ab.first.y
               << "," << ab.first.z << " to " << ab.second.x << "," << ab.second.y << "," << ab.second.z << " (node "
               << c.depth.node.at(t).x << "," << c.depth.node.at(t).y << " from " << c.depth.node.at(t).z << ")\n";
+}
+
+// Nothing of the machined stock below the design (beyond a micron).
+void expect_no_gouge(const jobs::ToolpathProgram& prog, const HeightFieldStock& stock) {
+  const DesignHeights design = design_heights(prog.work_mesh, stock.grid());
+  const DeviationResult dev = compare_to_design(stock, design, 0.01);
+  EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
+      << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
+      << dev.stats.largest_gouge.y;
+}
+
+// LinuxCNC's interpreter takes the whole program (the tool change's M0,
+// the roughing's G17 arcs, the rows' G18 arcs) and makes the same moves of
+// it as ours. (setup.sh installs it; skipped where it is missing.)
+void expect_rs274_makes_our_moves(const std::string& gcode) {
+  if (!test::rs274_available()) {
+    std::cout << "rs274 (linuxcnc-uspace) is not installed: the program was not checked with it\n";
+    return;
+  }
+  const auto r = test::run_rs274(gcode);
+  EXPECT_EQ(r.status, 0) << r.output.substr(0, 2000);
+  std::string error;
+  const auto ours = test::our_moves(gcode, error);
+  EXPECT_EQ(error, "");
+  ASSERT_EQ(ours.size(), r.moves.size());
+  for (std::size_t k = 0; k < ours.size(); ++k) {
+    ASSERT_LT(norm(ours[k].to - r.moves[k].to), 1e-4) << k;
+    ASSERT_EQ(ours[k].turn, r.moves[k].turn) << k;
+  }
 }
 
 }  // namespace
@@ -147,29 +185,43 @@ TEST(CompleteJob, PlaqueRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   EXPECT_LE(deepest.at(3), ball_max + 1e-3);
   EXPECT_GT(deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
   EXPECT_GT(deepest.at(2), 0.5 * ball_max);  // so did the rest roughing
-  const DesignHeights design = design_heights(prog.work_mesh, c.stock.grid());
-  const DeviationResult dev = compare_to_design(c.stock, design, 0.01);
-  EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
-      << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
-      << dev.stats.largest_gouge.y;
+  expect_no_gouge(prog, c.stock);
+  expect_rs274_makes_our_moves(prog.gcode);
+}
 
-  // LinuxCNC's interpreter takes the whole program (the tool change's M0,
-  // the roughing's G17 arcs, the rows' G18 arcs) and makes the same moves of
-  // it as ours. (setup.sh installs it; skipped where it is missing.)
-  if (test::rs274_available()) {
-    const auto r = test::run_rs274(prog.gcode);
-    EXPECT_EQ(r.status, 0) << r.output.substr(0, 2000);
-    std::string error;
-    const auto ours = test::our_moves(prog.gcode, error);
-    EXPECT_EQ(error, "");
-    ASSERT_EQ(ours.size(), r.moves.size());
-    for (std::size_t k = 0; k < ours.size(); ++k) {
-      ASSERT_LT(norm(ours[k].to - r.moves[k].to), 1e-4) << k;
-      ASSERT_EQ(ours[k].turn, r.moves[k].turn) << k;
-    }
-  } else {
-    std::cout << "rs274 (linuxcnc-uspace) is not installed: the program was not checked with it\n";
+// A shared mesh with vertical walls, a spur gear 41.7 mm across and 8 mm
+// thick, from its block: Z-level roughing with a 3 mm flat, rest roughing
+// where the flat cannot reach between the teeth, steep-and-shallow
+// finishing (waterlines on the teeth's flanks), run in sequence in the
+// simulator: no gouge, no move deeper than its cutter may cut.
+TEST(CompleteJob, GearwheelRoughedThenFinishedWithoutGougeOrOverDeepPass) {
+  jobs::ToolpathParams p = plaque_job();
+  p.part.stl = std::string(CNCSTREAM_SHARED_MESHES) + "/gearwheel.bin.stl";
+  p.rough = parse_cutter_spec("flat:3");
+  p.strategy = jobs::FinishStrategy::SteepShallow;  // the command's default
+  const jobs::ToolpathProgram prog = jobs::generate_toolpath(p);
+  std::vector<std::string> names;
+  for (const auto& o : prog.operations) names.push_back(o.name);
+  ASSERT_EQ(names, (std::vector<std::string>{"roughing", "rest roughing", "finishing"}));
+  EXPECT_NE(prog.operations[2].detail.find("waterlines"), std::string::npos) << prog.operations[2].detail;
+  for (const auto& n : prog.notes) std::cout << n << "\n";
+
+  const Cut c = run(prog, block_of(prog), p.tolerance);
+  EXPECT_EQ(c.pauses, 1);
+  print_deepest(c);
+  for (std::size_t k = 0; k < prog.operations.size(); ++k) {
+    const jobs::OperationSummary& o = prog.operations[k];
+    // The finishing's max_depth is what it was measured to cut; its limit
+    // is its cutter's.
+    const double limit = o.name == "finishing" ? jobs::default_max_depth(o.cutter) : o.max_depth;
+    const int op = static_cast<int>(k) + 1;
+    ASSERT_TRUE(c.depth.deepest.count(op)) << o.name;
+    std::cout << o.name << ": deepest cut of one move " << c.depth.deepest.at(op) << " mm (max " << limit << ")\n";
+    EXPECT_LE(c.depth.deepest.at(op), limit + 1e-3) << o.name;
   }
+  EXPECT_GT(c.depth.deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
+  expect_no_gouge(prog, c.stock);
+  expect_rs274_makes_our_moves(prog.gcode);
 }
 
 // A roughing interrupted half way, its result written as the simulator
@@ -212,11 +264,7 @@ TEST(CompleteJob, PlaqueRoughedAgainFromAnInterruptedRoughingCutsOnlyWhatIsLeft)
   ASSERT_TRUE(c.depth.deepest.count(1));
   print_deepest(c);
   EXPECT_LE(c.depth.deepest.at(1), r2.max_depth + 1e-3);
-  const DesignHeights design = design_heights(second.work_mesh, c.stock.grid());
-  const DeviationResult dev = compare_to_design(c.stock, design, 0.01);
-  EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
-      << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
-      << dev.stats.largest_gouge.y;
+  expect_no_gouge(second, c.stock);
   // About as much left as after the whole roughing (its levels are planned
   // anew from the half-cut stock's highest point, so its terraces lie at
   // other heights: compared in volume, not node by node).
