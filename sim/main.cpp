@@ -81,8 +81,10 @@ struct NumberedTally {
 
 int run_verify(const std::string& design_path, const std::string& result_path, double tolerance,
                const std::string& png) {
-  const auto design = cncstream::load_stl(design_path).mesh;
+  auto design = cncstream::load_stl(design_path).mesh;
   const auto field = cncstream::read_height_field(result_path);
+  // A cut in work coordinates that says where the model sat: the design goes there.
+  if (field.work_offset) design.translate(*field.work_offset);
   const auto stock = cncsim::stock_from_heights(field.grid, field.z);
   const auto heights = cncstream::design_heights(design, field.grid);
   const auto result = cncstream::compare_to_design(stock, heights, tolerance);

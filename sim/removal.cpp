@@ -106,10 +106,11 @@ void MaterialRemoval::cut(const Vec3& from, const Vec3& to) {
   deepest = std::max(deepest, stock_.last_max_depth());
 }
 
-std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path& path) const {
+std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path& path,
+                                                   std::optional<cncstream::Vec3> work_offset) const {
   // Each file whole or not at all; the sidecar is in place before its data file.
   write_whole(path, [&](const std::filesystem::path& file) {
-    cncstream::write_height_field(file, stock_.grid(), stock_.heights());
+    cncstream::write_height_field(file, stock_.grid(), stock_.heights(), work_offset);
     std::filesystem::rename(cncstream::height_field_sidecar(file), cncstream::height_field_sidecar(path));
   });
   auto stl = path;

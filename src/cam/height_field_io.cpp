@@ -39,8 +39,9 @@ std::filesystem::path height_field_sidecar(const std::filesystem::path& data_pat
   return std::filesystem::path(data_path.string() + ".txt");
 }
 
-HeightFieldWriter::HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid)
-    : path_(data_path), grid_(grid), out_(data_path, std::ios::binary) {
+HeightFieldWriter::HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid,
+                                     std::optional<Vec3> work_offset)
+    : path_(data_path), grid_(grid), work_offset_(work_offset), out_(data_path, std::ios::binary) {
   if (!out_) throw HeightFieldError(data_path.string() + ": cannot open for writing (" + std::generic_category().message(errno) + ")");
 }
 
@@ -67,14 +68,18 @@ void HeightFieldWriter::finish() {
   t << kMagic << "\n"
     << "nx " << grid_.nx << "\nny " << grid_.ny << "\nx0 " << num(grid_.x0) << "\ny0 " << num(grid_.y0) << "\ndx "
     << num(grid_.dx) << "\ndy " << num(grid_.dy) << "\nnodata nan\n";
+  if (work_offset_)  // + 0.0: no "-0"
+    t << "work_offset_x " << num(work_offset_->x + 0.0) << "\nwork_offset_y " << num(work_offset_->y + 0.0) << "\nwork_offset_z "
+      << num(work_offset_->z + 0.0) << "\n";
   if (!t) throw HeightFieldError(side.string() + ": write error");
 }
 
-void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z) {
+void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z,
+                        std::optional<Vec3> work_offset) {
   if (z.size() != grid.size())
     throw std::invalid_argument("height field: " + std::to_string(z.size()) + " values for a grid of " +
                                 std::to_string(grid.size()) + " nodes");
-  HeightFieldWriter w(data_path, grid);
+  HeightFieldWriter w(data_path, grid, work_offset);
   w.append(z);
   w.finish();
 }
@@ -99,7 +104,8 @@ HeightFieldData read_height_field(const std::filesystem::path& data_path) {
       if (val != "nan") throw err("only 'nodata nan' is supported");
       continue;
     }
-    if (key != "nx" && key != "ny" && key != "x0" && key != "y0" && key != "dx" && key != "dy")
+    if (key != "nx" && key != "ny" && key != "x0" && key != "y0" && key != "dx" && key != "dy" &&
+        key != "work_offset_x" && key != "work_offset_y" && key != "work_offset_z")
       throw err("unknown key '" + key + "'");
     double d = 0;
     const auto [p, ec] = std::from_chars(val.data(), val.data() + val.size(), d);
@@ -123,6 +129,12 @@ HeightFieldData read_height_field(const std::filesystem::path& data_path) {
   out.grid.y0 = v["y0"];
   out.grid.dx = v["dx"];
   out.grid.dy = v["dy"];
+  const int offsets = static_cast<int>(v.count("work_offset_x") + v.count("work_offset_y") + v.count("work_offset_z"));
+  if (offsets == 3) {
+    out.work_offset = Vec3{v["work_offset_x"], v["work_offset_y"], v["work_offset_z"]};
+  } else if (offsets != 0) {
+    throw err("work_offset_x, work_offset_y and work_offset_z go together");
+  }
   if (!(out.grid.dx > 0) || !(out.grid.dy > 0)) throw err("dx and dy must be positive");
   if (out.grid.size() > (std::size_t{1} << 32)) throw err("grid is too large");
 

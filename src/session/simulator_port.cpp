@@ -104,7 +104,7 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
     for (int t : removal_->unknown_tools())
       o << "sim: warning: the program selected T" << t << ", which the tool table does not hold; the cutter was kept\n";
     if (!opt_.result.empty()) {
-      const auto stl = removal_->write_result(opt_.result);
+      const auto stl = removal_->write_result(opt_.result, opt_.work_offset);
       o << "sim: machined surface written to " << opt_.result << " (+ .txt) and " << stl.string() << "\n";
     }
     const auto heights = design_heights(*opt_.design, removal_->stock().grid());

@@ -153,6 +153,19 @@ TEST(ViewCommand, CutScreenshotCarriesTheDeviationMapsLegend) {
     }
   EXPECT_TRUE(gouge_swatch);
   EXPECT_TRUE(excess_swatch);
+
+  // The same cut as the job's simulator writes it: in work coordinates (Z0
+  // at the part's top), saying where the model sat. It is placed on the
+  // design, not compared 10.5 mm below it.
+  const double top = plaque_mesh.bounds().hi.z;
+  std::vector<double> work(z);
+  for (double& h : work) h -= top;
+  cncstream::write_height_field(cut, g, work, cncstream::Vec3{0, 0, -top});
+  const auto w = run_cncstream({"view", "--cut", cut.string(), "--design", plaque(), "--screenshot", png.string(),
+                                "--view", "top", "--size", "320x200"});
+  ASSERT_EQ(w.code, 0) << w.out;
+  EXPECT_TRUE(w.has("cut placed on the design by its work origin: offset X 0.000 Y 0.000 Z 10.500")) << w.out;
+  EXPECT_TRUE(w.has(", 0 gouged,")) << w.out;
 }
 
 // The window attached to a job on the daemon: it waits for the start, shows

@@ -182,6 +182,12 @@ TEST(HeightFieldFiles, RoundTrip) {
   z[5] = std::nan("");
   write_height_field(path, g, z);
   EXPECT_TRUE(std::isnan(read_height_field(path).z[5]));
+  EXPECT_FALSE(read_height_field(path).work_offset);
+  // A machined surface in work coordinates says where the model sat.
+  write_height_field(path, g, z, Vec3{1.25, 0, -10.5});
+  const auto placed = read_height_field(path);
+  ASSERT_TRUE(placed.work_offset);
+  EXPECT_EQ(*placed.work_offset, (Vec3{1.25, 0, -10.5}));
 }
 
 TEST(HeightFieldFiles, ErrorsNameTheFile) {
@@ -205,6 +211,15 @@ TEST(HeightFieldFiles, ErrorsNameTheFile) {
     EXPECT_NE(std::string(e.what()).find("bad.f32.txt:3: 'three' is not a number"), std::string::npos) << e.what();
   }
   EXPECT_THROW(read_height_field(out_dir() / "missing.f32"), HeightFieldError);
+  write_height_field(path, g, std::vector<double>(g.size(), 0.0));
+  std::ofstream(height_field_sidecar(path), std::ios::app) << "work_offset_z -10.5\n";
+  try {
+    read_height_field(path);
+    FAIL() << "a partial work offset was taken";
+  } catch (const HeightFieldError& e) {
+    EXPECT_NE(std::string(e.what()).find("work_offset_x, work_offset_y and work_offset_z go together"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(HeightFieldSolid, ClosedAndEnclosesTheVolume) {

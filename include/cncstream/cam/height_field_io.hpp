@@ -11,20 +11,28 @@
 //     dy 0.1
 //     nodata nan
 // NaN marks nodes without a value. Shared by the stock export and the CL
-// grid export.
+// grid export. A machined surface in work coordinates may also say where
+// the part's model sat (work = model + offset), so a viewer or a verify can
+// place the design on it:
+//     work_offset_x 0
+//     work_offset_y 0
+//     work_offset_z -10.5
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <vector>
 
 #include "cncstream/cam/cl_grid.hpp"
+#include "cncstream/geometry/vec3.hpp"
 
 namespace cncstream {
 
 struct HeightFieldData {
   GridSpec grid;
   std::vector<float> z;  // grid.size() values, NaN = no value
+  std::optional<Vec3> work_offset;  // work = model + offset, where the file says
 };
 
 class HeightFieldError : public std::runtime_error {
@@ -40,20 +48,23 @@ std::filesystem::path height_field_sidecar(const std::filesystem::path& data_pat
 // sidecar.
 class HeightFieldWriter {
  public:
-  HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid);
+  HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid,
+                    std::optional<Vec3> work_offset = std::nullopt);
   void append(std::span<const double> z);
   void finish();
 
  private:
   std::filesystem::path path_;
   GridSpec grid_;
+  std::optional<Vec3> work_offset_;
   std::ofstream out_;
   std::size_t written_ = 0;
 };
 
 // Writes both files. Throws HeightFieldError naming the path on failure and
 // std::invalid_argument if z.size() != grid.size().
-void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z);
+void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z,
+                        std::optional<Vec3> work_offset = std::nullopt);
 
 // Reads both files; errors name the file and the sidecar line, or the data
 // file's expected and actual size.

@@ -36,6 +36,9 @@ struct SimulatorOptions {
   std::optional<cncsim::ToolTable> tools;  // T number -> cutter (else `cutter` throughout)
   std::optional<Box3> stock;  // the block cut (machine coordinates); default: the design's box
   std::string result;       // machined surface written here (.f32 + .txt, and .stl)
+  // Recorded with the result: where the part's model sits (work = model +
+  // offset), so a viewer or `cncsim verify` places the design on the cut.
+  std::optional<Vec3> work_offset;
   std::optional<std::filesystem::path> link;  // a stable symlink to the pty (e.g. for a reconnect test)
   std::optional<double> probe_surface_z;       // G38.x touches this Z plane (machine coordinates)
 };

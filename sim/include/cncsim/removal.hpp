@@ -3,6 +3,7 @@
 // coordinates) cut by every piece of tool motion with the exact swept cutter.
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <map>
 #include <set>
 #include <string>
@@ -58,8 +59,11 @@ class MaterialRemoval {
 
   // Writes the machined surface as a height field (<path> + <path>.txt) and
   // as a closed STL solid down to the stock's bottom (<path> with .stl).
-  // Returns the STL's path.
-  std::filesystem::path write_result(const std::filesystem::path& path) const;
+  // `work_offset`: where the part's model sat in the machine's coordinates
+  // (work = model + offset), recorded in the sidecar when known. Returns
+  // the STL's path.
+  std::filesystem::path write_result(const std::filesystem::path& path,
+                                     std::optional<cncstream::Vec3> work_offset = std::nullopt) const;
 
  private:
   cncstream::HeightFieldStock stock_;

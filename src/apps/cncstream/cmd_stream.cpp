@@ -131,7 +131,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
                 << "  estimated machining time: " << format_duration(eta.total()) << " (" << limits_note << ")\n"
                 << std::flush;
       if (!confirm("Start machining on " + c.port + "?", c.yes)) return 2;
-      verify = VerifyTarget{r.work_mesh, r.cutter, {}, r.stock};
+      verify = VerifyTarget{r.work_mesh, r.cutter, {}, r.stock, r.work_offset};
       // The simulator cuts each operation with its own cutter.
       if (r.operations.size() > 1)
         for (const auto& op : r.operations) verify->tools[op.tool] = op.cutter;

@@ -147,7 +147,16 @@ void register_view(CLI::App& app, CommandRegistry& registry) {
     if (!o->cut.empty()) {
       if (o->design.empty() && !part) throw std::invalid_argument("--cut needs the design: give --design PART.stl or the part");
       const Mesh design = o->design.empty() ? *part : load_stl(o->design).mesh;
-      const HeightFieldData field = read_height_field(o->cut);
+      HeightFieldData field = read_height_field(o->cut);
+      if (field.work_offset) {
+        // Cut in work coordinates (the job's simulator): into the design's
+        // (and the part's, the program's) model coordinates.
+        const Vec3 w = *field.work_offset;
+        field.grid.x0 -= w.x;
+        field.grid.y0 -= w.y;
+        for (float& z : field.z) z = static_cast<float>(static_cast<double>(z) - w.z);
+        std::cout << "cut placed on the design by its work origin: offset " << format_position(Vec3{} - w) << "\n";
+      }
       scene.cut = cut_surface(field.grid, field.z, design, o->tolerance);
       std::cout << "cut " << o->cut << ": " << field.grid.nx << " x " << field.grid.ny << " nodes, "
                 << scene.cut->stats.gouged << " gouged, " << scene.cut->stats.excess << " with excess (tolerance "

@@ -158,7 +158,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     session::SimulatorOptions so = simulator_options(s);
     if (!s.design.empty()) {
       if (s.tool.empty()) throw std::invalid_argument("--sim-design needs --sim-tool (the cutter that cuts it)");
-      verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool), {}, std::nullopt};
+      verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool), {}, std::nullopt, std::nullopt};
     }
     if (verify && !s.no_verify) {
       so.design = verify->design;
@@ -173,6 +173,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
         so.tools = cncsim::ToolTable(verify->tools.begin(), verify->tools.end());
       }
       so.result = s.result;
+      so.work_offset = verify->work_offset;
     } else if (!s.tool_table.empty() || !s.result.empty()) {
       throw std::invalid_argument("--sim-tool-table and --sim-result need a cut to simulate: an STL job, or --sim-design "
                                   "with --sim-tool (and not --no-sim-verify)");

@@ -68,6 +68,7 @@ struct VerifyTarget {
   Cutter cutter;
   std::map<int, Cutter> tools;  // T number -> cutter, for a program of several tools (else `cutter` throughout)
   std::optional<Box3> stock;    // the job's stock block (else the design's box)
+  std::optional<Vec3> work_offset;  // work = model + offset (an STL job's placement), recorded with --sim-result
 };
 
 // Motion limits for a plan shown before connecting: the simulator's settings
