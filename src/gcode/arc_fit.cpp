@@ -467,8 +467,8 @@ std::size_t fit_step(const Fitter& fitter, const std::vector<Vec3>& points, std:
   return best_j;
 }
 
-// The moves of a greedy run from `from` on until it reaches `until` (or
-// last), each with the index it starts at.
+// The moves of a greedy run from `from` on until it reaches `until` (at
+// most last), each with the index it starts at.
 struct GreedyRun {
   std::vector<std::size_t> starts;  // increasing
   std::vector<FittedMove> moves;
@@ -480,7 +480,7 @@ GreedyRun greedy_run(const Fitter& fitter, const std::vector<Vec3>& points, std:
   GreedyRun r;
   std::size_t i = from;
   FittedMove m;
-  while (i < until && i < last) {
+  while (i < until) {
     r.starts.push_back(i);
     i = fit_step(fitter, points, i, last, o, m);
     r.moves.push_back(m);

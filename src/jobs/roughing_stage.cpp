@@ -187,8 +187,6 @@ void check_roughing(RoughingStage& s, const ToolpathParams& p, const Mesh& mesh,
   s.finish_depth = s.finish_depth_alone;
   const bool needed = s.finish_depth_alone > s.finish_max_depth + 1e-9;
   if (!needed && !p.rough) {
-    s.path.reset();
-    s.roughed.reset();
     s.notes.push_back(fmt::format("the finishing pass cuts at most {} below the stock's top, within its cutter's {}: "
                                   "no roughing",
                                   mm(s.finish_depth_alone), mm(s.finish_max_depth)));

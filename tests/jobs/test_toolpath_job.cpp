@@ -17,7 +17,7 @@
 #include "cncstream/geometry/stl.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "jobs_test_util.hpp"
-#include "support/v_groove.hpp"
+#include "support/v_groove_job.hpp"
 
 using namespace cncstream;
 using namespace jobstest;
@@ -144,16 +144,11 @@ TEST(ToolpathJob, StopFromAnotherThreadCancelsAndWritesNothing) {
 TEST(ToolpathJob, OperationsBesideTheFinishingGiveTheSameProgramAsOneThread) {
   // The roughing's path and the rest machining run beside the finishing;
   // with one thread they run after it. The program is the same either way.
-  jobs::ToolpathParams p;
-  p.part.mesh = std::make_shared<const Mesh>(test::v_groove());
-  p.part.stl = "v-groove";
-  p.cutter = parse_cutter_spec("ball:6");
+  jobs::ToolpathParams p = test::v_groove_job("ball:6", "ball:2");
   p.rough = parse_cutter_spec("flat:6");
-  p.rest = parse_cutter_spec("ball:2");
   p.stock = jobs::StockSpec{};
   p.stepover = 1.0;
   p.step = 0.1;
-  p.bounds = XYBounds{3, 3, 37, 17};
   const jobs::ToolpathProgram beside = jobs::generate_toolpath(p);
   jobs::JobControl one;
   one.threads = 1;

@@ -18,7 +18,7 @@
 #include "cncstream/gcode/program_pause.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "sim_test_util.hpp"
-#include "support/v_groove.hpp"
+#include "support/v_groove_job.hpp"
 
 using namespace cncstream;
 
@@ -60,17 +60,10 @@ Result machine(const jobs::ToolpathProgram& prog, const GridSpec& grid, std::siz
 }  // namespace
 
 TEST(RestMachining, VGrooveCreaseComesDownFromTheBigBallsReachToTheSmallOnes) {
-  const Mesh mesh = test::v_groove();
-  jobs::ToolpathParams p;
-  p.part.mesh = std::make_shared<const Mesh>(mesh);
-  p.part.stl = "v-groove";
-  p.cutter = parse_cutter_spec("ball:6");
-  p.rest = parse_cutter_spec("ball:2");
+  jobs::ToolpathParams p = test::v_groove_job("ball:6", "ball:2");
   p.stepover = 0.5;
   p.tolerance = 0.01;
   p.rpm = 0;
-  // The balls stay over the block (its surface is open: no walls outside).
-  p.bounds = XYBounds{3, 3, 37, 17};
   const jobs::ToolpathProgram prog = jobs::generate_toolpath(p);
   ASSERT_EQ(prog.operations.size(), 2u);
   EXPECT_EQ(prog.operations[0].name, "finishing");
@@ -117,12 +110,7 @@ TEST(RestMachining, VGrooveCreaseComesDownFromTheBigBallsReachToTheSmallOnes) {
 }
 
 TEST(RestMachining, RefusesARestCutterNotSmallerThanTheFinishingOne) {
-  jobs::ToolpathParams p;
-  p.part.mesh = std::make_shared<const Mesh>(test::v_groove());
-  p.part.stl = "v-groove";
-  p.cutter = parse_cutter_spec("ball:2");
-  p.rest = parse_cutter_spec("ball:3");
-  p.bounds = XYBounds{3, 3, 37, 17};
+  const jobs::ToolpathParams p = test::v_groove_job("ball:2", "ball:3");
   try {
     jobs::generate_toolpath(p);
     FAIL() << "a larger rest cutter was taken";
