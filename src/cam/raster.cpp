@@ -174,8 +174,11 @@ struct StepRefiner {
 };
 
 // Exact CL samples along a straight pass (u = distance along it) -> the
-// refined and merged polyline, mapped to points by `to_point`. Runs between
-// staircases are simplified separately (the staircase corners are kept).
+// refined polyline fitted inside the band [CL, CL + tolerance] (vertices
+// above their samples, not on them: on convex stretches the moves are
+// sqrt(8 R T) long instead of the sample spacing), mapped to points by
+// `to_point`. Runs between staircases are fitted separately (the staircase
+// corners are kept).
 template <class At, class ToPoint>
 Polyline pass_polyline(const std::vector<double>& us_in, const std::vector<double>& zs_in, const StepRefiner& refiner,
                        double tolerance, At at, ToPoint to_point, std::size_t& queries) {
@@ -188,7 +191,7 @@ Polyline pass_polyline(const std::vector<double>& us_in, const std::vector<doubl
   Polyline out;
   std::vector<double> us, zs;
   auto flush = [&] {
-    for (std::size_t k : simplify_profile_above(us, zs, tolerance)) out.push_back(to_point(us[k], zs[k]));
+    for (const BandVertex& v : fit_profile_in_band(us, zs, tolerance)) out.push_back(to_point(us[v.index], v.z));
     us.clear();
     zs.clear();
   };

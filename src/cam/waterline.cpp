@@ -10,6 +10,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "cncstream/cam/level_band_fit.hpp"
 #include "cncstream/cam/level_contours.hpp"
 #include "cncstream/cam/polyline_simplify.hpp"
 
@@ -17,11 +18,14 @@ namespace cncstream {
 
 namespace {
 
-double xy_dist(const Vec3& a, const Vec3& b) { return std::hypot(a.x - b.x, a.y - b.y); }
 
 // The largest rise of the CL above a level run's chord that is moved out of
 // sideways rather than lifted over (append_lifted).
 constexpr double kSmallSag = 2e-3;
+
+// How far the exact CL may stand above a fitted level move (the contour's
+// own points are on the CL within a micron).
+constexpr double kClearSlack = 2e-5;
 
 // (x, y) on the lattice: the nearest lattice point where the CL allows the
 // point's height, else the nearest one lifted onto the CL there.
@@ -74,9 +78,9 @@ double free_offset(const ClEngine& engine, double x, double y, double nx, double
 // The chord a -> b (a at the level) sampled every `step` with the exact CL;
 // samples the CL rises above are lifted onto it (on the lattice). Appends
 // the points after a. The last resort of keep_level below. The lifted
-// samples (a CL cliff's face, every step/5) are then thinned along the
+// samples (a CL cliff's face, every step/5) are then fitted along the
 // chord as a raster's row is (within `tolerance` above them, never below):
-// a move between two kept points passes over the dropped ones, and over the
+// a move between two vertices passes over the samples between, and over the
 // samples left at the level, which lie under the level.
 void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, const Vec3& a, const Vec3& b,
                    double level, double step, double tolerance, Polyline& out, std::size_t& queries) {
@@ -89,15 +93,24 @@ void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, 
     const double cl = engine.height_at(p.x, p.y);
     ++queries;
     if (cl > p.z) {
-      // A sag of a micron or so (the chord's ends are on the contour within
-      // that): the sample moves sideways out of it at the level, so the run
-      // stays level for the merge and the arcs.
-      if (cl - level < kSmallSag && len > 0) {
+      // The sample moves sideways out of the CL at the level, so the run
+      // stays level for the band fit and the arcs: a sag of a micron or so
+      // (the chord's ends are on the contour within that) by up to a step;
+      // where the contour bulges out between its points (round an outside
+      // corner of the part) by up to a quarter of the chord. Lifting over
+      // such a bulge instead made a bump of hundredths of a millimetre
+      // every few tenths (a line each, more than a serial link delivers).
+      // The move to it from the point before must stay out of the CL too.
+      if (len > 0) {
         const double nx = -(b.y - a.y) / len, ny = (b.x - a.x) / len;  // left: the free side
-        const double d = free_offset(engine, p.x, p.y, nx, ny, level, 0, step, queries);
+        const double limit = cl - level < kSmallSag ? step : std::max(step, 0.25 * len);
+        const double d = free_offset(engine, p.x, p.y, nx, ny, level, 0, limit, queries);
         if (std::isfinite(d)) {
           const Vec3 q = on_lattice(engine, lat, {p.x + d * nx, p.y + d * ny, level}, queries);
-          if (q.z == level) {
+          const Vec3& before = chord.back();
+          ++queries;
+          if (q.z == level && (cl - level < kSmallSag || before.z != level ||
+                               engine.height_at(0.5 * (q.x + before.x), 0.5 * (q.y + before.y)) <= level)) {
             chord.push_back(q);
             continue;
           }
@@ -120,8 +133,8 @@ void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, 
     increasing = increasing && (k == 0 || us[k] > us[k - 1]);
   }
   if (chord.size() > 3 && increasing && tolerance > 0) {
-    const std::vector<std::size_t> kept = simplify_profile_above(us, zs, tolerance);
-    for (std::size_t k = 1; k < kept.size(); ++k) out.push_back(chord[kept[k]]);
+    const std::vector<BandVertex> kept = fit_profile_in_band(us, zs, tolerance);
+    for (std::size_t k = 1; k < kept.size(); ++k) out.push_back({chord[kept[k].index].x, chord[kept[k].index].y, kept[k].z});
   } else {
     out.insert(out.end(), chord.begin() + 1, chord.end());
   }
@@ -211,41 +224,6 @@ Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat,
   Polyline out{pts.front()};
   for (std::size_t c = 0; c < chords; ++c)
     append_lifted(engine, lat, pts[c], pts[(c + 1) % n], level, step / 5, tolerance, out, queries);
-  return out;
-}
-
-// Keeps a subset of a level run's points so that every chord between kept
-// points passes on the free side (left) of the points it replaces, within
-// `tolerance` of them: the part is on the right of the run, so a chord left
-// of the old points is left of the old segments too (they are convex
-// combinations of points right of the chord's line), and never cuts deeper.
-Polyline simplify_level_run(const Polyline& p, double tolerance) {
-  if (p.size() < 3 || !(tolerance > 0)) return p;
-  constexpr std::size_t kWindow = 400;
-  Polyline out{p.front()};
-  std::size_t i = 0;
-  while (i + 1 < p.size()) {
-    std::size_t j = i + 1;
-    while (j + 1 < p.size() && j + 1 - i <= kWindow) {
-      const Vec3 &a = p[i], &b = p[j + 1];
-      const double len = xy_dist(a, b);
-      if (!(len > 0) || b.z != a.z) break;
-      bool ok = true;
-      for (std::size_t k = i + 1; k <= j && ok; ++k) {
-        if (p[k].z != a.z) ok = false;
-        // Left of the chord's direction: positive.
-        const double side = ((b.x - a.x) * (p[k].y - a.y) - (b.y - a.y) * (p[k].x - a.x)) / len;
-        ok = ok && side <= 1e-9 && side >= -tolerance;
-        // ... and beside the chord, not beyond its ends.
-        const double along = ((p[k].x - a.x) * (b.x - a.x) + (p[k].y - a.y) * (b.y - a.y)) / len;
-        ok = ok && along >= 0 && along <= len;
-      }
-      if (!ok) break;
-      ++j;
-    }
-    out.push_back(p[j]);
-    i = j;
-  }
   return out;
 }
 
@@ -375,10 +353,21 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
       for (Run& r : steep_runs(c, slope, angle)) {
         // Every chord checked against the exact CL (closed loops: the closing
         // chord too; the loop then repeats its first point at its end).
-        r.points = simplify_level_run(
+        // A fitted move with a vertex moved off the contour is checked
+        // against the exact CL as densely as the lifts are.
+        const LevelMoveCheck clear = [&](const Vec3& a, const Vec3& b) {
+          const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(xy_dist(a, b) / (o.sample_step / 5))));
+          for (std::size_t k = 0; k <= n; ++k) {
+            const double t = double(k) / double(n);
+            ++lp.queries;
+            if (engine.height_at(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t) > z + kClearSlack) return false;
+          }
+          return true;
+        };
+        r.points = fit_level_run_in_band(
             keep_level(engine, o.lattice, std::move(r.points), r.closed, z, o.sample_step, o.simplify_tolerance,
                        lp.queries),
-            o.simplify_tolerance);
+            o.simplify_tolerance, o.lattice, clear);
         lp.runs.push_back(std::move(r));
       }
     if (checkpoint) checkpoint(0.9 * double(++done) / double(levels.size()));

@@ -51,8 +51,6 @@ void check(const Cutter& cutter, const ClEngine& grown, const StockBlock& s, con
                                 " grown by the stock to leave (" + want.spec() + ")");
 }
 
-double xy_dist(const Vec3& a, const Vec3& b) { return std::hypot(b.x - a.x, b.y - a.y); }
-
 // The loop rotated to start at its vertex nearest to `from`.
 Polyline rotated_near(const Polyline& loop, const Vec3& from) {
   std::size_t best = 0;
@@ -153,7 +151,10 @@ struct Builder {
     }
     const double ramp_top = std::min(z_above + above + 0.5, pass.lift_z);
     const double drop = ramp_top - z;
-    const double need = drop / std::tan(p.ramp_angle_deg * kPi / 180);
+    // A loop shorter than the cutter's radius is a spot the tool covers
+    // anyway: laps of it would be a zigzag of hundredths of a millimetre
+    // (a line each, more than a serial link can deliver), so it plunges.
+    const double need = length < R ? 0.0 : drop / std::tan(p.ramp_angle_deg * kPi / 180);
     if (length < (p.min_ramp_loop > 0 ? p.min_ramp_loop : kPi * R / 2)) ++path.stats.short_entries;
     // Down along the loop over the length the angle needs (laps of a short
     // loop), not a whole lap of a long one at the plunge feed; then one

@@ -74,7 +74,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   p.plunge_feed = number(j, "plunge_feed", 300, 0, 100000, true);
   p.rpm = number(j, "rpm", 18000, 0, 100000);
   p.safe_z = opt_number(j, "safe_z", -1000, 1000);
-  p.tolerance = number(j, "tolerance", 0.002, 0, 1);
+  p.tolerance = number(j, "tolerance", jobs::kDefaultTolerance, 0, 1);
   const std::string arcs = choice(j, "arcs", "on", {"on", "off"});
   p.arcs = arcs == "on";
   p.controller_arc_tolerance = number(j, "controller_arc_tolerance", 0.002, 0, 0.1);

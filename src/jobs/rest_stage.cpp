@@ -90,7 +90,7 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
   ro.stepover = s.stepover;
   ro.step = std::min(s.stepover / 4, 0.1);
   ro.direction = p.direction;
-  ro.tolerance = p.tolerance;
+  ro.tolerance = rows_tolerance(p);
   ro.lattice = lattice;
   const RasterPath rows = build_raster(engine, box, ro, checkpoint_part(checkpoint, 0.5, 0.7));
   s.pieces = cleanup_pieces(rows, grid, left, s.threshold, grow, p.direction != RasterDirection::Y);

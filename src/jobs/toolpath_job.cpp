@@ -67,7 +67,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     ro.stepover = spacing.stepover;
     ro.step = spacing.step;
     ro.direction = p.direction;
-    ro.tolerance = p.tolerance;
+    ro.tolerance = rows_tolerance(p);
     ro.lattice = work.lattice;
     const XYBounds region = p.bounds.value_or(default_bounds(*mesh, r.cutter));
     {

@@ -21,12 +21,12 @@ namespace {
 
 constexpr double kTolerance = 0.02;  // mm, vertical (the raster's)
 
-jobs::ToolpathProgram plaque_program(bool arcs, RasterDirection direction) {
+jobs::ToolpathProgram plaque_program(bool arcs, RasterDirection direction, double tolerance) {
   jobs::ToolpathParams p;
   p.part.stl = (std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "examples/plaque.stl").string();
   p.cutter = parse_cutter_spec("ball:3.175");
   p.stepover = 1.0;
-  p.tolerance = kTolerance;
+  p.tolerance = tolerance;
   p.arcs = arcs;
   p.direction = direction;
   p.feed = 3000;
@@ -60,8 +60,18 @@ HeightFieldStock machined(const jobs::ToolpathProgram& prog) {
 class ArcPrograms : public ::testing::TestWithParam<RasterDirection> {};
 
 TEST_P(ArcPrograms, PlaqueWithArcsCutsTheSameSurfaceInFewerLines) {
-  const auto lines = plaque_program(false, GetParam());
-  const auto arcs = plaque_program(true, GetParam());
+  // With arcs the rows' lines take half the tolerance and the arcs over
+  // them the rest (jobs::rows_tolerance): the program without arcs at half
+  // the tolerance has the same lines, so the two cut the same surface but
+  // where the arcs replace lines.
+  const auto lines = plaque_program(false, GetParam(), kTolerance / 2);
+  const auto arcs = plaque_program(true, GetParam(), kTolerance);
+  {
+    jobs::ToolpathParams with_arcs;
+    with_arcs.tolerance = kTolerance;
+    with_arcs.arcs = true;
+    ASSERT_EQ(jobs::rows_tolerance(with_arcs), kTolerance / 2);
+  }
   const std::string plane_word = GetParam() == RasterDirection::X ? "G18" : "G19";
   EXPECT_NE(arcs.gcode.find(plane_word), std::string::npos);
   EXPECT_EQ(lines.stats.arcs, 0u);
@@ -71,7 +81,9 @@ TEST_P(ArcPrograms, PlaqueWithArcsCutsTheSameSurfaceInFewerLines) {
   RecordProperty("lines_with_arcs", int(arcs.stats.lines));
   std::cout << "plaque at stepover 1, rows along " << (GetParam() == RasterDirection::X ? "X" : "Y") << ", tolerance " << kTolerance << ": " << lines.stats.lines << " lines without arcs, "
             << arcs.stats.lines << " with " << arcs.stats.arcs << " arcs (" << drop << " x fewer)\n";
-  EXPECT_GE(drop, 3.0);
+  // Against lines fitted in the band (2.3-2.5 x measured; it was 3 x against
+  // lines through the CL samples, before the band).
+  EXPECT_GE(drop, 2.0);
 
   const HeightFieldStock a = machined(lines), b = machined(arcs);
   ASSERT_EQ(a.heights().size(), b.heights().size());

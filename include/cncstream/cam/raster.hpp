@@ -9,6 +9,7 @@
 
 #include "cncstream/cam/checkpoint.hpp"
 #include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/polyline.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
 namespace cncstream {
@@ -54,9 +55,6 @@ struct RasterOptions {
   // node below the exact surface is raised to it (one point query a node).
   std::function<ClGrid(const GridSpec&, const Checkpoint&)> grid_source;
 };
-
-// One pass of the path: a polyline of tool-tip points, cut in order.
-using Polyline = std::vector<Vec3>;
 
 struct RasterPath {
   std::vector<Polyline> rows;   // in cutting order, alternating direction

@@ -60,7 +60,7 @@ struct RoughingParams {
   double tolerance = 0.05;   // mm: the region's boundary within this of exact (sets the grid)
   bool climb = true;         // climb milling for a clockwise spindle (M3)
   ClearingOrder order = ClearingOrder::InsideOut;
-  double ramp_angle_deg = 3; // entries descend at most this steeply
+  double ramp_angle_deg = 3; // entries descend at most this steeply (into a loop shorter than R: plunged)
   double min_ramp_loop = 0;  // mm: shortest loop to ramp along; 0: pi * R / 2
   double clearance = 2;      // mm above the stock top (and above a cleared level) for moves over
   bool flat_levels = true;   // extra levels at the part's flat areas

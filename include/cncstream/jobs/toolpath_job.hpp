@@ -26,6 +26,14 @@ namespace cncstream::jobs {
 // where it is steeper, with a small overlap.
 enum class FinishStrategy { Raster, SteepShallow };
 
+// The band the finishing path may ride above the exact CL (never below it),
+// mm. 0.01 mm is below what wood's grain and fuzz show and a tenth of a
+// router's runout, and it lets a 3.175 mm ball take moves of sqrt(8 R T) =
+// 0.36 mm over convex stretches: a 115,200-baud link then delivers the
+// densest stretches above 5,000 mm/min (0.002 mm: 0.16 mm moves, about
+// 2,500 mm/min). docs/toolpath.md, "Tolerance".
+inline constexpr double kDefaultTolerance = 0.01;
+
 struct ToolpathParams {
   PartSource part;
   Cutter cutter;
@@ -41,7 +49,7 @@ struct ToolpathParams {
   double feed = 1000, plunge_feed = 300;  // mm/min
   double rpm = 18000;                     // 0: no spindle commands
   std::optional<double> safe_z;           // work coordinates; default 5 mm above the part's top
-  double tolerance = 0.002;               // merged points stay within this above the CL, mm
+  double tolerance = kDefaultTolerance;   // the path stays within this above the CL, mm
   // Arcs (G2/G3 in the rows' upright planes) where they fit within the
   // tolerance, less the controller's own arc tolerance (GRBL $12), which its
   // chords take.
@@ -84,6 +92,13 @@ struct ToolpathParams {
   // job's last stage.
   std::filesystem::path output;
 };
+
+// The band the rows' lines take: the whole tolerance without arcs; with
+// arcs half of it, the arcs fitted over those lines taking up to the
+// tolerance more (the sum stays within 1.5 T of the CL). A polyline fitted
+// in the whole band circumscribes a curve so tightly that no arc, cut in
+// the controller's chords, fits over it within the tolerance.
+inline double rows_tolerance(const ToolpathParams& p) { return p.arcs ? p.tolerance / 2 : p.tolerance; }
 
 // One operation of the program, for the plan shown before cutting.
 struct OperationSummary {

@@ -27,7 +27,7 @@ struct ToolpathOptions {
   double plunge_feed = 300;
   double rpm = 18000;
   std::optional<double> safe_z;
-  double tolerance = 0.002;
+  double tolerance = jobs::kDefaultTolerance;
   std::string arcs = "on";
   double controller_arc_tolerance = 0.002;
   std::string bounds;
