@@ -161,30 +161,52 @@ struct Builder {
     // whole lap at z from where the ramp got down.
     pass.points.push_back({loop.front().x, loop.front().y, ramp_top});
     const std::size_t n = loop.size();
+    // The ramp runs along chords of the loop that stay inside the level's
+    // region (material to be removed, above the part): the loop's own
+    // vertices are a few tenths apart round small pockets, a line each at
+    // the plunge feed, more than a serial link delivers.
+    auto chord_end = [&](std::size_t from) {
+      std::size_t to = from + 1;
+      // Short of a whole lap: loop[from + n] is loop[from] again.
+      for (std::size_t m = from + 2; m < from + std::min<std::size_t>(n, 64); ++m) {
+        if (xy_dist(loop[from % n], loop[m % n]) > 4 * R) break;
+        if (!segment_inside(loop[from % n], loop[m % n], z, mask, nullptr)) break;
+        to = m;
+      }
+      return to;
+    };
     double s = 0;
     std::size_t k = 0;
     Vec3 down = loop.front();
-    for (;; ++k) {
+    bool back_to_down = true;  // the lap closes at `down` (else at its chord's end)
+    for (;;) {
+      const std::size_t next = n > 2 && need > 0 ? chord_end(k) : k + 1;
       const Vec3& a = loop[k % n];
-      const Vec3& b = loop[(k + 1) % n];
+      const Vec3& b = loop[next % n];
       const double seg = xy_dist(a, b);
       if (s + seg >= need || (k + 1 >= n && s + seg <= 1e-9)) {
         const double t = seg > 0 ? std::clamp((need - s) / seg, 0.0, 1.0) : 1.0;
-        if (t >= 1) ++k;  // down at b: the lap starts there
         down = t >= 1 ? Vec3{b.x, b.y, z} : Vec3{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, z};
         pass.points.push_back(down);
+        if (t < 1 && next > k + 1) {
+          // Down inside a chord: on along it to its end, where the lap starts.
+          pass.points.push_back({b.x, b.y, z});
+          back_to_down = false;
+        }
+        if (t >= 1 || next > k + 1) k = next;  // the lap starts at b
         break;
       }
       s += seg;
       pass.points.push_back({b.x, b.y, ramp_top - drop * s / need});
+      k = next;
     }
-    pass.entry_points = pass.points.size() - 1;
-    // The lap: the vertices after `down` round to the one before it, then back to it.
+    pass.entry_points = pass.points.size() - 1 - (back_to_down ? 0 : 1);
+    // The lap: the vertices after `down` (or its chord's end) round to it.
     for (std::size_t m = 1; m <= n; ++m) {
       const Vec3& v = loop[(k + m) % n];
       pass.points.push_back({v.x, v.y, z});
     }
-    if (pass.points.back().x != down.x || pass.points.back().y != down.y) pass.points.push_back(down);
+    if (back_to_down && (pass.points.back().x != down.x || pass.points.back().y != down.y)) pass.points.push_back(down);
     return pass;
   }
 
