@@ -9,6 +9,7 @@ cmake --build build/release -j"$(nproc)" --target cncstream cncsim
 mkdir -p out
 echo "== cncstream examples/plaque.stl sim: roughing and finishing paths, plan, stream to the simulator (tool change included), verify the cut"
 ./build/release/cncstream examples/plaque.stl sim --tool ball:3.175 --rough flat:6 --scallop 0.05 --tolerance 0.01 --yes \
+  --sim-tool-table 1=flat:6@30,2=ball:3.175@37.3 \
   --journal out/journal.sqlite -o out/plaque.nc --sim-png out/plaque-deviation.png --sim-result out/plaque-cut.f32
 echo "== The 3-D viewer, one frame each without a window: the program on the part, the simulated cut"
 ./build/release/cncstream view examples/plaque.stl --program out/plaque.nc --colour operation \

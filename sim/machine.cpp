@@ -34,11 +34,39 @@ Machine::Machine(MachineOptions options) : options_(std::move(options)) {
   queue_.set_limits(store_.settings.motion_limits());
   parser_.coords = store_.coords;
   parser_.coord_system = store_.coords.wcs[0];
+  if (options_.probe_surface_z) {
+    ProbeFace plane;
+    plane.name = "probe plane";
+    plane.everywhere = true;
+    plane.top = *options_.probe_surface_z;
+    probes_.add(plane);
+  }
+  for (const ProbeFace& f : options_.probe_faces) probes_.add(f);
+  mounted_tool_ = options_.start_tool;
   if (options_.start_position) {
     queue_.set_position(*options_.start_position);
     parser_.position = *options_.start_position;
   }
   boot(true);
+}
+
+// ---- tools ------------------------------------------------------------------
+
+double Machine::tip_drop() const {
+  const auto& so = options_.stick_outs;
+  const auto mounted = so.find(mounted_tool_), start = so.find(options_.start_tool);
+  if (mounted == so.end() || start == so.end()) return 0;
+  return mounted->second - start->second;
+}
+
+void Machine::apply_mount_request() {
+  const int tool = mount_request_.tool.exchange(-1);
+  if (tool >= 0) mount(tool);
+}
+
+void Machine::mount(int tool) {
+  mounted_tool_ = tool;
+  if (tool_observer_) tool_observer_(tool);
 }
 
 // ---- output -----------------------------------------------------------------
@@ -189,6 +217,7 @@ void Machine::soft_reset() {
 // ---- input ----------------------------------------------------------------------
 
 void Machine::receive(std::string_view bytes) {
+  apply_mount_request();
   for (char ch : bytes) {
     if (vanished_) return;
     auto c = static_cast<unsigned char>(ch);
@@ -543,9 +572,9 @@ void Machine::queue_actions(const gc::BlockResult& r) {
     return true;
   };
   auto add_sync = [&] { if (!check) steps_.push_back({Step::Sync, {}, 0, {}, {}, false, 0}); };
-  if (parser_.tool != previous_tool && tool_observer_ && !check) {
+  if (parser_.tool != previous_tool && !options_.operator_mounts_tools && !check) {
     add_sync();
-    steps_.push_back({Step::Apply, {}, 0, {}, [this, t = parser_.tool] { if (tool_observer_) tool_observer_(t); }, false, 0});
+    steps_.push_back({Step::Apply, {}, 0, {}, [this, t = parser_.tool] { mount(t); }, false, 0});
   }
   for (const gc::Action& a : r.actions) {
     if (const auto* m = std::get_if<gc::LinearMove>(&a)) {
@@ -560,33 +589,43 @@ void Machine::queue_actions(const gc::BlockResult& r) {
     } else if (const auto* pr = std::get_if<gc::ProbeMove>(&a)) {
       if (check) continue;
       add_sync();
-      // The probe touches the surface plane when the move crosses it.
-      Vec3 stop = pr->to;
+      // GRBL 1.1's probe cycle with the TIP's geometry: the input must not
+      // already be in the state sought (ALARM:4); the move stops where it
+      // changes, the trigger position ([PRB]) is where it changed, and the
+      // machine decelerates past it at the probe's feed (so the position
+      // after a probe is never the trigger).
+      const Vec3 drop{0, 0, tip_drop()};
+      const bool active_at_start = probes_.triggered(pr->from - drop);
+      if (active_at_start == pr->toward) {
+        steps_.push_back({Step::Apply, {}, 0, {}, [this] { raise_alarm(grbl::kAlarmProbeFailInitial); }, false, 0});
+        return;
+      }
+      Vec3 stop = pr->to, trigger = pr->to;
       bool contact = false;
-      if (options_.probe_surface_z) {
-        const double zs = *options_.probe_surface_z;
-        const bool starts_clear = pr->from.z > zs;
-        if (pr->toward && !starts_clear) {
-          raise_alarm(grbl::kAlarmProbeFailInitial);
-          return;
+      if (const auto t = probes_.first_change(pr->from - drop, pr->to - drop, pr->toward)) {
+        const Vec3 d = pr->to - pr->from;
+        trigger = pr->from + d * *t;
+        const double length = norm(d);
+        // Deceleration from the probe feed at the direction's acceleration.
+        const Vec3 accel = store_.settings.motion_limits().acceleration;
+        double a = 1e300;
+        for (int i = 0; i < 3; ++i) {
+          const double u = std::fabs((i == 0 ? d.x : i == 1 ? d.y : d.z) / length);
+          const double ai = i == 0 ? accel.x : i == 1 ? accel.y : accel.z;
+          if (u > 1e-12) a = std::min(a, ai / u);
         }
-        if (pr->toward && pr->to.z <= zs && pr->from.z != pr->to.z) {
-          const double f = (pr->from.z - zs) / (pr->from.z - pr->to.z);
-          stop = pr->from + (pr->to - pr->from) * f;
-          contact = true;
-        } else if (!pr->toward && !starts_clear && pr->to.z > zs && pr->from.z != pr->to.z) {
-          const double f = (zs - pr->from.z) / (pr->to.z - pr->from.z);
-          stop = pr->from + (pr->to - pr->from) * f;
-          contact = true;
-        }
+        const double v = std::min(pr->feed, 1e9) / 60.0;
+        const double overshoot = std::min(v * v / (2 * a), length * (1 - *t));
+        stop = trigger + d * (overshoot / length);
+        contact = true;
       }
       if (!add_block(pr->from, stop, pr->feed, false, true)) return;
       add_sync();
       const bool error_on_fail = pr->error_on_fail;
       Step end;
       end.kind = Step::ProbeEnd;
-      end.apply = [this, contact, error_on_fail] {
-        probe_position_ = queue_.position();
+      end.apply = [this, contact, error_on_fail, trigger] {
+        probe_position_ = contact ? trigger : queue_.position();
         probe_succeeded_ = contact;
         parser_.position = queue_.position();
         if (!contact && error_on_fail) {
@@ -837,7 +876,7 @@ void Machine::start_homing() {
       return;
     }
     const Vec3 home{-pulloff, -pulloff, -pulloff};
-    if (observer_) observer_(queue_.position(), home, true);
+    if (observer_) observer_(tip_position(), home - Vec3{0, 0, tip_drop()}, true);
     queue_.set_position(home);
     parser_.position = home;
     state_ = MachineState::Idle;
@@ -877,8 +916,10 @@ std::optional<double> Machine::next_timer() const {
 }
 
 void Machine::advance_motion(double dt, bool stop_after_block) {
-  const auto traverse = [this](const Vec3& a, const Vec3& b, const gc::MotionBlock& block) {
-    if (observer_) observer_(a, b, block.rapid);
+  // What cuts is the tip: the spindle's path less the mounted tool's extra length.
+  const Vec3 drop{0, 0, tip_drop()};
+  const auto traverse = [this, drop](const Vec3& a, const Vec3& b, const gc::MotionBlock& block) {
+    if (observer_) observer_(a - drop, b - drop, block.rapid);
   };
   const auto r = queue_.advance(dt, observer_ ? gc::MotionQueue::Traverse(traverse) : gc::MotionQueue::Traverse{},
                                 stop_after_block);
@@ -908,6 +949,7 @@ void Machine::after_motion() {
 }
 
 void Machine::advance(double seconds) {
+  apply_mount_request();
   const double end = now_ + seconds;
   for (std::size_t guard = 0; guard < 100000000; ++guard) {
     pump();
@@ -981,6 +1023,7 @@ std::string Machine::status_report() {
     const double rpm = spindle_on ? parser_.spindle_speed * spindle_ovr_ / 100.0 : 0.0;
     r += fmt::format("|FS:{:.0f},{:.0f}", queue_.speed() * 60.0 * k, rpm);
   }
+  if (probe_input()) r += "|Pn:P";
   const bool busy = state_ == MachineState::Run || state_ == MachineState::Hold || state_ == MachineState::Jog ||
                     state_ == MachineState::Home || state_ == MachineState::Door;
   if (wco_counter_ > 0) {

@@ -131,7 +131,13 @@ int run(int argc, char** argv) {
   std::string tool_table_text, png_path;
   double tolerance = 0.05;
   app.add_option("--tool-table", tool_table_text,
-                 "tools by T number, e.g. 1=ball:3.175,2=bull:3.175:0.79, or a file of N=SPEC lines");
+                 "tools by T number, e.g. 1=ball:3.175,2=bull:3.175:0.79, or a file of N=SPEC lines; SPEC@L gives "
+                 "the tool's stick-out L mm (1=flat:6@30,2=ball:3.175@37.3): the lowest T is in the spindle at "
+                 "power-on and the tip of a longer tool sits lower by the difference");
+  std::string touch_plate_text, tool_sensor_text;
+  app.add_option("--touch-plate", touch_plate_text,
+                 "X,Y,THICKNESS: a 40 mm touch plate centred on X,Y (machine mm) lying on the stock's top");
+  app.add_option("--tool-sensor", tool_sensor_text, "X,Y,Z: a fixed tool-length sensor, its top at Z (machine mm)");
   app.add_option("--png", png_path, "with --design: write the deviation map of the verify at exit");
   app.add_option("--tolerance", tolerance, "with --design: verify tolerance, mm")->check(CLI::PositiveNumber);
 
@@ -195,6 +201,17 @@ int run(int argc, char** argv) {
     } else if (!result_path.empty() || !tool_table_text.empty() || !png_path.empty()) {
       throw std::invalid_argument("--result, --tool-table and --png need a stock (--stock or --design)");
     }
+    if (!tool_table_text.empty()) {
+      options.stick_outs = cncsim::parse_tool_stick_outs(tool_table_text);
+      if (!options.stick_outs.empty()) options.start_tool = options.stick_outs.begin()->first;
+    }
+    if (!touch_plate_text.empty()) {
+      if (!removal) throw std::invalid_argument("--touch-plate lies on the stock: give --stock or --design");
+      options.probe_faces.push_back(cncsim::parse_touch_plate(touch_plate_text, removal->stock().top()));
+    }
+    if (!tool_sensor_text.empty()) options.probe_faces.push_back(cncsim::parse_tool_sensor(tool_sensor_text));
+    // With a plate or a sensor the probe touches those, not the stock's top everywhere.
+    if (!options.probe_faces.empty() && !probe_z) options.probe_surface_z.reset();
     cncsim::Machine machine(options);
     if (removal) removal->attach(machine);
     NumberedTally tally;

@@ -6,6 +6,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string_view>
+#include <utility>
 
 #include "cncsim/number_text.hpp"
 #include "cncsim/output_file.hpp"
@@ -47,8 +48,12 @@ MaterialRemoval::MaterialRemoval(cncstream::HeightFieldStock stock, const cncstr
   for (double z : stock_.heights()) bottom_ = std::min(bottom_, z - 1.0);
 }
 
-ToolTable parse_tool_table(const std::string& text) {
+namespace {
+
+// Both tables from one text: cutters, and stick-outs where an entry has "@L".
+std::pair<ToolTable, StickOuts> parse_tool_entries(const std::string& text) {
   ToolTable table;
+  StickOuts lengths;
   auto trim = [](const std::string& s) {
     const auto first = s.find_first_not_of(" \t\r");
     return first == std::string::npos ? std::string() : s.substr(first, s.find_last_not_of(" \t\r") - first + 1);
@@ -63,8 +68,17 @@ ToolTable parse_tool_table(const std::string& text) {
     if (!number || *number < 0)
       throw std::invalid_argument(where + "'" + entry + "': expected N=SPEC, e.g. 1=ball:3.175");
     const int tool = *number;
+    std::string spec = trim(entry.substr(eq + 1));
+    if (const auto at = spec.find('@'); at != std::string::npos) {
+      const auto length = number_from<double>(spec.substr(at + 1));
+      if (!length || !(*length > 0) || !std::isfinite(*length))
+        throw std::invalid_argument(where + "tool " + std::to_string(tool) + " '" + spec +
+                                    "': expected SPEC@STICKOUT, the stick-out a positive length in mm (e.g. flat:6@30)");
+      lengths[tool] = *length;
+      spec = trim(spec.substr(0, at));
+    }
     try {
-      table[tool] = cncstream::parse_cutter_spec(trim(entry.substr(eq + 1)));
+      table[tool] = cncstream::parse_cutter_spec(spec);
     } catch (const std::exception& e) {
       throw std::invalid_argument(where + "tool " + std::to_string(tool) + ": " + e.what());
     }
@@ -84,8 +98,19 @@ ToolTable parse_tool_table(const std::string& text) {
     }
   }
   if (table.empty()) throw std::invalid_argument("tool table '" + text + "' holds no tools");
-  return table;
+  // Lengths for some tools only would leave the others' tips unknown.
+  if (!lengths.empty())
+    for (const auto& [tool, cutter] : table)
+      if (!lengths.contains(tool))
+        throw std::invalid_argument("tool table '" + text + "': tool " + std::to_string(tool) +
+                                    " has no stick-out (@mm) while others have one: give every tool's or none");
+  return {std::move(table), std::move(lengths)};
 }
+
+}  // namespace
+
+ToolTable parse_tool_table(const std::string& text) { return parse_tool_entries(text).first; }
+StickOuts parse_tool_stick_outs(const std::string& text) { return parse_tool_entries(text).second; }
 
 void MaterialRemoval::attach(Machine& machine) {
   machine.set_motion_observer([this](const Vec3& a, const Vec3& b, bool) { cut(a, b); });

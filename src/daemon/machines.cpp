@@ -276,6 +276,10 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
       }
       return;
     }
+    case SessionEventKind::ToolChange:
+      spdlog::info("machine {}: tool change: {}", name, e.text);
+      publish(m, {{"type", "event"}, {"kind", "tool-change"}, {"code", 0}, {"line", 0}, {"text", e.text}, {"info", nullptr}});
+      return;
     case SessionEventKind::Controller: break;
   }
   const auto& ev = e.controller;

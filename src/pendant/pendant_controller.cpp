@@ -117,6 +117,7 @@ void PendantController::unplugged(const std::string& why) {
   release_jog("the pendant's receiver is gone", true);
   if (input_tap_) input_tap_(Input::Unplug, {});
   plugged_ = false;
+  owed_.reset();
   tracker_.reset();
   display_timer_.cancel();
   log(LogLevel::Warning, "pendant: receiver unplugged (" + why + ")");
@@ -169,6 +170,7 @@ void PendantController::on_key(Key key, bool fn) {
     case Key::Stop:
       // The session's stop cancels every jog (held and queued steps) and stops a job.
       continuous_.reset();
+      owed_.reset();
       command("stop", session_.stop());
       return;
     case Key::StartPause: {
@@ -216,6 +218,7 @@ void PendantController::on_key(Key key, bool fn) {
 
 void PendantController::set_mode(JogMode m) {
   if (m == mode_) return;
+  owed_.reset();
   release_jog("the jog mode changed");
   mode_ = m;
   log(LogLevel::Info, std::string("pendant: ") + to_string(m) + " mode");
@@ -284,19 +287,26 @@ void PendantController::on_wheel(const PendantEvent& e) {
       log(LogLevel::Debug, std::string("pendant: the knob is at ") + to_string(e.knob) + ": no step size in step mode");
       return;
     }
-    const double feed = config_.step_feed_mm_min > 0 ? config_.step_feed_mm_min : session_.max_jog_feed();
-    // One jog per detent; the session takes at most a few at a time, so a
-    // fast spin is cut short instead of queueing motion that runs on after
-    // the wheel stops.
-    for (int i = 0; i < std::abs(e.detents); ++i) {
-      const auto r = session_.jog_step(dir, *step, feed);
-      if (r) {
-        ++counters_.steps_sent;
-      } else {
-        ++counters_.steps_refused;
-        log(LogLevel::Debug, "pendant: step dropped: " + r.reason);
-      }
+    // Every detent counts: the detents are added to what is owed on this
+    // axis at this step size and go out as one jog when the session takes
+    // one (at most two are queued; the rest waits, never dropped). A spin
+    // beyond kMaxOwedSteps is clamped: motion must not run on long after the
+    // wheel stops.
+    if (owed_ && (owed_->axis != *axis || owed_->step_mm != *step)) {
+      log(LogLevel::Info, fmt::format("pendant: {} owed step(s) on {} dropped: the axis or step size changed",
+                                      std::abs(owed_->steps), kAxisLetters[owed_->axis]));
+      owed_.reset();
     }
+    if (!owed_) owed_ = OwedSteps{*axis, *step, 0};
+    owed_->steps += e.detents;
+    if (std::abs(owed_->steps) > kMaxOwedSteps) {
+      const int over = std::abs(owed_->steps) - kMaxOwedSteps;
+      owed_->steps = owed_->steps > 0 ? kMaxOwedSteps : -kMaxOwedSteps;
+      counters_.steps_refused += static_cast<std::size_t>(over);
+      log(LogLevel::Warning, fmt::format("pendant: wheel spun {} detent(s) beyond the {} a step jog may owe: clamped",
+                                         over, kMaxOwedSteps));
+    }
+    send_owed_steps();
     return;
   }
   const auto percent = knob_percent(e.knob);
@@ -327,6 +337,29 @@ void PendantController::on_wheel(const PendantEvent& e) {
   ++counters_.continuous_starts;
   log(LogLevel::Debug,
       fmt::format("pendant: continuous jog {}{} at {:.0f} mm/min", sign > 0 ? '+' : '-', kAxisLetters[*axis], feed));
+}
+
+void PendantController::send_owed_steps() {
+  if (!owed_ || owed_->steps == 0) {
+    owed_.reset();
+    return;
+  }
+  JogDirection dir;
+  dir.v[static_cast<std::size_t>(owed_->axis)] = owed_->steps > 0 ? 1 : -1;
+  const double feed = config_.step_feed_mm_min > 0 ? config_.step_feed_mm_min : session_.max_jog_feed();
+  const auto r = session_.jog_step(dir, std::abs(owed_->steps) * owed_->step_mm, feed);
+  if (!r) {
+    // Two steps in flight (or the machine busy): tried again at the next
+    // report or display tick; a refusal that is no queue limit ends the debt.
+    if (!session_.engine() || !session_.engine()->jogging() || mode_ != JogMode::Step) {
+      counters_.steps_refused += static_cast<std::size_t>(std::abs(owed_->steps));
+      log(LogLevel::Debug, "pendant: step refused: " + r.reason);
+      owed_.reset();
+    }
+    return;
+  }
+  counters_.steps_sent += static_cast<std::size_t>(std::abs(owed_->steps));
+  owed_.reset();
 }
 
 void PendantController::release_jog(const char* why, bool always) {
@@ -383,6 +416,7 @@ void PendantController::arm_display() {
   std::weak_ptr<bool> alive = alive_;
   display_timer_.async_wait([this, alive](const boost::system::error_code& ec) {
     if (ec || !alive.lock() || !plugged_) return;
+    send_owed_steps();
     refresh_display();
     arm_display();
   });

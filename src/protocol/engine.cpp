@@ -27,6 +27,7 @@ const char* to_string(JobState s) {
     case JobState::HeldOnError: return "held-on-error";
     case JobState::Stopping: return "stopping";
     case JobState::Finished: return "finished";
+    case JobState::ToolChange: return "tool-change";
   }
   return "?";
 }
@@ -50,14 +51,14 @@ const char* to_string(JobOutcome o) {
 namespace cncstream::protocol {
 
 std::string ProtocolEngine::jog_step(const JogDirection& dir, double distance_mm, double feed_mm_min, double now) {
-  if (is_active(progress().state)) return "jog: a job is running";
+  if (is_active(progress().state) && progress().state != JobState::ToolChange) return "jog: a job is running";
   std::string why = jog_.step(dir, distance_mm, feed_mm_min, now);
   pump_jog();
   return why;
 }
 
 std::string ProtocolEngine::jog_start(const JogDirection& dir, double feed_mm_min, double lease_s, double now) {
-  if (is_active(progress().state)) return "jog: a job is running";
+  if (is_active(progress().state) && progress().state != JobState::ToolChange) return "jog: a job is running";
   std::string why = jog_.start(dir, feed_mm_min, lease_s, now);
   pump_jog();
   return why;

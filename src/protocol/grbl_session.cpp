@@ -265,7 +265,8 @@ void GrblSession::on_banner() {
   if (!is_active(progress_.state)) return;
   if (stop_requested_) {
     finish_job(error_seen_ ? JobOutcome::Error : JobOutcome::Stopped,
-               "stopped after file line " + std::to_string(progress_.last_answered_line) + " was answered");
+               (abort_reason_.empty() ? std::string() : abort_reason_ + "; ") + "stopped after file line " +
+                   std::to_string(progress_.last_answered_line) + " was answered");
   } else {
     finish_job(JobOutcome::Error, "controller reset during the job after file line " +
                                       std::to_string(progress_.last_answered_line) +
@@ -377,7 +378,15 @@ void GrblSession::pump() {
         (check_phase_ == CheckPhase::None || check_phase_ == CheckPhase::Streaming) &&
         next_index_ < program_.lines.size()) {
       const auto& line = program_.lines[next_index_];
-      if (line.text.empty()) {
+      if (line.tool_change >= 0 && progress_.mode != JobMode::Check) {
+        // A tool change: nothing more goes out until every line before it
+        // is answered; then the session's routine takes over.
+        if (in_flight_of(Origin::File) > 0) return;
+        set_job_state(JobState::ToolChange, "tool change at file line " + std::to_string(line.source_line));
+        return;
+      }
+      // Blank, or a tool change in a check pass (GRBL's $C would refuse M6).
+      if (line.text.empty() || line.tool_change >= 0) {
         ++next_index_;
         ++progress_.lines_sent;
         ++progress_.lines_answered;  // nothing to answer: done once reached
@@ -391,7 +400,7 @@ void GrblSession::pump() {
       ++progress_.lines_sent;
       continue;
     }
-    if (!is_active(progress_.state) && jog_.busy()) {
+    if ((!is_active(progress_.state) || progress_.state == JobState::ToolChange) && jog_.busy()) {
       // A jog line is at most ~60 bytes: ask the jog engine only when one fits,
       // so a move it hands out is always sent.
       PreparedLine room;
@@ -436,6 +445,7 @@ void GrblSession::start_job(PreparedProgram program, JobMode mode, double now) {
   error_seen_ = false;
   draining_ = false;
   stop_requested_ = false;
+  abort_reason_.clear();
   modal_ = gcode::ParserState{};
   check_phase_ = CheckPhase::None;
   if (mode == JobMode::Check) {
@@ -472,6 +482,11 @@ void GrblSession::finish_job(JobOutcome o, const std::string& text) {
 }
 
 void GrblSession::pause() {
+  if (progress_.state == JobState::ToolChange) {
+    // The routine's motion holds; its state stays (it waits for Idle).
+    write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::FeedHold).value_or('!'))));
+    return;
+  }
   if (progress_.state != JobState::Running) return;
   write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::FeedHold).value_or('!'))));
   hold_sent_ = true;
@@ -491,12 +506,21 @@ bool GrblSession::release_machine_hold() {
 
 void GrblSession::toggle_pause() {
   if (progress_.state == JobState::Paused || progress_.state == JobState::HeldOnError) return resume();
+  if (progress_.state == JobState::ToolChange) {
+    const auto& st = tracker_.last();
+    if (st && (st->state == MachineState::Hold || st->state == MachineState::Door)) return resume();
+    return pause();
+  }
   // Space is cycle start for a machine holding by itself, not a second hold.
   if (release_machine_hold()) return;
   pause();
 }
 
 void GrblSession::resume() {
+  if (progress_.state == JobState::ToolChange) {
+    write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::CycleStart).value_or('~'))));
+    return;
+  }
   if (release_machine_hold()) return;
   if (progress_.state != JobState::Paused && progress_.state != JobState::HeldOnError) return;
   write(std::string(1, static_cast<char>(profile_.realtime_byte(Realtime::CycleStart).value_or('~'))));
@@ -534,6 +558,30 @@ void GrblSession::send_command(const std::string& line) {
   l.sync = is_persistent_write(l.text) || l.text.front() == '$';
   commands_.emplace_back(std::move(l), Origin::Command);
   pump();
+}
+
+std::optional<ProtocolEngine::ToolChangeStop> GrblSession::tool_change_stop() const {
+  if (progress_.state != JobState::ToolChange || next_index_ >= program_.lines.size()) return std::nullopt;
+  const auto& l = program_.lines[next_index_];
+  return ToolChangeStop{l.source_line, l.tool_change};
+}
+
+void GrblSession::tool_change_done() {
+  if (progress_.state != JobState::ToolChange) return;
+  // The change's line counts as answered: it was carried out by the routine.
+  progress_.last_answered_line = program_.lines[next_index_].source_line;
+  ++next_index_;
+  ++progress_.lines_sent;
+  ++progress_.lines_answered;
+  set_job_state(JobState::Running, "tool change done; the job goes on");
+  pump();
+}
+
+void GrblSession::abort_job(const std::string& why) {
+  if (!is_active(progress_.state)) return;
+  abort_reason_ = why;
+  error_seen_ = true;
+  stop();
 }
 
 void GrblSession::disconnected() {

@@ -74,6 +74,20 @@ void JobJournal::on_event(const SessionEvent& e) {
       journal_.end_job(job_id_, protocol::to_string(e.outcome), e.text);
       open_ = false;
       return;
+    case SessionEventKind::ToolChange:
+      if (open_ && e.tool_record) {
+        const auto& r = *e.tool_record;
+        transport::ToolChangeRow row;
+        row.job_id = job_id_;
+        row.line = r.line;
+        row.tool = r.tool;
+        row.method = r.skipped ? "skipped" : protocol::to_string(r.method);
+        row.offset_z = r.offset_z;
+        row.length_known = r.length_known;
+        row.note = r.note;
+        journal_.record_tool_change(row);
+      }
+      return;
     case SessionEventKind::Controller: break;
     default: return;
   }

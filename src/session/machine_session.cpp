@@ -5,11 +5,14 @@
 #include <boost/asio/post.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
+#include "cncstream/gcode/tool_change_line.hpp"
 #include "cncstream/protocol/grbl_session.hpp"
+#include "cncstream/protocol/line_cleaner.hpp"
 #include "cncstream/protocol/machine_actions.hpp"
 #include "cncstream/protocol/marlin_session.hpp"
 #include "cncstream/protocol/response.hpp"
@@ -317,13 +320,16 @@ void MachineSession::drain() {
     if (ev.kind == EventKind::Alarm) {
       alarm_ = true;
       probe_pending_ = false;  // a probe that misses alarms (ALARM:4/5)
+      forget_tool_reference("an alarm");
     }
+    if (ev.kind == EventKind::Reset) forget_tool_reference("a reset");
     if (probe_pending_ && ev.kind == EventKind::Info)
       if (auto p = protocol::parse_probe_report(ev.text)) on_probe_report(*p);
     if (ev.kind == EventKind::Status && ev.status) {
       alarm_ = ev.status->state == MachineState::Alarm;
       in_mm(*ev.status);
     }
+    if (routine_) tool_change_event(ev);
     SessionEvent e;
     e.kind = SessionEventKind::Controller;
     e.text = ev.text;
@@ -343,7 +349,127 @@ void MachineSession::drain() {
     }
     if (!engine_) return;  // a subscriber closed the session
   }
-  if (transport_) transport_->write(engine_->take_output());
+  if (!routine_ && job_ && engine_->tool_change_stop()) start_tool_change();
+  if (routine_) pump_tool_change();
+  if (transport_ && engine_) transport_->write(engine_->take_output());
+}
+
+// ---- tool changes -------------------------------------------------------------
+
+void MachineSession::forget_tool_reference(const char* why) {
+  if (!tool_reference_) return;
+  tool_reference_.reset();
+  log(std::string("tool-length reference forgotten after ") + why + ": the next change measures it again");
+}
+
+void MachineSession::start_tool_change() {
+  const auto stop = engine_->tool_change_stop();
+  protocol::ToolChangeRequest req;
+  req.line = stop->source_line;
+  req.from_tool = tool_in_spindle_;
+  req.to_tool = stop->tool;
+  req.modal = engine_->modal();
+  for (const auto& c : gcode::find_tool_changes(job_->lines)) {
+    const long src = job_->source_lines.empty() ? static_cast<long>(c.index) + 1 : job_->source_lines[c.index];
+    if (src == stop->source_line) req.note = c.note;
+  }
+  routine_ = std::make_unique<protocol::ToolChangeRoutine>(*opt_.tool_change, req, tool_reference_);
+  routine_line_.clear();
+  log(fmt::format("tool change at file line {}: T{} -> T{} ({})", req.line, req.from_tool, req.to_tool,
+                  protocol::to_string(opt_.tool_change->method)));
+  if (report_inches_) {
+    routine_->abort("the controller reports in inches ($13=1): set $13=0 for tool changes");
+    return;
+  }
+  routine_->start();
+}
+
+void MachineSession::tool_change_event(const protocol::Event& ev) {
+  switch (ev.kind) {
+    case EventKind::CommandAnswered:
+      if (!routine_line_.empty() && ev.line_text == routine_line_) {
+        routine_line_.clear();
+        routine_->on_answer(!ev.info.has_value(), ev.code);
+      }
+      break;
+    case EventKind::Info: routine_->on_message(ev.text); break;
+    case EventKind::Status:
+      if (ev.status) routine_->on_status(*ev.status);
+      break;
+    case EventKind::JobFinished:
+      // An alarm, a reset, a lost link or a stop ended the job mid-routine.
+      end_tool_change(ev.text);
+      break;
+    default: break;
+  }
+}
+
+void MachineSession::pump_tool_change() {
+  if (!routine_) return;
+  if (auto p = routine_->take_prompt()) {
+    SessionEvent e;
+    e.kind = SessionEventKind::ToolChange;
+    e.text = p->text;
+    e.tool_prompt = *p;
+    emit(e);
+    if (!routine_ || !engine_) return;
+  }
+  if (routine_line_.empty() && !routine_->finished()) {
+    if (auto line = routine_->take_line()) {
+      std::string err;
+      const auto cleaned = protocol::clean_gcode_line(*line, {}, &err);
+      try {
+        if (!cleaned) throw std::invalid_argument(err);
+        routine_line_ = *cleaned;
+        engine_->send_command(*line);
+      } catch (const std::exception& ex) {
+        routine_->abort(std::string("cannot send '") + *line + "': " + ex.what());
+      }
+    }
+  }
+  if (routine_->finished()) end_tool_change("");
+}
+
+void MachineSession::end_tool_change(const std::string& why) {
+  if (!routine_) return;
+  if (!routine_->finished()) routine_->abort(why.empty() ? std::string("the job ended") : why);
+  const auto rec = routine_->record();
+  const bool ok = routine_->succeeded();
+  const std::string failure = routine_->failure();
+  tool_in_spindle_ = rec.tool;
+  if (ok) tool_reference_ = routine_->reference();
+  else tool_reference_.reset();
+  routine_.reset();
+  routine_line_.clear();
+  SessionEvent e;
+  e.kind = SessionEventKind::ToolChange;
+  e.text = ok ? rec.note : failure + (rec.length_known ? "" : "; the length of the tool in the spindle is unknown");
+  e.tool_record = rec;
+  emit(e);
+  if (!engine_) return;
+  if (ok) engine_->tool_change_done();
+  else if (job_active()) engine_->abort_job(failure);
+}
+
+bool MachineSession::operator_turn() const {
+  return routine_ && routine_->pending_prompt() && engine_ &&
+         engine_->progress().state == protocol::JobState::ToolChange;
+}
+
+CommandResult MachineSession::tool_change_confirm() {
+  if (!operator_turn()) return CommandResult::refused("confirm: no tool change is waiting for the operator");
+  routine_->confirm();
+  drain();
+  arm_timer();
+  return CommandResult::ok();
+}
+
+CommandResult MachineSession::tool_change_decline() {
+  if (!operator_turn()) return CommandResult::refused("decline: no tool change is waiting for the operator");
+  routine_->decline();
+  drain();
+  arm_timer();
+  return CommandResult::ok();
 }
 
 void MachineSession::arm_timer() {
@@ -431,6 +557,15 @@ CommandResult MachineSession::start_job(JobInput job, JobMode mode) {
     }
   if (!job.source_lines.empty())
     for (std::size_t i = 0; i < program.lines.size(); ++i) program.lines[i].source_line = job.source_lines[i];
+  // Tool changes are ours to run (GRBL holds on M0 where nothing can be
+  // jogged or probed, and refuses M6): the lines are marked, never sent.
+  if (opt_.tool_change && !marlin_family(profile_)) {
+    for (const auto& c : gcode::find_tool_changes(job.lines)) program.lines[c.index].tool_change = c.tool;
+    if (const int first = gcode::first_tool(job.lines); first > 0 && job.resumed_from == 0) {
+      if (tool_in_spindle_ != first) tool_reference_.reset();
+      tool_in_spindle_ = first;
+    }
+  }
   try {
     engine_->start_job(std::move(program), mode, now());
   } catch (const std::exception& e) {
@@ -495,7 +630,8 @@ CommandResult MachineSession::realtime(Realtime rt) {
 
 CommandResult MachineSession::refuse_jog() const {
   if (auto r = needs_engine("jog"); !r) return r;
-  if (job_active()) return CommandResult::refused("jog: a job is running");
+  // At a tool change's prompt the machine is idle and the operator's.
+  if (job_active() && !operator_turn()) return CommandResult::refused("jog: a job is running");
   if (auto r = refuse_in_alarm("jog"); !r) return r;
   if (probe_pending_) return CommandResult::refused("jog: probing Z; wait for it to finish");
   return CommandResult::ok();
@@ -541,7 +677,7 @@ double MachineSession::max_jog_feed() const {
 
 CommandResult MachineSession::action(const char* what, const std::function<std::vector<std::string>()>& lines) {
   if (auto r = needs_engine(what); !r) return r;
-  if (job_active()) return CommandResult::refused(std::string(what) + ": a job is running");
+  if (job_active() && !operator_turn()) return CommandResult::refused(std::string(what) + ": a job is running");
   if (engine_->jogging()) return CommandResult::refused(std::string(what) + ": a jog is running");
   if (auto r = refuse_in_alarm(what); !r) return r;
   if (probe_pending_) return CommandResult::refused(std::string(what) + ": probing Z; wait for it to finish");
@@ -562,7 +698,9 @@ std::optional<double> MachineSession::work_z() const {
 
 CommandResult MachineSession::zero_axes(const std::string& axes) {
   const auto family = marlin_family(profile_) ? protocol::ActionFamily::Marlin : protocol::ActionFamily::Grbl;
-  return action("zero", [&] { return protocol::zero_axes_lines(axes, family); });
+  auto r = action("zero", [&] { return protocol::zero_axes_lines(axes, family); });
+  if (r && axes.find_first_of("Zz") != std::string::npos) forget_tool_reference("a re-zero of Z");
+  return r;
 }
 
 CommandResult MachineSession::safe_z() {
@@ -609,11 +747,20 @@ void MachineSession::on_probe_report(const protocol::ProbeReport& p) {
 
 CommandResult MachineSession::console(const std::string& line) {
   if (auto r = needs_engine("console"); !r) return r;
-  if (job_active()) return CommandResult::refused("console: a job is running; lines are refused until it ends");
+  if (job_active() && !operator_turn())
+    return CommandResult::refused("console: a job is running; lines are refused until it ends");
   if (engine_->jogging()) return CommandResult::refused("console: a jog is running");
   if (alarm_ && line != "$X" && line != "$H")
     return refuse_in_alarm("console");
   try {
+    const std::string upper = [&] {
+      std::string u;
+      for (char c : line) u.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+      return u;
+    }();
+    if (upper.find("G10") != std::string::npos || upper.find("G92") != std::string::npos ||
+        upper.rfind("$H", 0) == 0)
+      forget_tool_reference("a change of the work offset or a homing");
     engine_->send_command(line);
   } catch (const std::exception& e) {
     return CommandResult::refused(e.what());
@@ -637,6 +784,7 @@ CommandResult MachineSession::home() {
   if (job_active()) return CommandResult::refused("home: a job is running");
   if (engine_->jogging()) return CommandResult::refused("home: a jog is running");
   engine_->send_command(marlin_family(profile_) ? "G28" : "$H");
+  forget_tool_reference("a homing");
   drain();
   return CommandResult::ok();
 }
@@ -680,6 +828,8 @@ MachineSnapshot MachineSession::snapshot() const {
     s.buffer = engine_->buffer();
     s.jogging = engine_->jogging();
     s.job_active = job_active();
+    if (routine_) s.tool_prompt = routine_->pending_prompt();
+    s.tool_in_spindle = tool_in_spindle_;
   }
   return s;
 }

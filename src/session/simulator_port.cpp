@@ -31,10 +31,28 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
   mo.strict = opt_.strict;
   mo.faults = opt_.faults;
   mo.probe_surface_z = opt_.probe_surface_z;
+  mo.stick_outs = opt_.stick_outs;
+  if (!mo.stick_outs.empty()) {
+    mo.start_tool = mo.stick_outs.begin()->first;
+    mo.operator_mounts_tools = true;
+  }
+  if (!opt_.tool_sensor.empty()) mo.probe_faces.push_back(cncsim::parse_tool_sensor(opt_.tool_sensor));
   cncsim::PtyOptions po;
   po.speed = parse_sim_speed(opt_.speed);
   po.link = opt_.link;
   mo.instant_waits = po.speed <= 0;
+  std::optional<cncsim::StockBox> stock_box;
+  if (opt_.design) {
+    stock_box = cncsim::stock_box_for(*opt_.design, opt_.resolution);
+    if (opt_.stock) {
+      stock_box->lo = opt_.stock->lo;
+      stock_box->hi = opt_.stock->hi;
+    }
+  }
+  if (!opt_.touch_plate.empty()) {
+    if (!stock_box) throw std::invalid_argument("the simulator's touch plate lies on the stock: an STL job or --sim-design");
+    mo.probe_faces.push_back(cncsim::parse_touch_plate(opt_.touch_plate, stock_box->hi.z));
+  }
   machine_ = std::make_unique<cncsim::Machine>(mo);
   if (opt_.design) {
     if (!opt_.cutter) throw std::invalid_argument("sim verify needs the cutter (--tool)");
@@ -50,6 +68,8 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
     removal_ = std::make_unique<cncsim::MaterialRemoval>(box, *opt_.cutter);
     if (opt_.tools) removal_->set_tool_table(*opt_.tools);
     removal_->attach(*machine_);
+    // The tool in the spindle at the start cuts until the operator mounts another.
+    if (!mo.stick_outs.empty()) machine_->request_mount(mo.start_tool);
   }
   front_ = std::make_unique<cncsim::PtyFrontEnd>(*machine_, po);
   path_ = opt_.link ? opt_.link->string() : front_->slave_path();

@@ -78,6 +78,13 @@ void StreamRunner::request_realtime(Realtime r) {
   });
 }
 
+void StreamRunner::request_tool_change_answer(bool confirm) {
+  post([this, confirm](MachineSession& s) {
+    const auto r = confirm ? s.tool_change_confirm() : s.tool_change_decline();
+    if (!r && opt_.on_log) opt_.on_log(r.reason);
+  });
+}
+
 RunResult StreamRunner::run(const std::filesystem::path& gcode_path) { return run(job_from_file(gcode_path)); }
 
 RunResult StreamRunner::run(const JobInput& job) {
@@ -92,6 +99,7 @@ RunResult StreamRunner::run(const JobInput& job) {
   mo.identify = opt_.identify;
   mo.read_settings = opt_.read_settings;
   mo.settings_timeout_s = opt_.settings_timeout_s;
+  mo.tool_change = opt_.tool_change;
   MachineSession session(io, mo);
   std::unique_ptr<JobJournal> journal;
   if (opt_.journal_path) journal = std::make_unique<JobJournal>(session, *opt_.journal_path, port_label, opt_.progress_interval_s);
@@ -133,6 +141,9 @@ RunResult StreamRunner::run(const JobInput& job) {
           break;
         case SessionEventKind::Controller:
           if (opt_.on_event) opt_.on_event(e.controller);
+          break;
+        case SessionEventKind::ToolChange:
+          if (opt_.on_tool_change) opt_.on_tool_change(e);
           break;
         case SessionEventKind::Link:
           if (e.link == LinkState::Ready && !started) {

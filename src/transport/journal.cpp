@@ -135,6 +135,12 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
         throw JournalError(path.string() + ": cannot upgrade the progress table: " + sqlite3_errmsg(db_));
     }
     exec("CREATE INDEX IF NOT EXISTS progress_job ON progress(job_id, id)");
+    // Tool changes a job made: which tool is in the spindle after each and
+    // whether its length is known (resume reads the last one).
+    exec("CREATE TABLE IF NOT EXISTS tool_changes ("
+         " id INTEGER PRIMARY KEY AUTOINCREMENT, job_id INTEGER NOT NULL REFERENCES jobs(id), at TEXT NOT NULL,"
+         " line INTEGER NOT NULL, tool INTEGER NOT NULL, method TEXT NOT NULL, offset_z REAL,"
+         " length_known INTEGER NOT NULL, note TEXT NOT NULL)");
     // cncstreamd's queue: a new table, so older journals stay readable by
     // older programs and gain it the first time the daemon opens them.
     exec("CREATE TABLE IF NOT EXISTS daemon_jobs ("
@@ -211,6 +217,35 @@ void Journal::record_progress(const ProgressRecord& p) {
   else s.bind_null(19).bind_null(20).bind_null(21);
   s.bind(22, p.status_line).bind(23, p.machine_state);
   s.step();
+}
+
+void Journal::record_tool_change(const ToolChangeRow& r) {
+  Stmt s(db_, path_,
+         "INSERT INTO tool_changes (job_id, at, line, tool, method, offset_z, length_known, note) VALUES (?,?,?,?,?,?,?,?)");
+  s.bind(1, r.job_id).bind(2, now_iso8601()).bind(3, r.line).bind(4, r.tool).bind(5, r.method);
+  if (r.offset_z) s.bind(6, *r.offset_z);
+  else s.bind_null(6);
+  s.bind(7, static_cast<std::int64_t>(r.length_known ? 1 : 0)).bind(8, r.note);
+  s.step();
+}
+
+std::vector<ToolChangeRow> Journal::tool_changes(std::int64_t job_id) const {
+  Stmt s(db_, path_,
+         "SELECT job_id, line, tool, method, offset_z, length_known, note FROM tool_changes WHERE job_id=? ORDER BY id");
+  s.bind(1, job_id);
+  std::vector<ToolChangeRow> out;
+  while (s.step()) {
+    ToolChangeRow r;
+    r.job_id = s.i64(0);
+    r.line = s.i64(1);
+    r.tool = s.i64(2);
+    r.method = s.text(3);
+    if (!s.is_null(4)) r.offset_z = s.f64(4);
+    r.length_known = s.i64(5) != 0;
+    r.note = s.text(6);
+    out.push_back(std::move(r));
+  }
+  return out;
 }
 
 void Journal::end_job(std::int64_t job_id, const std::string& outcome, const std::string& message) {

@@ -10,7 +10,7 @@ using namespace apptest;
 
 TEST(MainCommand, PlaqueToTheBuiltInSimulatorCutsWithoutGouge) {
   // The shop's job: rough the block with a 6 mm flat, change to the ball,
-  // finish. The simulator's operator changes the tool at the pause at once.
+  // finish. The simulator's operator mounts the ball when the session asks.
   const auto r = run_cncstream({plaque(), "sim", "--tool", "ball:3.175", "--rough", "flat:6", "--stepover", "2",
                                 "--tolerance", "0.02", "--sim-resolution", "0.2", "--yes"});
   ASSERT_EQ(r.code, 0) << r.out;
@@ -22,9 +22,12 @@ TEST(MainCommand, PlaqueToTheBuiltInSimulatorCutsWithoutGouge) {
   EXPECT_TRUE(r.has("3. finishing  T2 ball:3.175")) << r.out;
   EXPECT_TRUE(r.has("roughing first with the flat:6")) << r.out;
   EXPECT_TRUE(r.has("estimated machining time:")) << r.out;
-  EXPECT_TRUE(r.has("PAUSED at line")) << r.out;
+  // The tool change is the session's (the M0 never reaches the controller):
+  // measured on the simulator's touch plate, the operator mounting T2.
+  EXPECT_FALSE(r.has("PAUSED at line")) << r.out;
   EXPECT_TRUE(r.has("TOOL CHANGE for rest roughing: mount T2, 3.175 mm ball-nose end mill")) << r.out;
-  EXPECT_TRUE(r.has("(simulator: resuming at once)")) << r.out;
+  EXPECT_TRUE(r.has("(simulator: the operator mounts T2 and confirms)")) << r.out;
+  EXPECT_TRUE(r.has("tool change: T2 measured +0.000 mm from T1 (plate)")) << r.out;
   EXPECT_TRUE(r.has("outcome: completed")) << r.out;
   EXPECT_TRUE(r.has(" 0 RX bytes dropped")) << r.out;
   // Every line answered: the program ends retracted above the stock at the last row's end.

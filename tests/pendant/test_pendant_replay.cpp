@@ -33,7 +33,7 @@ TEST(PendantReplay, StepJogsOnXAndYAndAContinuousZJogEndWhereTheWheelSaid) {
   const auto m = position(r.out, "MPos");
   ASSERT_TRUE(m) << r.out;
   EXPECT_NEAR((*m)[0], 3.0, 1e-9) << r.out;   // three 1 mm detents
-  EXPECT_NEAR((*m)[1], -0.2, 1e-9) << r.out;  // a five-detent spin: two steps, three dropped
+  EXPECT_NEAR((*m)[1], -0.5, 1e-9) << r.out;  // a five-detent spin: every detent counts
   // Continuous -Z for 1.1 s of wheel reports, then the 0.2 s lease: at least
   // the ramp (it reaches 500 mm/min after 3.5 mm), at most full speed for the
   // whole time plus the stop (8.33 mm/s x 1.3 s + 3.5 mm). More would be a jog
@@ -44,7 +44,7 @@ TEST(PendantReplay, StepJogsOnXAndYAndAContinuousZJogEndWhereTheWheelSaid) {
   const auto w = position(r.out, "WPos");
   ASSERT_TRUE(w) << r.out;
   EXPECT_NEAR((*w)[2], (*m)[2], 1e-9);
-  EXPECT_TRUE(r.has("5 steps sent, 3 dropped, 1 continuous jogs started")) << r.out;
+  EXPECT_TRUE(r.has("8 steps sent, 0 dropped, 1 continuous jogs started")) << r.out;
 }
 
 TEST(PendantReplay, AnUnplugStopsTheContinuousJogAtOnce) {
@@ -89,4 +89,28 @@ TEST(PendantReplay, ABadReplayFileNamesItsLineBeforeAnyPortOpens) {
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_TRUE(r.has(path.string() + ":3: byte 2 '0g' is not a hex byte (00-ff)")) << r.out;
   EXPECT_FALSE(r.has("nonexistent-port")) << r.out;
+}
+
+TEST(PendantReplay, EveryDetentCountsWhileAStepJogIsInFlight) {
+  // Step 0.1 mm on X; +3 detents, then +2 while the first jog still runs
+  // (50 ms later), then +1 and +1 while those run: the jogs queue, nothing
+  // is dropped, X ends at the sum (0.7 mm). Then a spin of 100 detents on Y
+  // is clamped to 10 steps (1 mm) and said.
+  const auto path = apptest::temp_dir() / "detents.txt";
+  std::ofstream(path) << "0 04 00 00 00 0f 11 00 00\n"
+                         "100 04 00 00 00 0f 11 03 00\n"
+                         "150 04 00 00 00 0f 11 02 00\n"
+                         "170 04 00 00 00 0f 11 01 00\n"
+                         "190 04 00 00 00 0f 11 01 00\n"
+                         "1500 04 00 00 00 0f 12 00 00\n"
+                         "1600 04 00 00 00 0f 12 64 00\n"
+                         "4000 04 00 00 00 0f 12 00 00\n";
+  const auto r = apptest::run_cncstream({"pendant", "sim", "--sim-speed", "1", "--replay", path.string()}, 120);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto m = position(r.out, "MPos");
+  ASSERT_TRUE(m) << r.out;
+  EXPECT_NEAR((*m)[0], 0.7, 1e-9) << r.out;
+  EXPECT_NEAR((*m)[1], 1.0, 1e-9) << r.out;
+  EXPECT_TRUE(r.has("clamped")) << r.out;
+  EXPECT_TRUE(r.has("17 steps sent, 90 dropped")) << r.out;
 }

@@ -87,6 +87,7 @@ class PendantController {
   DisplayState display_state() const;
   struct Counters {
     std::size_t reports = 0, bad_reports = 0;
+    // Detents moved, and detents not moved (clamped beyond the bound, or refused).
     std::size_t steps_sent = 0, steps_refused = 0;
     std::size_t continuous_starts = 0, renewals = 0, releases = 0;
     std::size_t frames = 0;
@@ -99,6 +100,7 @@ class PendantController {
   void on_wheel(const PendantEvent& e);
   void run_macro(int number);
   void release_jog(const char* why, bool always = false);
+  void send_owed_steps();
   void set_mode(JogMode m);
   void command(const char* what, const session::CommandResult& r);
   void arm_display();
@@ -115,6 +117,15 @@ class PendantController {
   bool warned_rotary_ = false;
   // The continuous jog this pendant runs: axis and sign.
   std::optional<std::pair<int, int>> continuous_;
+  // Step mode: detents turned and not yet sent as a jog (signed), on one
+  // axis at one step size.
+  static constexpr int kMaxOwedSteps = 10;
+  struct OwedSteps {
+    int axis = 0;
+    double step_mm = 0;
+    int steps = 0;
+  };
+  std::optional<OwedSteps> owed_;
   boost::asio::steady_timer display_timer_;
   std::function<void(const DisplayReports&)> display_sink_;
   std::function<void(LogLevel, const std::string&)> log_;

@@ -47,11 +47,14 @@ struct Event {
 // CheckThenRun: a check pass ($C) first; the job streams only if it found no
 // error (progress().mode is Check during the pass, Run after).
 enum class JobMode { Run, Check, CheckThenRun };
-enum class JobState { None, Running, Paused, HeldOnError, Stopping, Finished };
+// ToolChange: stopped at a tool change (every line before it answered);
+// the session runs its routine with commands, then continues the job.
+enum class JobState { None, Running, Paused, HeldOnError, Stopping, Finished, ToolChange };
 const char* to_string(JobState s);
 // A job that has started and not finished (running, paused, held, stopping).
 inline bool is_active(JobState s) {
-  return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping;
+  return s == JobState::Running || s == JobState::Paused || s == JobState::HeldOnError || s == JobState::Stopping ||
+         s == JobState::ToolChange;
 }
 
 enum class JobOutcome { None, Completed, Stopped, Error, Alarm, Disconnected, CheckPassed, CheckFailed };
@@ -92,6 +95,21 @@ class ProtocolEngine {
     else pause();
   }
   virtual void stop() = 0;  // controlled stop: hold, wait for motion to stop, reset
+  // Tool changes (lines marked PreparedLine::tool_change): the job stops in
+  // JobState::ToolChange at such a line once every line before it is
+  // answered; tool_change_done() counts it as done (never sent) and goes on.
+  // Engines without them never stop there.
+  struct ToolChangeStop {
+    long source_line = 0;
+    int tool = 0;
+  };
+  virtual std::optional<ToolChangeStop> tool_change_stop() const { return std::nullopt; }
+  virtual void tool_change_done() {}
+  // Ends the job as an error with this reason (a controlled stop: hold, reset).
+  virtual void abort_job(const std::string& why) {
+    (void)why;
+    stop();
+  }
   // An operator command line (e.g. "$X", "$H", "G0 X0"); queued behind the job.
   virtual void send_command(const std::string& line) = 0;
   // The controller went away (EOF/EIO): ends any job as Disconnected.

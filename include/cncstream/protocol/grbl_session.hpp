@@ -34,6 +34,9 @@ class GrblSession final : public ProtocolEngine {
   void toggle_pause() override;
   void stop() override;
   void send_command(const std::string& line) override;
+  std::optional<ToolChangeStop> tool_change_stop() const override;
+  void tool_change_done() override;
+  void abort_job(const std::string& why) override;
   void disconnected() override;
 
   bool realtime(Realtime r) override;
@@ -94,6 +97,7 @@ class GrblSession final : public ProtocolEngine {
   double now_ = 0;
   bool tool_state_reported_ = false;
   bool stop_requested_ = false;
+  std::string abort_reason_;  // abort_job(): why the job ends as an error
   bool hold_sent_ = false;
   // Every line answered: the job completes only when the controller reports
   // Idle twice in a row (its planner still runs up to 15 moves after the last ok).

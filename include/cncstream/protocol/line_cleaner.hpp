@@ -28,6 +28,7 @@ struct PreparedLine {
   long source_line = 0;  // 1-based line in the file; 0 for operator commands
   std::string text;      // cleaned, without newline; empty = nothing to send
   bool sync = false;     // persistent write: send alone and wait for the answer
+  int tool_change = -1;  // >= 0: a tool change to this tool (0: unnamed), never sent
 };
 
 struct PreparedProgram {

@@ -28,6 +28,7 @@
 #include "cncstream/protocol/grbl_settings.hpp"
 #include "cncstream/protocol/identifier.hpp"
 #include "cncstream/protocol/machine_actions.hpp"
+#include "cncstream/protocol/tool_change.hpp"
 #include "cncstream/session/job_input.hpp"
 #include "cncstream/session/machine_port.hpp"
 #include "cncstream/session/session_events.hpp"
@@ -52,6 +53,9 @@ struct MachineOptions {
   double reconnect_interval_s = 0;
   // Safe Z, spindle speed and the touch plate for the machine actions.
   protocol::MachineActionSettings actions;
+  // Tool changes in a job (GRBL family): intercepted and run by this
+  // routine (protocol/tool_change.hpp); nullopt: M0/M6 go to the controller.
+  std::optional<protocol::ToolChangeConfig> tool_change;
 };
 
 class MachineSession {
@@ -102,6 +106,11 @@ class MachineSession {
   CommandResult unlock();  // $X (Marlin: M999)
   CommandResult home();    // $H (Marlin: G28)
   CommandResult reset();   // soft reset (0x18)
+  // The operator's answer at a tool change's prompt.
+  CommandResult tool_change_confirm();
+  CommandResult tool_change_decline();
+  // The tool-length reference (forgotten on a reset, an alarm, a homing or a re-zero).
+  const std::optional<protocol::ToolLengthReference>& tool_reference() const { return tool_reference_; }
 
   // ---- state -------------------------------------------------------------
   LinkState link() const { return link_; }
@@ -143,6 +152,12 @@ class MachineSession {
   std::optional<double> work_z() const;
   void on_probe_report(const protocol::ProbeReport& p);
   CommandResult refuse_in_alarm(const char* what) const;
+  void tool_change_event(const protocol::Event& ev);
+  void start_tool_change();
+  void pump_tool_change();
+  void end_tool_change(const std::string& why);
+  void forget_tool_reference(const char* why);
+  bool operator_turn() const;
 
   boost::asio::io_context& io_;
   MachineOptions opt_;
@@ -166,6 +181,11 @@ class MachineSession {
   bool probe_pending_ = false;  // G38.2 sent, its [PRB:] not seen yet
 
   std::optional<JobInput> job_;  // the running job (its lines stay with the engine)
+
+  std::unique_ptr<protocol::ToolChangeRoutine> routine_;
+  std::string routine_line_;  // cleaned text of the routine's line in flight ("" none)
+  std::optional<protocol::ToolLengthReference> tool_reference_;
+  int tool_in_spindle_ = 0;
 
   boost::asio::steady_timer timer_;
   double timer_at_ = 0;

@@ -13,6 +13,7 @@
 
 #include "cncstream/protocol/engine.hpp"
 #include "cncstream/protocol/status_report.hpp"
+#include "cncstream/protocol/tool_change.hpp"
 #include "cncstream/session/job_input.hpp"
 
 namespace cncstream::session {
@@ -38,6 +39,9 @@ enum class SessionEventKind {
   Controller,  // a protocol event: status, line answered, error, alarm, job state...
   JobStarted,  // `job` points at the job's input (valid during the call)
   JobEnded,    // outcome, text and the last answered file line
+  // A tool change: the routine asks the operator (`tool_prompt`), or it
+  // ended (`tool_record`: done, skipped or failed); `text` says what.
+  ToolChange,
 };
 
 struct SessionEvent {
@@ -50,6 +54,8 @@ struct SessionEvent {
   protocol::JobOutcome outcome = protocol::JobOutcome::None;  // JobEnded
   long last_answered_line = 0;                                // JobEnded
   std::size_t lines_answered = 0;                             // JobEnded
+  std::optional<protocol::ToolChangePrompt> tool_prompt;      // ToolChange
+  std::optional<protocol::ToolChangeRecord> tool_record;      // ToolChange
 };
 
 // What a display needs at any moment.
@@ -66,6 +72,9 @@ struct MachineSnapshot {
   bool alarm = false;
   bool jogging = false;
   bool job_active = false;
+  // At a tool change: what the operator is asked now (nullopt: nothing).
+  std::optional<protocol::ToolChangePrompt> tool_prompt;
+  int tool_in_spindle = 0;  // as far as the session knows (0: unknown)
 };
 
 // Subscribers of one session. A handle removes its subscriber when dropped,

@@ -41,6 +41,14 @@ struct SimulatorOptions {
   std::optional<Vec3> work_offset;
   std::optional<std::filesystem::path> link;  // a stable symlink to the pty (e.g. for a reconnect test)
   std::optional<double> probe_surface_z;       // G38.x touches this Z plane (machine coordinates)
+  // Tool lengths (T -> stick-out, mm; the lowest T is in the spindle at the
+  // start): the machine cuts and probes with the tip, and a tool is mounted
+  // only when the simulated operator mounts it (operator_mount), never by a
+  // T word. A touch plate ("X,Y,THICKNESS" on the stock's top) and a fixed
+  // tool-length sensor ("X,Y,Z"), machine coordinates.
+  cncsim::StickOuts stick_outs;
+  std::string touch_plate;
+  std::string tool_sensor;
 };
 
 // Parses "max" or a positive number; throws std::invalid_argument naming the text.
@@ -65,6 +73,10 @@ class SimulatorPort final : public MachinePort {
   std::size_t lines_answered() const { return machine_->lines_answered(); }
   // The controller's settings ($$), for planning before connecting.
   const cncsim::Settings& settings() const { return machine_->settings(); }
+  // The simulated operator mounts tool T (thread-safe; before the host's
+  // next line is read). The tool in the spindle and where its tip is.
+  void operator_mount(int tool) { machine_->request_mount(tool); }
+  int mounted_tool() const { return machine_->mounted_tool(); }
   // The serving thread has ended (the port vanished, overflowed, or finish()).
   bool ended() const { return ended_; }
 

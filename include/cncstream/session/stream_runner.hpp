@@ -43,6 +43,10 @@ struct RunnerOptions {
   // Ctrl-C asks for a controlled stop (hold, wait, reset); a second one
   // gives SIGINT back to the system, so a third ends the process.
   bool stop_on_sigint = false;  // every tick once the job started, and once at the end
+  // Tool changes run by the session (nullopt: M0/M6 go to the controller),
+  // and what it asks or reports at them (on the session's thread).
+  std::optional<protocol::ToolChangeConfig> tool_change;
+  std::function<void(const SessionEvent&)> on_tool_change;
 };
 
 struct RunResult {
@@ -72,6 +76,8 @@ class StreamRunner {
   void request_resume();
   void request_toggle_pause();
   void request_realtime(protocol::Realtime r);
+  // The operator's answer at a tool change's prompt.
+  void request_tool_change_answer(bool confirm);
 
  private:
   void post(std::function<void(MachineSession&)> fn);

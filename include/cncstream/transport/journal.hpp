@@ -60,6 +60,18 @@ struct ProgressRecord {
 
 // A job of the daemon's queue (cncstreamd): created before it runs, so it
 // has a row of its own; `journal_id` links it to the `jobs` row its run wrote.
+// One tool change of a job: the tool in the spindle after it, the work
+// offset's Z written (if any) and whether that tool's length is known.
+struct ToolChangeRow {
+  std::int64_t job_id = 0;
+  std::int64_t line = 0;  // file line of the change
+  std::int64_t tool = 0;
+  std::string method;
+  std::optional<double> offset_z;
+  bool length_known = false;
+  std::string note;
+};
+
 struct DaemonJobRow {
   std::int64_t id = 0;
   std::string machine;
@@ -95,6 +107,8 @@ class Journal {
                          std::int64_t resumed_from = 0, std::int64_t from_line = 0, std::int64_t planner_blocks = 0);
   void record_progress(const ProgressRecord& p);
   void end_job(std::int64_t job_id, const std::string& outcome, const std::string& message);
+  void record_tool_change(const ToolChangeRow& r);
+  std::vector<ToolChangeRow> tool_changes(std::int64_t job_id) const;
 
   std::vector<JobRecord> jobs(int limit = 50) const;  // newest first
   std::optional<JobRecord> job(std::int64_t id) const;

@@ -14,12 +14,14 @@
 #include <limits>
 #include <filesystem>
 #include <functional>
+#include <atomic>
 #include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 
+#include "cncsim/probe_targets.hpp"
 #include "cncsim/settings.hpp"
 #include "cncstream/gcode/interpreter.hpp"
 #include "cncstream/gcode/line_lexer.hpp"
@@ -89,6 +91,18 @@ struct MachineOptions {
   // or a dwell, the virtual clock jumps ahead instead of waiting for advance().
   bool instant_waits = false;
   std::optional<double> probe_surface_z;  // G38.x touches this Z plane (machine coords)
+  // A touch plate on the work, a fixed tool-length sensor (probe_targets.hpp).
+  std::vector<ProbeFace> probe_faces;
+  // Tool lengths: T number -> stick-out (mm below the spindle's reference
+  // face). The tool in the spindle at power-on is `start_tool`; what cuts and
+  // what trips the probe is its TIP: the spindle position less the mounted
+  // tool's stick-out beyond the start tool's (a machine does not know it).
+  std::map<int, double> stick_outs;
+  int start_tool = 0;
+  // A real machine: a T word changes nothing physical; only the operator
+  // mounts a tool (request_mount). Otherwise the T word mounts the tool once
+  // the motion before it has run (the old simulated operator).
+  bool operator_mounts_tools = false;
 };
 
 class RxOverflowError : public std::runtime_error {
@@ -123,6 +137,15 @@ class Machine {
   std::string status_report();     // the '?' answer (advances the report counters)
   cncstream::Vec3 machine_position() const { return queue_.position(); }
   cncstream::Vec3 work_position() const { return queue_.position() - parser_.wco(); }
+  // The mounted tool, how far its tip sits below where the start tool's
+  // would (stick-out difference), and where the tip is (machine coords).
+  int mounted_tool() const { return mounted_tool_; }
+  double tip_drop() const;
+  cncstream::Vec3 tip_position() const { return queue_.position() - cncstream::Vec3{0, 0, tip_drop()}; }
+  bool probe_input() const { return probes_.triggered(tip_position()); }
+  // The operator mounts tool T (any thread: applied before the next byte
+  // is read or the clock runs). The removal switches to its cutter.
+  void request_mount(int tool) { mount_request_.tool.store(tool); }
   const cncstream::gcode::ParserState& parser() const { return parser_; }
   const Settings& settings() const { return store_.settings; }
   const PersistentStore& store() const { return store_; }
@@ -162,6 +185,8 @@ class Machine {
   };
 
   void boot(bool power_on);
+  void apply_mount_request();
+  void mount(int tool);
   void soft_reset();
   void emit(std::string_view line);
   void answer(int status);
@@ -233,6 +258,19 @@ class Machine {
   int feed_ovr_ = 100, rapid_ovr_ = 100, spindle_ovr_ = 100;
   int wco_counter_ = 0, ovr_counter_ = 0;
   cncstream::Vec3 probe_position_{};
+  ProbeTargets probes_;
+  int mounted_tool_ = 0;
+  // The operator's mount, from another thread; a Machine stays copyable and movable.
+  struct MountRequest {
+    std::atomic<int> tool{-1};
+    MountRequest() = default;
+    MountRequest(const MountRequest& o) : tool(o.tool.load()) {}
+    MountRequest& operator=(const MountRequest& o) {
+      tool.store(o.tool.load());
+      return *this;
+    }
+  };
+  MountRequest mount_request_;
   bool probe_succeeded_ = false;
 
   std::size_t bytes_received_ = 0;

@@ -29,8 +29,12 @@ StockBox stock_box_for(const cncstream::Mesh& design, double resolution);
 // Tool number -> cutter. `text` is "1=ball:3.175,2=bull:3.175:0.79" or the
 // path of a file with one "N=SPEC" per line ('#' starts a comment). Errors
 // name the entry (and the file and line).
+// An entry may give the tool's stick-out: "2=ball:3.175@37.3" (mm).
 using ToolTable = std::map<int, cncstream::Cutter>;
 ToolTable parse_tool_table(const std::string& text);
+// The stick-outs of the same text (empty when it gives none; all or none).
+using StickOuts = std::map<int, double>;
+StickOuts parse_tool_stick_outs(const std::string& text);
 
 class MaterialRemoval {
  public:

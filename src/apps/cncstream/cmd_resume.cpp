@@ -50,12 +50,14 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     std::optional<transport::JobRecord> rec;
     std::optional<transport::ProgressRecord> last;
     std::vector<std::int64_t> error_lines;
+    std::vector<transport::ToolChangeRow> tool_changes;
     {
       transport::Journal j(jpath);
       rec = j.job(o->job);
       if (!rec) throw std::invalid_argument("no job " + std::to_string(o->job) + " in " + jpath.string());
       last = j.last_progress(o->job);
       error_lines = j.progress_lines(o->job, "error");
+      tool_changes = j.tool_changes(o->job);
     }
     const std::filesystem::path file = rec->file;
     if (!std::filesystem::exists(file))
@@ -112,6 +114,14 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
                                        plan.operation->cutter +
                                        " must be in the spindle, touched off at the same Z0 as before\n"
                                  : std::string())
+              << (tool_changes.empty()
+                      ? std::string()
+                      : "  the journal's last tool change (line " + std::to_string(tool_changes.back().line) + "): T" +
+                            std::to_string(tool_changes.back().tool) + " in the spindle, its length " +
+                            (tool_changes.back().length_known ? "measured (" + tool_changes.back().method + ")"
+                                                              : std::string("UNKNOWN: measure it and set work Z before "
+                                                                            "resuming")) +
+                            "\n")
               << "  the controller must be homed with the same work offset as before\n"
               << "  preamble (retract to Z" << format_gcode_number(ro.safe_z) << ", travel, restore, plunge at F"
               << format_gcode_number(ro.plunge_feed) << "):\n";

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -14,6 +15,7 @@
 
 #include "cncsim/settings.hpp"
 #include "cncstream/gcode/program.hpp"
+#include "cncstream/gcode/tool_change_line.hpp"
 #include "cncstream/geometry/stl.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/protocol/grbl_settings.hpp"
@@ -36,6 +38,73 @@ std::string limits_text(const gcode::MotionLimits& m) {
   return o.str();
 }
 
+// "X,Y" (mm) for an option; throws naming it.
+std::array<double, 2> xy_option(const std::string& text, const char* flag) {
+  const auto comma = text.find(',');
+  const auto x = comma == std::string::npos ? std::nullopt : cncsim::number_from<double>(text.substr(0, comma));
+  const auto y = comma == std::string::npos ? std::nullopt : cncsim::number_from<double>(text.substr(comma + 1));
+  if (!x || !y) throw std::invalid_argument(std::string(flag) + " '" + text + "': expected X,Y (mm)");
+  return {*x, *y};
+}
+
+// The tool-change routine's settings from the options; on the simulator
+// (`so`, with its stock in machine = work coordinates) also where its plate
+// or sensor is, when not given. nullopt: the M0 goes to the controller.
+std::optional<protocol::ToolChangeConfig> tool_change_config(const ConnectionOptions& c, const session::JobInput& job,
+                                                             session::SimulatorOptions* so, std::optional<Box3> stock) {
+  std::string method = c.tool_change_method;
+  if (method.empty()) method = so ? (stock ? "plate" : "pause") : "manual";
+  if (method == "pause") return std::nullopt;
+  protocol::ToolChangeConfig cfg;
+  cfg.method = protocol::parse_tool_change_method(method);
+  cfg.probe_travel = c.probe_travel;
+  cfg.max_length_change = c.max_length_change;
+  const bool changes = !gcode::find_tool_changes(job.lines).empty();
+  if (c.tool_change_safe_z) {
+    cfg.safe_z = *c.tool_change_safe_z;
+  } else if (so && stock) {
+    cfg.safe_z = stock->hi.z + 40;
+  } else if (changes) {
+    throw std::invalid_argument("the program changes tools: give --tool-change-safe-z (the machine Z, G53, for travel "
+                                "with any tool; e.g. -1 on a homed GRBL machine), or --tool-change-method pause");
+  }
+  if (cfg.method == protocol::ToolChangeMethod::Plate) {
+    if (!c.touch_plate_at.empty()) {
+      const auto p = xy_option(c.touch_plate_at, "--touch-plate-at");
+      cfg.probe_x = p[0];
+      cfg.probe_y = p[1];
+    } else if (so && stock) {
+      cfg.probe_x = stock->lo.x + 20;
+      cfg.probe_y = stock->lo.y + 20;
+    } else if (changes) {
+      throw std::invalid_argument("--tool-change-method plate needs --touch-plate-at X,Y (work coordinates)");
+    }
+  }
+  if (cfg.method == protocol::ToolChangeMethod::Sensor) {
+    if (!c.tool_sensor_at.empty()) {
+      const auto p = xy_option(c.tool_sensor_at, "--tool-sensor-at");
+      cfg.probe_x = p[0];
+      cfg.probe_y = p[1];
+    } else if (so && stock) {
+      cfg.probe_x = stock->lo.x - 30;
+      cfg.probe_y = stock->lo.y;
+    } else if (changes) {
+      throw std::invalid_argument("--tool-change-method sensor needs --tool-sensor-at X,Y (machine coordinates)");
+    }
+  }
+  if (so) {
+    // The simulator's G54 is zero: its machine XY are the work XY.
+    if (so->touch_plate.empty() && cfg.method == protocol::ToolChangeMethod::Plate && stock)
+      so->touch_plate = fmt::format("{},{},5", cfg.probe_x, cfg.probe_y);
+    if (so->tool_sensor.empty() && cfg.method == protocol::ToolChangeMethod::Sensor)
+      so->tool_sensor = fmt::format("{},{},{}", cfg.probe_x, cfg.probe_y, stock ? stock->hi.z : 0.0);
+    if (cfg.method == protocol::ToolChangeMethod::Manual && changes && !::isatty(STDIN_FILENO))
+      throw std::invalid_argument("--tool-change-method manual needs an operator at a terminal (the simulated "
+                                  "operator mounts and measures with plate or sensor)");
+  }
+  return cfg;
+}
+
 }  // namespace
 
 void add_link_options(CLI::App* sub, ConnectionOptions& o) {
@@ -55,6 +124,24 @@ void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
   sub->add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines without a terminal")
       ->check(CLI::PositiveNumber);
   sub->add_option("--timeout", o.timeout_s, "Give up after this many seconds (0: never)")->check(CLI::NonNegativeNumber);
+  const char* tc = "Tool change";
+  sub->add_option("--tool-change-method", o.tool_change_method,
+                  "plate (touch plate on the work), sensor (fixed tool-length sensor), manual (the operator zeroes Z), "
+                  "or pause (the M0 goes to the controller: no re-measure); default plate on sim, manual on a machine")
+      ->check(CLI::IsMember({"plate", "sensor", "manual", "pause"}))
+      ->group(tc);
+  sub->add_option("--tool-change-safe-z", o.tool_change_safe_z,
+                  "Machine Z (G53) for every XY travel of a tool change (needed for plate and sensor)")
+      ->group(tc);
+  sub->add_option("--touch-plate-at", o.touch_plate_at, "Work X,Y of the touch plate's centre (plate)")->group(tc);
+  sub->add_option("--tool-sensor-at", o.tool_sensor_at, "Machine X,Y of the tool-length sensor (sensor)")->group(tc);
+  sub->add_option("--probe-travel", o.probe_travel, "Longest probe move down from the safe Z, mm")
+      ->check(CLI::PositiveNumber)
+      ->group(tc);
+  sub->add_option("--max-length-change", o.max_length_change,
+                  "A tool measured this much longer or shorter than the reference is questioned, mm")
+      ->check(CLI::PositiveNumber)
+      ->group(tc);
   sub->add_flag("--view", o.view,
                 "Show the job in the 3-D viewer as it runs: the cutter where the machine is, the material its moves "
                 "remove (a window; closing it does not stop the job)");
@@ -81,7 +168,15 @@ void add_sim_options(CLI::App* sub, SimCliOptions& o) {
   sub->add_option("--sim-tool", o.tool, "Cutter for --sim-design, e.g. ball:3.175")->group(g);
   sub->add_option("--sim-png", o.png, "Write the verify deviation map (PNG) here")->group(g);
   sub->add_option("--sim-tool-table", o.tool_table,
-                  "Tools by T number for the cut, e.g. 1=ball:3.175,2=bull:3.175:0.79 (or a file of N=SPEC lines)")
+                  "Tools by T number for the cut, e.g. 1=ball:3.175,2=bull:3.175:0.79 (or a file of N=SPEC lines); "
+                  "SPEC@L gives each tool's stick-out (1=flat:6@30,2=ball:3.175@37.3): the simulated operator mounts "
+                  "the tools and a longer one's tip cuts lower")
+      ->group(g);
+  sub->add_option("--sim-touch-plate", o.touch_plate,
+                  "X,Y,THICKNESS: the simulator's touch plate on the stock (default: under --touch-plate-at, 5 mm)")
+      ->group(g);
+  sub->add_option("--sim-tool-sensor", o.tool_sensor,
+                  "X,Y,Z: the simulator's tool-length sensor (default: 30 mm left of the stock, its top level with it)")
       ->group(g);
   sub->add_option("--sim-result", o.result, "Write the machined surface here (.f32 height field, and .stl)")->group(g);
   sub->add_option("--sim-resolution", o.resolution, "Stock grid step for the verify, mm")->check(CLI::PositiveNumber)->group(g);
@@ -96,6 +191,8 @@ session::SimulatorOptions simulator_options(const SimCliOptions& s) {
   so.faults.drop_every = s.drop_every;
   so.faults.corrupt_every = s.corrupt_every;
   so.faults.vanish_after = s.vanish_after;
+  so.touch_plate = s.touch_plate;
+  so.tool_sensor = s.tool_sensor;
   cncsim::parse_line_faults(s.error_at, "--sim-error-at", so.faults.error_at);
   cncsim::parse_line_faults(s.alarm_at, "--sim-alarm-at", so.faults.alarm_at);
   cncsim::parse_line_faults(s.stall_at, "--sim-stall-at", so.faults.stall_at);
@@ -174,10 +271,14 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
       }
       so.result = s.result;
       so.work_offset = verify->work_offset;
+      if (!s.tool_table.empty()) so.stick_outs = cncsim::parse_tool_stick_outs(s.tool_table);
     } else if (!s.tool_table.empty() || !s.result.empty()) {
       throw std::invalid_argument("--sim-tool-table and --sim-result need a cut to simulate: an STL job, or --sim-design "
                                   "with --sim-tool (and not --no-sim-verify)");
     }
+    std::optional<Box3> stock = so.stock;
+    if (!stock && so.design) stock = so.design->bounds();
+    ro.tool_change = tool_change_config(c, job, &so, stock);
     sim = std::make_shared<session::SimulatorPort>(so);
     ro.machine_port = sim;
     std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << s.speed << ", "
@@ -186,6 +287,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     const auto device = device_path(c.port);
     if (!device) return 2;
     ro.port = *device;
+    ro.tool_change = tool_change_config(c, job, nullptr, std::nullopt);
   }
   ro.serial = transport::parse_serial_settings(c.serial);
   ro.profiles_dir = protocol::default_profiles_dir();
@@ -272,13 +374,34 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     if (interactive) {
       panel.message("PAUSED at line " + std::to_string(line) + ": " + what + "\n  (space resumes, s or Ctrl-C stops)");
     } else if (sim) {
-      // The simulator's operator changes the tool at once (its tool table
-      // follows the T word).
+      // The simulator's operator mounts the tool the program selected and
+      // resumes at once (the old way: nothing is measured).
+      for (const auto& change : gcode::find_tool_changes(job.lines))
+        if (static_cast<long>(change.index) + 1 == line && change.tool > 0) sim->operator_mount(change.tool);
       panel.message("PAUSED at line " + std::to_string(line) + ": " + what + "\n  (simulator: resuming at once)");
       runner_ptr->request_toggle_pause();
     } else {
       panel.message("PAUSED at line " + std::to_string(line) + ": " + what +
                     "\n  (no terminal: the machine stays paused until cycle start on the controller or a pendant)");
+    }
+  };
+  // A tool change run by the session: the operator's prompts and what it did.
+  ro.on_tool_change = [&](const session::SessionEvent& e) {
+    if (!e.tool_prompt) {
+      panel.message("tool change: " + e.text);
+      return;
+    }
+    const auto& p = *e.tool_prompt;
+    if (sim && c.yes && p.kind == protocol::PromptKind::MountTool) {
+      panel.message("TOOL CHANGE: " + p.text + "\n  (simulator: the operator mounts T" + std::to_string(p.tool) +
+                    " and confirms)");
+      sim->operator_mount(p.tool);
+      runner_ptr->request_tool_change_answer(true);
+    } else if (interactive) {
+      panel.message("TOOL CHANGE: " + p.text + "\n  (c confirms, x declines and stops the job)");
+    } else {
+      panel.message("TOOL CHANGE: " + p.text + "\n  (nobody to answer: declined, the job stops)");
+      runner_ptr->request_tool_change_answer(false);
     }
   };
   // The viewer beside the job: the program, the part and the stock as it is cut.

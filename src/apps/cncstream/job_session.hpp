@@ -28,6 +28,15 @@ struct ConnectionOptions {
   bool view = false;  // the 3-D viewer beside the job (live_view.hpp)
   double progress_interval_s = 5;  // plain progress lines without a TTY
   double timeout_s = 0;            // give up after this long (0: never)
+  // Tool changes (protocol/tool_change.hpp): plate, sensor, manual, or pause
+  // (the old way: the M0 goes to the controller). "" = the default: plate on
+  // the simulator, manual on a real machine.
+  std::string tool_change_method;
+  std::optional<double> tool_change_safe_z;  // machine Z (G53)
+  std::string touch_plate_at;   // work X,Y of the plate's centre
+  std::string tool_sensor_at;   // machine X,Y of the sensor
+  double probe_travel = 50;     // mm
+  double max_length_change = 40;  // mm
 };
 
 struct SimCliOptions {
@@ -40,6 +49,8 @@ struct SimCliOptions {
   double resolution = 0.1, tolerance = 0.05;
   std::size_t drop_every = 0, corrupt_every = 0, vanish_after = 0;
   std::vector<std::string> error_at, alarm_at, stall_at;
+  std::string touch_plate;  // X,Y,THICKNESS on the stock (machine mm); default at the tool-change plate position
+  std::string tool_sensor;  // X,Y,Z (machine mm)
 };
 
 // Options after the positional FILE/JOB and PORT.

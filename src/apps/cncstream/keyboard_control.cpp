@@ -19,7 +19,8 @@ const char* KeyboardControl::help() { return job_keys_help(); }
 
 KeyboardControl::KeyboardControl(session::StreamRunner& runner)
     : KeyboardControl(JobKeyActions{[&runner] { runner.request_toggle_pause(); }, [&runner] { runner.request_stop(); },
-                                    [&runner](protocol::Realtime r) { runner.request_realtime(r); }}) {}
+                                    [&runner](protocol::Realtime r) { runner.request_realtime(r); },
+                                    [&runner](bool yes) { runner.request_tool_change_answer(yes); }}) {}
 
 KeyboardControl::KeyboardControl(JobKeyActions actions) : actions_(std::move(actions)) {
   if (!::isatty(STDIN_FILENO) || ::tcgetattr(STDIN_FILENO, &g_saved) != 0) return;
@@ -74,6 +75,11 @@ void KeyboardControl::loop() {
       switch (c) {
         case ' ': actions_.toggle_pause(); break;
         case 's': case 'S': actions_.stop(); break;
+        case 'c': case 'C':
+        case 'x': case 'X':
+          if (actions_.tool_change_answer) actions_.tool_change_answer(c == 'c' || c == 'C');
+          else note("no tool change here to confirm or decline");
+          break;
         case '+': actions_.realtime(Realtime::FeedOvPlus10); break;
         case '-': actions_.realtime(Realtime::FeedOvMinus10); break;
         case ']': actions_.realtime(Realtime::FeedOvPlus1); break;

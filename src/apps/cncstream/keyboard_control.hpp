@@ -22,6 +22,8 @@ struct JobKeyActions {
   std::function<void()> toggle_pause;
   std::function<void()> stop;
   std::function<void(protocol::Realtime)> realtime;
+  // At a tool change's prompt: c confirms (true), x declines (false).
+  std::function<void(bool)> tool_change_answer;
 };
 
 class KeyboardControl {
