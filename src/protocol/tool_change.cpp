@@ -175,11 +175,12 @@ void ToolChangeRoutine::start() {
   if (req_.to_tool != 0 && req_.to_tool == req_.from_tool) {
     skipped_ = true;
     length_known_ = true;  // what was known of it stays so
-    summary_ = "T" + std::to_string(req_.to_tool) + " is already in the spindle: nothing to change";
+    // fmt, not "T" + std::to_string(): GCC 12 at -O3 warns falsely (-Wrestrict) on the latter.
+    summary_ = fmt::format("T{} is already in the spindle: nothing to change", req_.to_tool);
     done_ = true;
     return;
   }
-  const std::string tool_text = req_.to_tool ? "T" + std::to_string(req_.to_tool) : std::string("the next tool");
+  const std::string tool_text = req_.to_tool ? fmt::format("T{}", req_.to_tool) : std::string("the next tool");
   const std::string what = tool_text + (req_.note.empty() ? std::string() : " (" + req_.note + ")");
   add([this] { wait_idle(); });
   add([this] { send("M5"); });
