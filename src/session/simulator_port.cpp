@@ -31,6 +31,7 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
   mo.strict = opt_.strict;
   mo.faults = opt_.faults;
   mo.probe_surface_z = opt_.probe_surface_z;
+  mo.link_bytes_per_second = cncsim::link_bytes_per_second_for_baud(opt_.baud);
   cncsim::PtyOptions po;
   po.speed = parse_sim_speed(opt_.speed);
   po.link = opt_.link;
@@ -88,6 +89,8 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
     << machine_->lines_executed() << " executed, " << machine_->rx_bytes_dropped() << " RX bytes dropped";
   if (vanished_) o << "; vanished (fault injection)";
   o << "\n";
+  o << "sim: " << cncsim::link_summary(machine_->link_stats(), opt_.baud, cncsim::MachineOptions{}.starved_below_blocks)
+    << "\n";
   const auto mpos = machine_->machine_position();
   const auto wpos = machine_->work_position();
   o << fmt::format("sim: final position MPos {:.3f},{:.3f},{:.3f} WPos {:.3f},{:.3f},{:.3f}, state ", mpos.x, mpos.y,

@@ -63,6 +63,12 @@ void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
 void add_sim_machine_options(CLI::App* sub, SimCliOptions& o) {
   const char* g = "Simulator (PORT=sim)";
   sub->add_option("--sim-speed", o.speed, "Simulator time scale: 'max' or K (1 = real time)")->group(g)->capture_default_str();
+  sub->add_option("--sim-baud", o.baud,
+                  "Simulated serial link: bytes reach the simulator at baud/10 per virtual second, as on a USB-serial "
+                  "GRBL board (0: unthrottled)")
+      ->check(CLI::NonNegativeNumber)
+      ->group(g)
+      ->capture_default_str();
   sub->add_flag("--sim-lenient", o.lenient, "Drop overflowing RX bytes like the firmware instead of failing")->group(g);
   sub->add_option("--sim-settings", o.settings, "Simulator settings file ($$, offsets) kept across runs")->group(g);
   sub->add_option("--sim-drop-every", o.drop_every, "Fault: drop every Nth byte received")->group(g);
@@ -91,6 +97,7 @@ void add_sim_options(CLI::App* sub, SimCliOptions& o) {
 session::SimulatorOptions simulator_options(const SimCliOptions& s) {
   session::SimulatorOptions so;
   so.speed = s.speed;
+  so.baud = s.baud;
   so.strict = !s.lenient;
   so.settings_file = s.settings;
   so.faults.drop_every = s.drop_every;

@@ -32,6 +32,7 @@ struct ConnectionOptions {
 
 struct SimCliOptions {
   std::string speed = "max";
+  double baud = 115200;  // the simulated link (0: unthrottled)
   bool lenient = false;  // strict RX buffer is the default
   std::string settings;
   bool no_verify = false;
