@@ -24,7 +24,7 @@ constexpr double kBytesPerSecond = 11520;  // 115,200 baud, 8-N-1
 // `count` moves of `step` mm along X (alternating Y a little so no two are
 // collinear, as a finishing row's are not), at F`feed`, each line padded to
 // `bytes` bytes with the newline.
-std::vector<std::string> short_moves(std::size_t count, double step, double feed, std::size_t bytes) {
+std::vector<std::string> short_moves(std::size_t count, double step, std::size_t bytes, double feed = 3000) {
   std::vector<std::string> lines{fmt::format("G1F{:.0f}", feed)};
   for (std::size_t i = 1; i <= count; ++i) {
     std::string l = fmt::format("X{:.3f}Y{:.3f}", static_cast<double>(i) * step, (i % 2) * 0.001);
@@ -83,7 +83,7 @@ TEST(SimLink, RealTimeBytesWaitTheirTurnOnTheWire) {
 // v <= sqrt(2 a * 15 L) for moves of length L, here 0.03 mm at 500 mm/s^2:
 // 21.2 mm/s = 1,273 mm/min, whatever F says, on any link.
 TEST(SimLink, PlannerLookAheadLimitsTheFeedOfShortMoves) {
-  const auto lines = short_moves(2000, 0.03, 3000, 16);
+  const auto lines = short_moves(2000, 0.03, 16);
   const auto run = simtest::stream_lines(lines, 0);
   const double limit = std::sqrt(2 * 500.0 * 15 * 0.03) * 60;
   EXPECT_EQ(run.answered, lines.size());
@@ -97,7 +97,7 @@ TEST(SimLink, PlannerLookAheadLimitsTheFeedOfShortMoves) {
 // 0.03 mm per 2.17 ms = 829 mm/min, below the look-ahead's 1,273: the link
 // sets the feed and the planner starves.
 TEST(SimLink, DenseProgramStarvesOnA115200BaudLink) {
-  const auto lines = short_moves(2000, 0.03, 3000, 25);
+  const auto lines = short_moves(2000, 0.03, 25);
   const auto paced = simtest::stream_lines(lines, kBytesPerSecond);
   const auto free = simtest::stream_lines(lines, 0);
   const double wire_bound = 0.03 / (25 / kBytesPerSecond) * 60;
@@ -110,7 +110,7 @@ TEST(SimLink, DenseProgramStarvesOnA115200BaudLink) {
 }
 
 TEST(SimLink, LongMovesKeepThePlannerFed) {
-  const auto lines = short_moves(300, 2.0, 3000, 25);
+  const auto lines = short_moves(300, 2.0, 25);
   const auto paced = simtest::stream_lines(lines, kBytesPerSecond);
   const auto free = simtest::stream_lines(lines, 0);
   EXPECT_LT(paced.link.starved_seconds, 0.05);
@@ -153,6 +153,28 @@ TEST(StreamingCheck, ProgramOfLongMovesKeepsThePlannerFed) {
   std::cout << r.describe() << "\n";
   EXPECT_TRUE(r.keeps_planner_fed()) << r.describe();
   EXPECT_LE(r.slowdown(), 1.05) << r.describe();
+}
+
+}  // namespace
+
+namespace {
+
+// The estimate (gcode::estimate_program_time over a StreamLink) and the
+// simulator agree on a program that starves and on one that does not.
+TEST(SimLink, EstimateOverTheLinkAgreesWithTheSimulator) {
+  for (const double step : {0.03, 0.5}) {
+    const auto lines = short_moves(1500, step, 25);
+    std::string text;
+    for (const auto& l : lines) text += l + "\n";
+    cncstream::gcode::MotionLimits limits;
+    limits.max_rate = {6000, 6000, 6000};
+    limits.acceleration = {500, 500, 500};
+    cncstream::gcode::StreamLink link;
+    link.bytes_per_second = kBytesPerSecond;
+    const double estimate = estimate_program_time(cncstream::gcode::trace_program(text), limits, link).total();
+    const auto run = simtest::stream_lines(lines, kBytesPerSecond);
+    EXPECT_NEAR(estimate, run.seconds, 0.03 * run.seconds) << "moves of " << step << " mm";
+  }
 }
 
 }  // namespace
