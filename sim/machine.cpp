@@ -29,7 +29,8 @@ bool is_realtime(unsigned char c) {
 
 }  // namespace
 
-Machine::Machine(MachineOptions options) : options_(std::move(options)) {
+Machine::Machine(MachineOptions options)
+    : options_(std::move(options)), queue_(cncstream::gcode::MotionLimits{}, options_.planner_blocks) {
   if (options_.store_path) store_ = load_store(*options_.store_path);
   queue_.set_limits(store_.settings.motion_limits());
   parser_.coords = store_.coords;
@@ -67,6 +68,16 @@ void Machine::apply_mount_request() {
 void Machine::mount(int tool) {
   mounted_tool_ = tool;
   if (tool_observer_) tool_observer_(tool);
+}
+
+std::string link_summary(const LinkStats& s, double baud, std::size_t starved_below) {
+  const std::string link = baud > 0 ? fmt::format("{:.0f} baud", baud) : std::string("unthrottled");
+  const double share = s.commanded_feed() > 0 ? s.achieved_feed() / s.commanded_feed() * 100.0 : 0.0;
+  return fmt::format(
+      "link {}: starved {:.3f} s (planner below {} blocks with a line on its way), dry {:.3f} s; feed achieved "
+      "{:.0f} of {:.0f} mm/min commanded ({:.1f} %) over {:.1f} mm of feed moves in {:.3f} s",
+      link, s.starved_seconds, starved_below, s.dry_seconds, s.achieved_feed(), s.commanded_feed(), share, s.feed_mm,
+      s.feed_seconds);
 }
 
 // ---- output -----------------------------------------------------------------
@@ -218,35 +229,78 @@ void Machine::soft_reset() {
 
 void Machine::receive(std::string_view bytes) {
   apply_mount_request();
+  const double rate = options_.link_bytes_per_second;
   for (char ch : bytes) {
     if (vanished_) return;
-    auto c = static_cast<unsigned char>(ch);
-    ++bytes_received_;
-    Faults& f = options_.faults;
-    // Real-time bytes are no part of a line: they move no line offset.
-    const bool line_byte = !is_realtime(c);
-    const bool eol = c == '\n' || c == '\r';
-    bool drop = f.drop_every && bytes_received_ % f.drop_every == 0;
-    bool corrupt = !drop && f.corrupt_every && bytes_received_ % f.corrupt_every == 0;
-    if (line_byte && !drop && wire_fault(f.drop_byte_at, c, eol)) drop = true;
-    if (line_byte && !drop && !corrupt && wire_fault(f.corrupt_byte_at, c, eol)) corrupt = true;
-    if (line_byte) ++arriving_offset_;
-    if (drop) {
-      ++applied_.dropped_bytes;
+    const auto c = static_cast<unsigned char>(ch);
+    if (rate <= 0) {
+      arrive(c);
       continue;
     }
-    if (corrupt) {
-      unsigned char flipped = c ^ 0x01;
-      if (is_realtime(flipped)) flipped = c ^ 0x02;
-      c = flipped;
-      ++applied_.corrupted_bytes;
-    }
-    if (line_byte && (c == '\n' || c == '\r')) {
-      ++arriving_line_;
-      arriving_offset_ = 0;
-    }
-    receive_byte(c);
+    // The link is free again once its last byte has arrived.
+    if (wire_.empty()) wire_next_ = now_ + 1.0 / rate;
+    wire_.push_back(c);
   }
+  deliver_due();
+}
+
+void Machine::deliver_due() {
+  const double rate = options_.link_bytes_per_second;
+  const bool instant = rate <= 0;  // the link was made unthrottled with bytes on it
+  while (!wire_.empty() && !vanished_ && (instant || wire_next_ <= now_ + 1e-12)) {
+    const unsigned char c = wire_.front();
+    wire_.pop_front();
+    if (!instant) wire_next_ += 1.0 / rate;
+    arrive(c);
+  }
+  if (vanished_) wire_.clear();
+}
+
+// When the next byte that changes what the firmware does arrives: an end of
+// line (the line can be parsed) or a real-time command; else the last byte.
+double Machine::next_wire_event() const {
+  const double gap = 1.0 / options_.link_bytes_per_second;
+  const std::size_t scan = std::min<std::size_t>(wire_.size(), 512);
+  for (std::size_t k = 0; k < scan; ++k) {
+    const unsigned char c = wire_[k];
+    if (c == '\n' || c == '\r' || is_realtime(c)) return wire_next_ + static_cast<double>(k) * gap;
+  }
+  return wire_next_ + static_cast<double>(scan - 1) * gap;
+}
+
+// The firmware has nothing to do but wait for a line that is on its way.
+bool Machine::waiting_for_bytes() const {
+  return steps_.empty() && (!wire_.empty() || !rx_.empty()) && !critical_lock_ && state_ != MachineState::Alarm &&
+         state_ != MachineState::Hold && state_ != MachineState::Door;
+}
+
+void Machine::arrive(unsigned char c) {
+  ++bytes_received_;
+  ++link_stats_.bytes_arrived;
+  Faults& f = options_.faults;
+  // Real-time bytes are no part of a line: they move no line offset.
+  const bool line_byte = !is_realtime(c);
+  const bool eol = c == '\n' || c == '\r';
+  bool drop = f.drop_every && bytes_received_ % f.drop_every == 0;
+  bool corrupt = !drop && f.corrupt_every && bytes_received_ % f.corrupt_every == 0;
+  if (line_byte && !drop && wire_fault(f.drop_byte_at, c, eol)) drop = true;
+  if (line_byte && !drop && !corrupt && wire_fault(f.corrupt_byte_at, c, eol)) corrupt = true;
+  if (line_byte) ++arriving_offset_;
+  if (drop) {
+    ++applied_.dropped_bytes;
+    return;
+  }
+  if (corrupt) {
+    unsigned char flipped = c ^ 0x01;
+    if (is_realtime(flipped)) flipped = c ^ 0x02;
+    c = flipped;
+    ++applied_.corrupted_bytes;
+  }
+  if (line_byte && (c == '\n' || c == '\r')) {
+    ++arriving_line_;
+    arriving_offset_ = 0;
+  }
+  receive_byte(c);
 }
 
 bool Machine::wire_fault(std::map<std::size_t, ByteOfLine>& at, unsigned char c, bool eol) {
@@ -382,7 +436,7 @@ void Machine::cycle_start() {
 bool Machine::stalled() const { return !steps_.empty() && steps_.front().stall; }
 
 bool Machine::busy() const {
-  return !queue_.empty() || !steps_.empty() || !rx_.empty();
+  return !queue_.empty() || !steps_.empty() || !rx_.empty() || !wire_.empty();
 }
 
 void Machine::pump() {
@@ -424,6 +478,7 @@ bool Machine::run_front_step() {
     case Step::Block:
       if (queue_.full()) return false;
       if (queue_.push(s.block)) {
+        last_block_feed_ = !s.block.rapid;
         planned_lines_.push_back(s.block.tag);
         if (PendingLine* p = pending_line(s.block.tag)) ++p->blocks_left;
         if (s.jog && (state_ == MachineState::Idle || state_ == MachineState::Jog)) state_ = MachineState::Jog;
@@ -781,7 +836,7 @@ void Machine::process_system(const std::string& line) {
     case 'I':
       if (line.size() == 2) {
         say("[VER:1.1h.20190830:" + store_.build_info + "]");
-        say("[OPT:VNM," + std::to_string(kPlannerBlocks) + "," + std::to_string(kRxBufferSize) + "]");
+        say("[OPT:VNM," + std::to_string(queue_.capacity()) + "," + std::to_string(kRxBufferSize) + "]");
         return reply(0);
       }
       if (line[2] != '=') return reply(grbl::kInvalidStatement);
@@ -924,6 +979,9 @@ void Machine::advance_motion(double dt, bool stop_after_block) {
   const auto r = queue_.advance(dt, observer_ ? gc::MotionQueue::Traverse(traverse) : gc::MotionQueue::Traverse{},
                                 stop_after_block);
   now_ += r.time;
+  link_stats_.feed_seconds += r.feed_time;
+  link_stats_.feed_mm += r.feed_length;
+  link_stats_.commanded_seconds += r.commanded_time;
   if (r.completed > 0) blocks_completed(r.completed);
 }
 
@@ -951,20 +1009,38 @@ void Machine::after_motion() {
 void Machine::advance(double seconds) {
   apply_mount_request();
   const double end = now_ + seconds;
+  const bool stalled_before = stalled();
   for (std::size_t guard = 0; guard < 100000000; ++guard) {
+    deliver_due();
     pump();
     after_motion();
+    // A stall fault that began with a line off the wire lasts wall-clock
+    // time: hand back to the caller, which scales time by stalled().
+    if (stalled() && !stalled_before) return;
     if (now_ >= end || vanished_) break;
     double slice = end - now_;
     if (auto t = next_timer()) slice = std::clamp(*t - now_, 0.0, slice);
+    if (!wire_.empty()) slice = std::clamp(next_wire_event() - now_, 0.0, slice);
     const bool waiting_for_room = !steps_.empty() && steps_.front().kind == Step::Block;
     const bool waiting_for_sync = !steps_.empty() && steps_.front().kind == Step::Sync;
+    // While a line is on its way, every block's end is a moment to count at.
+    const bool starving = waiting_for_bytes();
+    const double before = now_;
     if (motion_can_run()) {
-      const double before = now_;
-      advance_motion(slice, waiting_for_room || waiting_for_sync);
+      advance_motion(slice, waiting_for_room || waiting_for_sync || starving);
       if (now_ == before && slice > 0 && !motion_can_run()) now_ += slice;
     } else {
       now_ += slice;
+    }
+    if (starving) {
+      // Blocks only leave the planner inside a slice and lines arrive at its
+      // ends, so its depth at the end is the least it held.
+      const double spent = now_ - before;
+      if (queue_.size() < options_.starved_below_blocks) link_stats_.starved_seconds += spent;
+      if (queue_.empty() && last_block_feed_) {
+        link_stats_.dry_seconds += spent;
+        link_stats_.feed_seconds += spent;
+      }
     }
     after_motion();
   }
@@ -976,8 +1052,8 @@ void Machine::run_until_idle(double max_seconds) {
   while (now_ < end && !vanished_) {
     pump();
     after_motion();
-    if (queue_.empty() && steps_.empty() && rx_.empty()) break;
-    if (!motion_can_run() && !next_timer()) {
+    if (queue_.empty() && steps_.empty() && rx_.empty() && wire_.empty()) break;
+    if (!motion_can_run() && !next_timer() && wire_.empty()) {
       // Nothing will happen by itself (hold, alarm lock, M0): stop here.
       if (steps_.empty() || (steps_.front().kind != Step::Delay && steps_.front().kind != Step::Homing))
         break;
@@ -1013,7 +1089,7 @@ std::string Machine::status_report() {
     r += "|WPos:" + format_vec(mpos - parser_.wco());
   }
   if (s.report_buffer_state()) {
-    r += "|Bf:" + std::to_string(kPlannerBlocks - queue_.size()) + "," + std::to_string(kRxBufferSize - rx_.size());
+    r += "|Bf:" + std::to_string(queue_.capacity() - queue_.size()) + "," + std::to_string(kRxBufferSize - rx_.size());
   }
   if (const auto* b = queue_.current(); b && b->line_number > 0) r += "|Ln:" + std::to_string(b->line_number);
   {

@@ -1,5 +1,5 @@
 // cncsim: a GRBL 1.1h router on a pseudo-terminal.
-//   cncsim [--link PATH] [--speed K|max] [--settings FILE] [--strict] [faults] [stock]
+//   cncsim [--link PATH] [--speed K|max] [--baud B] [--settings FILE] [--strict] [faults] [stock]
 //          (with --design: verify the cut at exit; --result writes it as .f32 and .stl;
 //          --stock-from RESULT.f32 --position X,Y,Z start from a saved state)
 //   cncsim verify --design part.stl --result RESULT.f32 [--tolerance T] [--png MAP.png]
@@ -108,6 +108,17 @@ int run(int argc, char** argv) {
   std::string stock_from, position_text;
   app.add_option("--link", link, "make PATH a symlink to the pty slave");
   app.add_option("--speed", speed_text, "time scale: K (1 = real time) or 'max'");
+  double baud = 115200;
+  std::size_t starved_below = 8;
+  app.add_option("--baud", baud,
+                 "serial link rate: bytes arrive at baud/10 per second of virtual time (scaled by --speed like the "
+                 "motion), as on a USB-serial GRBL board; 0 = unthrottled")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--starved-below", starved_below,
+                 "count the planner as starved below this many blocks while a line is on its way")
+      ->check(CLI::Range(std::size_t{1}, cncsim::kPlannerBlocks))
+      ->capture_default_str();
   app.add_option("--settings", settings_path, "settings file ($$, G10/G28.1/G30.1 data, $N lines) kept across runs");
   app.add_flag("--strict", strict, "any RX buffer overflow is fatal (exit 2)");
   app.add_option("--drop-every", drop_every, "drop every Nth byte received");
@@ -156,6 +167,8 @@ int run(int argc, char** argv) {
     cncsim::MachineOptions options;
     if (!settings_path.empty()) options.store_path = settings_path;
     options.strict = strict;
+    options.link_bytes_per_second = cncsim::link_bytes_per_second_for_baud(baud);
+    options.starved_below_blocks = starved_below;
     options.faults.drop_every = drop_every;
     options.faults.corrupt_every = corrupt_every;
     options.faults.vanish_after = vanish_after;
@@ -244,6 +257,7 @@ int run(int argc, char** argv) {
     if (removal) std::cerr << ", " << removal->stock().removed_volume() << " mm^3 removed";
     std::cerr << "\n";
     if (const auto numbered = tally.summary(); !numbered.empty()) std::cerr << "cncsim: " << numbered << "\n";
+    std::cerr << "cncsim: " << cncsim::link_summary(machine.link_stats(), baud, starved_below) << "\n";
     {
       const auto m = machine.machine_position();
       std::cerr << fmt::format("cncsim: final position MPos {:.4f},{:.4f},{:.4f}, state {}\n", m.x, m.y, m.z,

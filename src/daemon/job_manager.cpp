@@ -14,6 +14,7 @@
 #include "cncstream/daemon/job_params.hpp"
 #include "cncstream/gcode/program.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
+#include "cncstream/protocol/link_model.hpp"
 #include "cncstream/protocol/grbl_settings.hpp"
 #include "cncstream/transport/sha256.hpp"
 
@@ -64,7 +65,9 @@ std::shared_ptr<Program> make_program(const std::string& text, const fs::path& p
 
 std::shared_ptr<EtaTable> make_eta(const gcode::ProgramTrace& trace, std::size_t lines, const gcode::MotionLimits& limits) {
   auto e = std::make_shared<EtaTable>();
-  const auto ends = gcode::estimate_line_end_times(trace, limits, lines);
+  // The ETA over GRBL 1.1's 115,200-baud link: a program that starves the
+  // planner shows the wire's time, not a flattering one.
+  const auto ends = gcode::estimate_line_end_times(trace, limits, lines, protocol::grbl_default_link());
   e->end_by_line.assign(lines + 1, 0.0);
   for (std::size_t i = 0; i < ends.size() && i + 1 < e->end_by_line.size(); ++i) e->end_by_line[i + 1] = ends[i];
   e->estimated_s = ends.empty() ? 0 : ends.back() + trace.dwell_seconds;

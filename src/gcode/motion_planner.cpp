@@ -182,17 +182,23 @@ MotionQueue::Advance MotionQueue::advance(double dt, const Traverse& on_traverse
       if (t_phase < 0) t_phase = 0;
     }
     if (ends_at_rest && acc != 0) t_phase = v0 / -acc;
-    double moved;
+    double moved, spent;
     if (t_phase <= left) {
       moved = span;
       speed_ = ends_at_rest ? 0 : std::sqrt(std::max(0.0, v0 * v0 + 2 * acc * span));
+      spent = t_phase;
       left -= t_phase;
-      result.time += t_phase;
     } else {
       moved = std::clamp(v0 * left + 0.5 * acc * left * left, 0.0, span);
       speed_ = std::max(0.0, v0 + acc * left);
-      result.time += left;
+      spent = left;
       left = 0;
+    }
+    result.time += spent;
+    if (!b.src.rapid) {
+      result.feed_time += spent;
+      result.feed_length += moved;
+      if (b.src.feed > 0) result.commanded_time += moved / (b.src.feed / 60.0);
     }
     const Vec3 a_pt = position_;
     b.remaining -= moved;

@@ -73,8 +73,10 @@ ProgramTrace trace_program(std::string_view text, const ProgramOptions& options)
   ParserState state = options.initial;
   const auto lines = split_lines(text);
   trace.lines = lines.size();
+  trace.line_bytes.assign(lines.size(), 0);
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const CleanLine c = clean_line(lines[i]);
+    if (!c.text.empty() && c.text != "%") trace.line_bytes[i] = static_cast<std::uint32_t>(c.text.size() + 1);
     if (carries_no_gcode(c)) continue;
     BlockResult r;
     if (c.overflow) {

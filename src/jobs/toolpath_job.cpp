@@ -16,6 +16,7 @@
 #include "cncstream/jobs/work_setup.hpp"
 #include "finishing_stage.hpp"
 #include "job_operations.hpp"
+#include "link_feed_job.hpp"
 #include "job_run.hpp"
 #include "job_text.hpp"
 #include "rest_stage.hpp"
@@ -190,6 +191,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     } else {
       compose_job(r, p, rough ? &*rough : nullptr, rest ? &*rest : nullptr, mp);
     }
+    if (p.link && p.link->bytes_per_second > 0) limit_feed_to_link(r, *p.link);
     r.seconds_gcode = seconds_since(t0);
 
     if (!p.output.empty()) {

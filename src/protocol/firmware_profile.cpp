@@ -205,6 +205,14 @@ FirmwareProfile load_impl(const std::filesystem::path& path, std::set<std::strin
       if (ms < 20 || ms > 5000) fail(path, v, "status_poll_interval_ms must be within 20..5000");
       p.status_poll_interval_s = ms / 1000.0;
     } else if (key == "baud") p.baud = static_cast<unsigned>(get_int(path, v, "baud"));
+    else if (key == "native_usb") {
+      if (!v.is_boolean()) fail(path, v, "native_usb must be true or false");
+      p.native_usb = v.value_or(false);
+    } else if (key == "blocks_per_second") {
+      const double r = get_number(path, v, key.c_str());
+      if (!(r >= 0)) fail(path, v, "blocks_per_second must be a number >= 0");
+      p.blocks_per_second = r;
+    }
     else if (key == "banner_patterns") {
       p.banner_patterns = get_strings(path, v, key.c_str());
       check_regexes(path, v, p.banner_patterns);

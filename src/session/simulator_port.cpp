@@ -37,6 +37,7 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
     mo.operator_mounts_tools = true;
   }
   if (!opt_.tool_sensor.empty()) mo.probe_faces.push_back(cncsim::parse_tool_sensor(opt_.tool_sensor));
+  mo.link_bytes_per_second = cncsim::link_bytes_per_second_for_baud(opt_.baud);
   cncsim::PtyOptions po;
   po.speed = parse_sim_speed(opt_.speed);
   po.link = opt_.link;
@@ -108,6 +109,8 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
     << machine_->lines_executed() << " executed, " << machine_->rx_bytes_dropped() << " RX bytes dropped";
   if (vanished_) o << "; vanished (fault injection)";
   o << "\n";
+  o << "sim: " << cncsim::link_summary(machine_->link_stats(), opt_.baud, cncsim::MachineOptions{}.starved_below_blocks)
+    << "\n";
   const auto mpos = machine_->machine_position();
   const auto wpos = machine_->work_position();
   o << fmt::format("sim: final position MPos {:.3f},{:.3f},{:.3f} WPos {:.3f},{:.3f},{:.3f}, state ", mpos.x, mpos.y,

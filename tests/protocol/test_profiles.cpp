@@ -4,6 +4,7 @@
 
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/protocol/identifier.hpp"
+#include "cncstream/protocol/link_model.hpp"
 
 using namespace cncstream::protocol;
 
@@ -248,4 +249,32 @@ TEST(Identify, AControllerThatAnswersNoStatusIsAskedAfterTheQueryTimeout) {
   EXPECT_EQ(id.take_output(), "?");
   id.tick(5.6);  // the query timeout after the first '?'
   EXPECT_EQ(id.take_output(), "$I\n");
+}
+
+// The link each profile describes (protocol/link_model.hpp).
+TEST(LinkModel, ProfilesDescribeTheirLinks) {
+  using namespace cncstream::protocol;
+  const auto dir = std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "firmware-profiles";
+  const auto grbl = link_model(load_firmware_profile(dir / "grbl-1.1.toml"));
+  EXPECT_DOUBLE_EQ(grbl.bytes_per_second, 11520);
+  EXPECT_EQ(grbl.rx_bytes, 128u);
+  EXPECT_EQ(grbl.planner_blocks, 15u);
+  const auto hal = link_model(load_firmware_profile(dir / "grblhal.toml"));
+  EXPECT_DOUBLE_EQ(hal.bytes_per_second, 0);  // native USB
+  EXPECT_EQ(hal.rx_bytes, 1024u);
+  EXPECT_EQ(hal.planner_blocks, 35u);
+  const auto fluid = link_model(load_firmware_profile(dir / "fluidnc.toml"));
+  EXPECT_DOUBLE_EQ(fluid.bytes_per_second, 11520);
+  EXPECT_EQ(fluid.rx_bytes, 256u);
+  // --link-rate replaces the profile's rate.
+  EXPECT_DOUBLE_EQ(link_model(load_firmware_profile(dir / "grbl-1.1.toml"), 23040).bytes_per_second, 23040);
+}
+
+TEST(LinkModel, LinkRateText) {
+  using cncstream::protocol::parse_link_rate;
+  EXPECT_DOUBLE_EQ(parse_link_rate("11520"), 11520);
+  EXPECT_DOUBLE_EQ(parse_link_rate("230400baud"), 23040);
+  EXPECT_DOUBLE_EQ(parse_link_rate("usb"), 0);
+  EXPECT_THROW(parse_link_rate("fast"), std::invalid_argument);
+  EXPECT_THROW(parse_link_rate("-5"), std::invalid_argument);
 }

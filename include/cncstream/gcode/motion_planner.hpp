@@ -58,6 +58,10 @@ class MotionQueue {
   struct Advance {
     double time = 0;             // seconds of motion simulated (<= dt)
     std::size_t completed = 0;   // blocks finished
+    // Of that time, the part spent on feed (non-rapid) blocks, the length
+    // they covered and the time the same length takes at their programmed
+    // feed: what a simulator needs to say how far a program fell below its F.
+    double feed_time = 0, feed_length = 0, commanded_time = 0;
   };
   // Moves for up to dt seconds. Returns early when the queue runs dry, when a
   // hold comes to rest, or, with stop_after_block, when a block completes.

@@ -3,12 +3,14 @@
 // straight path segments (arcs chorded like the firmware), find the modal
 // state before any line (resume from line N), and estimate run time.
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "cncstream/gcode/interpreter.hpp"
 #include "cncstream/gcode/motion_planner.hpp"
+#include "cncstream/gcode/stream_link.hpp"
 
 namespace cncstream::gcode {
 
@@ -42,6 +44,9 @@ struct ProgramTrace {
   std::vector<LineError> errors;
   double dwell_seconds = 0;
   std::size_t lines = 0;
+  // Per line (0-based): the bytes a streamer sends for it (cleaned length +
+  // 1), 0 for a line that is not sent (empty after cleaning, '%').
+  std::vector<std::uint32_t> line_bytes;
   ParserState final_state;
 };
 
@@ -62,6 +67,12 @@ struct TimeEstimate {
   double total() const { return motion_seconds + dwell_seconds; }
 };
 TimeEstimate estimate_program_time(const ProgramTrace& trace, const MotionLimits& limits);
+// The same over a link: a line reaches the planner only once its bytes have
+// crossed the wire, which carries them only while the RX buffer has room
+// (character counting), and the planner holds link.planner_blocks. A program
+// whose moves are shorter than the wire delivers at their feed takes the
+// wire's time, not the motion's. An unbounded link gives the estimate above.
+TimeEstimate estimate_program_time(const ProgramTrace& trace, const MotionLimits& limits, const StreamLink& link);
 
 // When each line's motion is done, in seconds from the start, through the
 // same planner as estimate_motion_time: entry i is for 0-based line i (a line
@@ -69,6 +80,9 @@ TimeEstimate estimate_program_time(const ProgramTrace& trace, const MotionLimits
 // entries; the last one is the total motion time. Dwells are not included.
 std::vector<double> estimate_line_end_times(const ProgramTrace& trace, const MotionLimits& limits,
                                             std::size_t line_count);
+// The same over a link (see estimate_program_time).
+std::vector<double> estimate_line_end_times(const ProgramTrace& trace, const MotionLimits& limits,
+                                            std::size_t line_count, const StreamLink& link);
 
 // Splits text into lines at '\n' (a trailing '\r' is kept; cleaning drops it).
 std::vector<std::string_view> split_lines(std::string_view text);

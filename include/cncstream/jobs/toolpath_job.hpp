@@ -13,6 +13,7 @@
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/gcode/finishing_program.hpp"
 #include "cncstream/gcode/job_program.hpp"
+#include "cncstream/gcode/stream_link.hpp"
 #include "cncstream/geometry/mesh.hpp"
 #include "cncstream/jobs/height_preview.hpp"
 #include "cncstream/jobs/job_control.hpp"
@@ -55,6 +56,10 @@ struct ToolpathParams {
   // chords take.
   bool arcs = true;
   double controller_arc_tolerance = 0.002;  // mm
+  // The link the program will stream over: where a stretch of moves cannot
+  // arrive in time at its feed, F is lowered there (gcode/link_feed_limit.hpp).
+  // Unset or unbounded: the feeds stay as commanded.
+  std::optional<gcode::StreamLink> link;
   std::optional<XYBounds> bounds;         // of the tool tip, model coordinates; default: part box grown by the radius
   std::optional<double> floor;            // lowest tip height, model coordinates; default: the part's lowest z
   XYOrigin origin = XYOrigin::PartMin;
@@ -111,6 +116,12 @@ struct OperationSummary {
   double cut_length = 0;   // mm at feed
   double feed_time_s = 0;  // cut length / feed
   double max_depth = 0;    // the deepest any pass of it may cut, mm
+  // With a link (ToolpathParams::link): the feed its densest stretch streams
+  // at (mm/min; infinite: any) and the share of its feed-move length that
+  // now runs below the commanded feed.
+  bool link_checked = false;
+  double wire_feed = 0;
+  double share_below_feed = 0;
 };
 
 // The default maximum depth of cut of a cutter: half its diameter for a

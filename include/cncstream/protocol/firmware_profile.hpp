@@ -55,6 +55,11 @@ struct FirmwareProfile {
   int planner_blocks = 15;
   double status_poll_interval_s = 0.2;
   unsigned baud = 115200;
+  // The board's USB is the controller's own (grblHAL on a Teensy, STM32,
+  // RP2040): no UART between, the baud does not bound the bytes.
+  bool native_usb = false;
+  // Blocks a second the firmware can plan; 0: not modelled (link_model.hpp).
+  double blocks_per_second = 0;
   std::vector<std::string> banner_patterns;   // ECMAScript regexes on a banner line
   std::vector<std::string> version_patterns;  // regexes on $I / M115 answer lines
   std::string identify_query;                 // "$I" or "M115"

@@ -23,6 +23,7 @@ namespace cncstream::session {
 
 struct SimulatorOptions {
   std::string speed = "max";  // "max" or a time scale K (1 = real time)
+  double baud = 115200;       // the link's rate in virtual time (bytes/s = baud / 10); 0: unthrottled
   bool strict = true;         // an RX overflow stops the simulator (a streamer bug)
   std::string settings_file;  // persistent $$ / offsets; empty: defaults
   cncsim::Faults faults;

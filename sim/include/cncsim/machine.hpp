@@ -103,7 +103,40 @@ struct MachineOptions {
   // mounts a tool (request_mount). Otherwise the T word mounts the tool once
   // the motion before it has run (the old simulated operator).
   bool operator_mounts_tools = false;
+  // The serial link in virtual time: the host's bytes arrive one after
+  // another at this rate (8-N-1: baud / 10; 115,200 baud = 11,520 bytes/s),
+  // so the RX buffer and the planner fill only as fast as a real USB-serial
+  // board's would. 0: every byte arrives the moment it is sent.
+  double link_bytes_per_second = 0;
+  // GRBL 1.1 plans 15 blocks ahead. A deeper planner is no real GRBL's: it
+  // measures what a program loses to the look-ahead (tests).
+  std::size_t planner_blocks = kPlannerBlocks;
+  // The planner counts as starved below this many blocks (see LinkStats).
+  std::size_t starved_below_blocks = 8;
 };
+
+// Baud (8-N-1: a start bit, 8 data bits, a stop bit) to bytes per second.
+inline double link_bytes_per_second_for_baud(double baud) { return baud / 10.0; }
+
+// What the link and the planner did to the program's feed, in virtual time.
+struct LinkStats {
+  // The planner held fewer than starved_below_blocks blocks while the
+  // firmware waited for a line still on its way (bytes on the wire or a part
+  // of a line in the RX buffer): the host had lines left that had not arrived.
+  double starved_seconds = 0;
+  double dry_seconds = 0;  // of that, with the planner empty: the tool stopped mid-program
+  // Feed moves (not rapids): their length, the time they took (including the
+  // dry time after a feed move) and the time the same length takes at the
+  // programmed F. Achieved against commanded feed is what the link allowed.
+  double feed_mm = 0, feed_seconds = 0, commanded_seconds = 0;
+  double achieved_feed() const { return feed_seconds > 0 ? feed_mm / feed_seconds * 60.0 : 0.0; }    // mm/min
+  double commanded_feed() const { return commanded_seconds > 0 ? feed_mm / commanded_seconds * 60.0 : 0.0; }
+  std::size_t bytes_arrived = 0;
+};
+// One line for the exit summary: "link 115200 baud: starved 1.234 s (planner
+// below 8 blocks with a line on its way), dry 0.5 s; feed achieved 1270 of
+// 3000 mm/min commanded (42.3 %) over 123.4 mm of feed moves".
+std::string link_summary(const LinkStats& s, double baud, std::size_t starved_below);
 
 class RxOverflowError : public std::runtime_error {
  public:
@@ -125,7 +158,8 @@ class Machine {
   void receive(std::string_view bytes);
   // Firmware -> host: everything printed since the last call.
   std::string take_output();
-  // Runs the virtual clock forward.
+  // Runs the virtual clock forward (less when a --stall-at fault begins:
+  // its time is the wall clock's, see stalled()).
   void advance(double seconds);
   // Advances until no motion, wait or line is pending (or max_seconds pass).
   void run_until_idle(double max_seconds = 3600);
@@ -162,7 +196,12 @@ class Machine {
   // another thread serves the machine).
   Faults& faults() { return options_.faults; }
   bool vanished() const { return vanished_; }
-  bool busy() const;  // motion, a pending line or unread RX bytes
+  bool busy() const;  // motion, a pending line, unread RX bytes or bytes still on the wire
+  const LinkStats& link_stats() const { return link_stats_; }
+  // Changes the link's rate (bytes/s, 0: unthrottled) from now on; the bytes
+  // already on the wire arrive at the old rate's times.
+  void set_link_rate(double bytes_per_second) { options_.link_bytes_per_second = bytes_per_second; }
+  std::size_t bytes_on_wire() const { return wire_.size(); }
   bool stalled() const;  // inside a --stall-at fault (time must pass for real)
 
   void set_motion_observer(MotionObserver observer) { observer_ = std::move(observer); }
@@ -191,6 +230,10 @@ class Machine {
   void emit(std::string_view line);
   void answer(int status);
   void receive_byte(unsigned char c);
+  void arrive(unsigned char c);  // a byte off the wire: faults, then the RX buffer or a real-time command
+  void deliver_due();            // the wire's bytes whose arrival time has come
+  double next_wire_event() const;
+  bool waiting_for_bytes() const;
   void realtime(unsigned char c);
   void pump();
   bool run_front_step();
@@ -237,6 +280,10 @@ class Machine {
   cncstream::gcode::MotionQueue queue_;
   cncstream::gcode::LineAssembler assembler_;
   std::deque<char> rx_;
+  std::deque<unsigned char> wire_;  // sent by the host, not yet arrived (link_bytes_per_second > 0)
+  double wire_next_ = 0;            // when wire_.front() arrives
+  LinkStats link_stats_;
+  bool last_block_feed_ = false;    // the newest planned block is a feed move
   std::deque<Step> steps_;
   std::string out_;
   MotionObserver observer_;

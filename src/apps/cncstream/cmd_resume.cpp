@@ -101,7 +101,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     job.lines = std::move(plan.lines);
     job.source_lines = std::move(plan.source_lines);
     const auto limits = planning_limits(o->conn, o->sim);
-    EtaEstimator eta = estimate_job(job, limits);
+    EtaEstimator eta = estimate_job(job, limits, planning_link(o->conn, o->sim));
     const Vec3 p = at.work_position();
     std::cout << "resume job " << rec->id << " (" << rec->outcome.value_or("interrupted") << "): " << file.string()
               << "\n  continue after line " << n << " of " << whole.total_lines << " (last answered: "

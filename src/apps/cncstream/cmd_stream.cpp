@@ -73,6 +73,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
   add_progress_option(sub, o->progress);
   sub->get_option("--progress")->group("Tool path (STL input)");
   registry.add(sub, [o] {
+    o->conn.link_rate = o->tp.link_rate;  // --link-rate: the program's link is the ETA's too
     const auto& c = o->conn;
     // A running daemon owns the port: it runs the job, this command follows it.
     if (const auto daemon = daemon_owning_port(c.port)) {
@@ -119,7 +120,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       }
       const jobs::ToolpathProgram& r = *program;
       job = session::job_from_file(out);
-      EtaEstimator eta = estimate_job(job, limits);
+      EtaEstimator eta = estimate_job(job, limits, planning_link(c, o->sim));
       std::cout << "plan for " << o->file << ":\n";
       if (r.stock)
         std::cout << "  stock in work coordinates: " << bounds_text(*r.stock) << "\n";
@@ -138,7 +139,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       return run_session(c, o->sim, job, verify, std::move(eta));
     }
     job = session::job_from_file(o->file);
-    EtaEstimator eta = estimate_job(job, limits);
+    EtaEstimator eta = estimate_job(job, limits, planning_link(c, o->sim));
     std::cout << o->file << ": " << job.total_lines << " lines, estimated machining time "
               << format_duration(eta.total()) << " (" << limits_note << ")" << std::endl;
     return run_session(c, o->sim, job, std::nullopt, std::move(eta));

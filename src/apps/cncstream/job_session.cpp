@@ -18,6 +18,7 @@
 #include "cncstream/gcode/tool_change_line.hpp"
 #include "cncstream/geometry/stl.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/protocol/link_model.hpp"
 #include "cncstream/protocol/grbl_settings.hpp"
 #include "cncstream/transport/journal.hpp"
 #include "cncstream/transport/port_discovery.hpp"
@@ -150,6 +151,12 @@ void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
 void add_sim_machine_options(CLI::App* sub, SimCliOptions& o) {
   const char* g = "Simulator (PORT=sim)";
   sub->add_option("--sim-speed", o.speed, "Simulator time scale: 'max' or K (1 = real time)")->group(g)->capture_default_str();
+  sub->add_option("--sim-baud", o.baud,
+                  "Simulated serial link: bytes reach the simulator at baud/10 per virtual second, as on a USB-serial "
+                  "GRBL board (0: unthrottled)")
+      ->check(CLI::NonNegativeNumber)
+      ->group(g)
+      ->capture_default_str();
   sub->add_flag("--sim-lenient", o.lenient, "Drop overflowing RX bytes like the firmware instead of failing")->group(g);
   sub->add_option("--sim-settings", o.settings, "Simulator settings file ($$, offsets) kept across runs")->group(g);
   sub->add_option("--sim-drop-every", o.drop_every, "Fault: drop every Nth byte received")->group(g);
@@ -186,6 +193,7 @@ void add_sim_options(CLI::App* sub, SimCliOptions& o) {
 session::SimulatorOptions simulator_options(const SimCliOptions& s) {
   session::SimulatorOptions so;
   so.speed = s.speed;
+  so.baud = s.baud;
   so.strict = !s.lenient;
   so.settings_file = s.settings;
   so.faults.drop_every = s.drop_every;
@@ -221,11 +229,27 @@ gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOpti
   return protocol::grbl_default_motion_limits();  // refined from the controller's own $$ once connected
 }
 
-EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits) {
+gcode::StreamLink planning_link(const ConnectionOptions& c, const SimCliOptions& s) {
+  std::optional<double> rate;
+  if (!c.link_rate.empty()) rate = protocol::parse_link_rate(c.link_rate);
+  gcode::StreamLink link = protocol::grbl_default_link();
+  if (c.port == "sim") {
+    link.bytes_per_second = gcode::bytes_per_second_for_baud(s.baud);
+  } else if (!c.profile.empty()) {
+    link = protocol::link_model(protocol::load_firmware_profile(protocol::default_profiles_dir() / (c.profile + ".toml")));
+  } else {
+    link.bytes_per_second = gcode::bytes_per_second_for_baud(transport::parse_serial_settings(c.serial).baud);
+  }
+  if (rate) link.bytes_per_second = *rate;
+  return link;
+}
+
+EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits,
+                          const gcode::StreamLink& link) {
   std::string text;
   for (const auto& l : job.lines) text.append(l).push_back('\n');
   const auto trace = gcode::trace_program(text);
-  const auto ends = gcode::estimate_line_end_times(trace, limits, job.lines.size());
+  const auto ends = gcode::estimate_line_end_times(trace, limits, job.lines.size(), link);
   std::vector<double> by_line(static_cast<std::size_t>(std::max<std::int64_t>(job.total_lines, 0)) + 1, 0.0);
   for (std::size_t i = 0; i < ends.size(); ++i) {
     const long src = job.source_lines.empty() ? long(i) + 1 : job.source_lines[i];
@@ -301,7 +325,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
   const bool tty = ::isatty(STDERR_FILENO);
   LivePanel panel(stderr, tty, c.progress_interval_s);
   const gcode::MotionLimits default_limits = planning_limits(c, s);
-  EtaEstimator eta = precomputed ? std::move(*precomputed) : estimate_job(job, default_limits);
+  EtaEstimator eta = precomputed ? std::move(*precomputed) : estimate_job(job, default_limits, planning_link(c, s));
   std::unique_ptr<KeyboardControl> keys;
 
   ro.on_log = [&panel](const std::string& m) { panel.message(m); };
@@ -313,7 +337,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     }
     if (limits->max_rate != default_limits.max_rate || limits->acceleration != default_limits.acceleration ||
         limits->junction_deviation != default_limits.junction_deviation)
-      eta = estimate_job(job, *limits);
+      eta = estimate_job(job, *limits, planning_link(c, s));
     panel.message("controller settings: " + limits_text(*limits) + "; estimated machining time " +
                   format_duration(eta.total()));
   };

@@ -13,6 +13,7 @@
 
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/gcode/motion_planner.hpp"
+#include "cncstream/gcode/stream_link.hpp"
 #include "cncstream/geometry/mesh.hpp"
 #include "cncstream/session/simulator_port.hpp"
 #include "cncstream/session/stream_runner.hpp"
@@ -24,6 +25,7 @@ struct ConnectionOptions {
   std::string port = "auto";
   std::string serial = "115200";
   std::string profile, journal;
+  std::string link_rate;  // --link-rate: bytes/s, NNNbaud or usb (empty: the profile's)
   bool no_journal = false, check = false, check_only = false, verbose = false, yes = false;
   bool view = false;  // the 3-D viewer beside the job (live_view.hpp)
   double progress_interval_s = 5;  // plain progress lines without a TTY
@@ -41,6 +43,7 @@ struct ConnectionOptions {
 
 struct SimCliOptions {
   std::string speed = "max";
+  double baud = 115200;  // the simulated link (0: unthrottled)
   bool lenient = false;  // strict RX buffer is the default
   std::string settings;
   bool no_verify = false;
@@ -86,9 +89,14 @@ struct VerifyTarget {
 // for `sim`, GRBL 1.1's shipped defaults (protocol, not the simulator) otherwise (the controller's own `$$` replaces
 // them once connected).
 gcode::MotionLimits planning_limits(const ConnectionOptions& c, const SimCliOptions& s);
+// The link the ETA streams over: the simulator's --sim-baud, else the forced
+// profile's (--profile), else GRBL 1.1's at the --serial baud; --link-rate
+// replaces the bytes per second.
+gcode::StreamLink planning_link(const ConnectionOptions& c, const SimCliOptions& s);
 
 // When each file line's motion ends, for the lines the job sends.
-EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits);
+EtaEstimator estimate_job(const session::JobInput& job, const gcode::MotionLimits& limits,
+                          const gcode::StreamLink& link);
 
 // Asks "question [y/N]" on the terminal unless `yes`. Without a TTY and
 // without --yes, refuses (returns false) with a message saying so.

@@ -2,10 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <algorithm>
 #include <sstream>
 
 #include "cncstream/gcode/gcode_writer.hpp"
+#include "cncstream/protocol/link_model.hpp"
 #include "job_display.hpp"
 
 namespace cncstream::app {
@@ -73,6 +75,10 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
       ->check(CLI::NonNegativeNumber)->group(group);
   sub->add_option("--rough-feed", o.rough_feed, "Roughing feed, mm/min (default: --feed)")
       ->check(CLI::PositiveNumber)->group(group);
+  sub->add_option("--link-rate", o.link_rate,
+                  "The link the program streams over: bytes/s (11520), a baud rate (115200baud) or 'usb'; where a "
+                  "stretch of moves cannot arrive in time at its feed, F is lowered there, and the plan says so")
+      ->group(group);
   sub->add_option("--tool-change", o.tool_change,
                   "How the program pauses for a tool change: m0 (GRBL: a pause and a comment) or m6")
       ->check(CLI::IsMember({"m0", "m6"}))->capture_default_str()->group(group);
@@ -112,6 +118,11 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   p.rough_stepover = o.rough_stepover;
   p.rough_feed = o.rough_feed;
   p.tool_change = o.tool_change == "m6" ? ToolChangeCode::M6 : ToolChangeCode::PauseM0;
+  if (!o.link_rate.empty()) {
+    gcode::StreamLink link = protocol::grbl_default_link();
+    link.bytes_per_second = protocol::parse_link_rate(o.link_rate);
+    p.link = link;
+  }
   if (!p.stock && (p.rough || p.max_depth || p.step_down))
     throw std::invalid_argument("--stock none finishes from the part's top without a depth check: --rough, "
                                 "--max-depth and --step-down need a stock");
@@ -129,6 +140,10 @@ std::string operations_text(const jobs::ToolpathProgram& r, const EtaEstimator* 
     const double seconds = eta ? eta->at_line(last) - eta->at_line(first - 1) : op.feed_time_s;
     o << fmt::format("  {}. {:<10} T{} {:<14} {:>9} lines  {:>9}{}  {}\n", k + 1, op.name, op.tool, op.cutter.spec(),
                      last - first + 1, format_duration(seconds), eta ? "" : " at feed", op.detail);
+    if (op.link_checked)
+      o << (std::isinf(op.wire_feed) ? std::string("     the wire allows any feed here")
+                                     : fmt::format("     the wire allows {:.0f} mm/min here", op.wire_feed))
+        << fmt::format("; {:.1f} % of its path runs below the commanded feed\n", 100.0 * op.share_below_feed);
   }
   for (const auto& n : r.notes) o << "  " << n << "\n";
   return o.str();

@@ -46,6 +46,10 @@ struct ToolpathOptions {
   double rough_stepover = 0;
   std::optional<double> rough_feed;
   std::string tool_change = "m0";
+  // The link the program streams over (--link-rate): bytes/s, NNNbaud or usb.
+  // Set: F is lowered where the link cannot deliver a stretch in time, and
+  // the ETA uses it. Empty: the feeds as commanded; the ETA uses the profile's.
+  std::string link_rate;
 };
 
 
