@@ -18,6 +18,19 @@ double chord_at(const std::vector<double>& s, const std::vector<double>& z, cons
   ADD_FAILURE() << "sample " << k << " not covered";
   return NAN;
 }
+// 401 samples at random spacing: slopes that change every 37 samples and
+// steps every fifth.
+void random_profile(std::mt19937& rng, std::vector<double>& s, std::vector<double>& z) {
+  std::uniform_real_distribution<double> step(0.01, 0.2), dz(-0.05, 0.05);
+  s = {0};
+  z = {0};
+  double slope = 0;
+  for (int i = 0; i < 400; ++i) {
+    s.push_back(s.back() + step(rng));
+    if (i % 37 == 0) slope = dz(rng) * 10;
+    z.push_back(z.back() + slope * (s.back() - s[s.size() - 2]) + (i % 5 == 0 ? dz(rng) : 0.0));
+  }
+}
 }  // namespace
 
 TEST(SimplifyProfile, CollinearCollapsesToEnds) {
@@ -44,15 +57,9 @@ TEST(SimplifyProfile, KeepsCornersAndNarrowPeaks) {
 
 TEST(SimplifyProfile, NeverBelowAndWithinToleranceOnRandomProfiles) {
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> step(0.01, 0.2), dz(-0.05, 0.05);
   for (int trial = 0; trial < 200; ++trial) {
-    std::vector<double> s{0}, z{0};
-    double slope = 0;
-    for (int i = 0; i < 400; ++i) {
-      s.push_back(s.back() + step(rng));
-      if (i % 37 == 0) slope = dz(rng) * 10;
-      z.push_back(z.back() + slope * (s.back() - s[s.size() - 2]) + (i % 5 == 0 ? dz(rng) : 0.0));
-    }
+    std::vector<double> s, z;
+    random_profile(rng, s, z);
     const double tol = trial % 2 ? 0.002 : 0.05;
     const auto kept = simplify_profile_above(s, z, tol);
     ASSERT_EQ(kept.front(), 0u);
@@ -159,16 +166,10 @@ TEST(FitProfileInBand, RidgeIsPassedAboveWithinTheBand) {
 
 TEST(FitProfileInBand, InBandAndNoMoreVerticesThanSimplifyOnRandomProfiles) {
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> step(0.01, 0.2), dz(-0.05, 0.05);
   std::size_t fitted = 0, kept = 0;
   for (int trial = 0; trial < 200; ++trial) {
-    std::vector<double> s{0}, z{0};
-    double slope = 0;
-    for (int i = 0; i < 400; ++i) {
-      s.push_back(s.back() + step(rng));
-      if (i % 37 == 0) slope = dz(rng) * 10;
-      z.push_back(z.back() + slope * (s.back() - s[s.size() - 2]) + (i % 5 == 0 ? dz(rng) : 0.0));
-    }
+    std::vector<double> s, z;
+    random_profile(rng, s, z);
     const double tol = trial % 2 ? 0.002 : 0.05;
     const auto v = fit_profile_in_band(s, z, tol);
     expect_in_band(s, z, v, tol);
