@@ -105,7 +105,9 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
         std::string not_written = "no program written, nothing streamed";
         if (!o->output.empty()) not_written = o->output + " not written, nothing streamed";
         try {
-          program = jobs::generate_toolpath(toolpath_params(o->tp), generation.control());
+          jobs::ToolpathParams params = toolpath_params(o->tp);
+          params.link = planning_link(c, o->sim);  // the machine's own link (the simulator's, a profile's, --serial)
+          program = jobs::generate_toolpath(params, generation.control());
         } catch (const jobs::Cancelled&) {
           return generation.interrupted_exit(not_written);
         }
