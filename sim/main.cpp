@@ -202,7 +202,13 @@ int run(int argc, char** argv) {
     if (!stock_from.empty()) {
       // A saved state: the surface an earlier run left is the stock.
       if (!stock_text.empty()) throw std::invalid_argument("--stock-from and --stock: give one");
-      const auto field = cncstream::read_height_field(stock_from);
+      auto field = cncstream::read_height_field(stock_from);
+      if (field.work_origin) {
+        // Saved in work coordinates with its work zero's machine position: back to machine coordinates.
+        field.grid.x0 += field.work_origin->x;
+        field.grid.y0 += field.work_origin->y;
+        for (float& z : field.z) z = static_cast<float>(static_cast<double>(z) + field.work_origin->z);
+      }
       removal = std::make_unique<cncsim::MaterialRemoval>(cncsim::stock_from_heights(field.grid, field.z),
                                                           cncstream::parse_cutter_spec(tool_spec));
       if (!tool_table_text.empty()) removal->set_tool_table(cncsim::parse_tool_table(tool_table_text));
@@ -282,7 +288,8 @@ int run(int argc, char** argv) {
       for (int t : removal->unknown_tools())
         std::cerr << "cncsim: warning: T" << t << " is not in the tool table; the cutter was kept\n";
       if (!result_path.empty()) {
-        const auto stl = removal->write_result(result_path);
+        const auto& parser = machine.parser();
+        const auto stl = removal->write_result(result_path, std::nullopt, parser.coord_system + parser.g92);
         std::cerr << "cncsim: machined surface written to " << result_path << " and " << stl.string() << "\n";
       }
     }

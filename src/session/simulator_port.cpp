@@ -138,7 +138,10 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
     for (int t : removal_->unknown_tools())
       o << "sim: warning: the program selected T" << t << ", which the tool table does not hold; the cutter was kept\n";
     if (!opt_.result.empty()) {
-      const auto stl = removal_->write_result(opt_.result, opt_.work_offset);
+      // In the job's work coordinates, with where its work zero sat on the
+      // machine, so a later setup (its zero elsewhere) places it.
+      const auto& parser = machine_->parser();
+      const auto stl = removal_->write_result(opt_.result, opt_.work_offset, parser.coord_system + parser.g92);
       o << "sim: machined surface written to " << opt_.result << " (+ .txt) and " << stl.string() << "\n";
     }
     const auto heights = design_heights(*opt_.design, removal_->stock().grid());
