@@ -60,6 +60,12 @@ double Machine::tip_drop() const {
   return mounted->second - start->second;
 }
 
+ProbeTool Machine::probe_tool() const {
+  const auto it = options_.tool_shapes.find(mounted_tool_);
+  if (it == options_.tool_shapes.end()) return std::nullopt;
+  return it->second;
+}
+
 void Machine::apply_mount_request() {
   const int tool = mount_request_.tool.exchange(-1);
   if (tool >= 0) mount(tool);
@@ -650,14 +656,15 @@ void Machine::queue_actions(const gc::BlockResult& r) {
       // machine decelerates past it at the probe's feed (so the position
       // after a probe is never the trigger).
       const Vec3 drop{0, 0, tip_drop()};
-      const bool active_at_start = probes_.triggered(pr->from - drop);
+      const ProbeTool tool = probe_tool();
+      const bool active_at_start = probes_.triggered(pr->from - drop, tool);
       if (active_at_start == pr->toward) {
         steps_.push_back({Step::Apply, {}, 0, {}, [this] { raise_alarm(grbl::kAlarmProbeFailInitial); }, false, 0});
         return;
       }
       Vec3 stop = pr->to, trigger = pr->to;
       bool contact = false;
-      if (const auto t = probes_.first_change(pr->from - drop, pr->to - drop, pr->toward)) {
+      if (const auto t = probes_.first_change(pr->from - drop, pr->to - drop, pr->toward, tool)) {
         const Vec3 d = pr->to - pr->from;
         trigger = pr->from + d * *t;
         const double length = norm(d);

@@ -149,6 +149,10 @@ int run(int argc, char** argv) {
   app.add_option("--touch-plate", touch_plate_text,
                  "X,Y,THICKNESS: a 40 mm touch plate centred on X,Y (machine mm) lying on the stock's top");
   app.add_option("--tool-sensor", tool_sensor_text, "X,Y,Z: a fixed tool-length sensor, its top at Z (machine mm)");
+  std::string corner_plate_text;
+  app.add_option("--corner-plate", corner_plate_text,
+                 "THICKNESS,LIP[,SIZE]: a corner touch plate on the stock's X-min/Y-min corner, its outer walls LIP "
+                 "outside the stock's edges (SIZE 50 mm); the tool's cutter touches it with its flank");
   app.add_option("--png", png_path, "with --design: write the deviation map of the verify at exit");
   app.add_option("--tolerance", tolerance, "with --design: verify tolerance, mm")->check(CLI::PositiveNumber);
 
@@ -198,7 +202,13 @@ int run(int argc, char** argv) {
     if (!stock_from.empty()) {
       // A saved state: the surface an earlier run left is the stock.
       if (!stock_text.empty()) throw std::invalid_argument("--stock-from and --stock: give one");
-      const auto field = cncstream::read_height_field(stock_from);
+      auto field = cncstream::read_height_field(stock_from);
+      if (field.work_origin) {
+        // Saved in work coordinates with its work zero's machine position: back to machine coordinates.
+        field.grid.x0 += field.work_origin->x;
+        field.grid.y0 += field.work_origin->y;
+        for (float& z : field.z) z = static_cast<float>(static_cast<double>(z) + field.work_origin->z);
+      }
       removal = std::make_unique<cncsim::MaterialRemoval>(cncsim::stock_from_heights(field.grid, field.z),
                                                           cncstream::parse_cutter_spec(tool_spec));
       if (!tool_table_text.empty()) removal->set_tool_table(cncsim::parse_tool_table(tool_table_text));
@@ -223,6 +233,17 @@ int run(int argc, char** argv) {
       options.probe_faces.push_back(cncsim::parse_touch_plate(touch_plate_text, removal->stock().top()));
     }
     if (!tool_sensor_text.empty()) options.probe_faces.push_back(cncsim::parse_tool_sensor(tool_sensor_text));
+    if (removal) {
+      // The probe input sees the mounted tool's cutter (a side probe meets its flank).
+      if (!tool_table_text.empty()) options.tool_shapes = cncsim::parse_tool_table(tool_table_text);
+      else options.tool_shapes[options.start_tool] = removal->cutter();
+    }
+    if (!corner_plate_text.empty()) {
+      if (!removal) throw std::invalid_argument("--corner-plate sits on the stock's corner: give --stock or --design");
+      const auto& grid = removal->stock().grid();
+      options.probe_faces.push_back(
+          cncsim::parse_corner_plate(corner_plate_text, grid.x0, grid.y0, removal->stock().top()));
+    }
     // With a plate or a sensor the probe touches those, not the stock's top everywhere.
     if (!options.probe_faces.empty() && !probe_z) options.probe_surface_z.reset();
     cncsim::Machine machine(options);
@@ -267,7 +288,8 @@ int run(int argc, char** argv) {
       for (int t : removal->unknown_tools())
         std::cerr << "cncsim: warning: T" << t << " is not in the tool table; the cutter was kept\n";
       if (!result_path.empty()) {
-        const auto stl = removal->write_result(result_path);
+        const auto& parser = machine.parser();
+        const auto stl = removal->write_result(result_path, std::nullopt, parser.coord_system + parser.g92);
         std::cerr << "cncsim: machined surface written to " << result_path << " and " << stl.string() << "\n";
       }
     }

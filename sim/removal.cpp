@@ -132,10 +132,19 @@ void MaterialRemoval::cut(const Vec3& from, const Vec3& to) {
 }
 
 std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path& path,
-                                                   std::optional<cncstream::Vec3> work_offset) const {
+                                                   std::optional<cncstream::Vec3> work_offset,
+                                                   std::optional<cncstream::Vec3> work_origin) const {
+  // In work coordinates when the work zero is known: machine − origin.
+  cncstream::GridSpec grid = stock_.grid();
+  std::vector<double> heights = stock_.heights();
+  if (work_origin) {
+    grid.x0 -= work_origin->x;
+    grid.y0 -= work_origin->y;
+    for (double& z : heights) z -= work_origin->z;
+  }
   // Each file whole or not at all; the sidecar is in place before its data file.
   write_whole(path, [&](const std::filesystem::path& file) {
-    cncstream::write_height_field(file, stock_.grid(), stock_.heights(), work_offset);
+    cncstream::write_height_field(file, grid, heights, work_offset, work_origin);
     std::filesystem::rename(cncstream::height_field_sidecar(file), cncstream::height_field_sidecar(path));
   });
   auto stl = path;
@@ -144,7 +153,7 @@ std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path&
   double bottom = bottom_;
   for (double z : stock_.heights()) bottom = std::min(bottom, z - 1.0);
   write_whole(stl, [&](const std::filesystem::path& file) {
-    cncstream::write_height_field_stl(file, stock_.grid(), stock_.heights(), bottom);
+    cncstream::write_height_field_stl(file, grid, heights, bottom - (work_origin ? work_origin->z : 0.0));
   });
   return stl;
 }

@@ -40,8 +40,12 @@ std::filesystem::path height_field_sidecar(const std::filesystem::path& data_pat
 }
 
 HeightFieldWriter::HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid,
-                                     std::optional<Vec3> work_offset)
-    : path_(data_path), grid_(grid), work_offset_(work_offset), out_(data_path, std::ios::binary) {
+                                     std::optional<Vec3> work_offset, std::optional<Vec3> work_origin)
+    : path_(data_path),
+      grid_(grid),
+      work_offset_(work_offset),
+      work_origin_(work_origin),
+      out_(data_path, std::ios::binary) {
   if (!out_) throw HeightFieldError(data_path.string() + ": cannot open for writing (" + std::generic_category().message(errno) + ")");
 }
 
@@ -71,15 +75,18 @@ void HeightFieldWriter::finish() {
   if (work_offset_)  // + 0.0: no "-0"
     t << "work_offset_x " << num(work_offset_->x + 0.0) << "\nwork_offset_y " << num(work_offset_->y + 0.0) << "\nwork_offset_z "
       << num(work_offset_->z + 0.0) << "\n";
+  if (work_origin_)
+    t << "work_origin_x " << num(work_origin_->x + 0.0) << "\nwork_origin_y " << num(work_origin_->y + 0.0)
+      << "\nwork_origin_z " << num(work_origin_->z + 0.0) << "\n";
   if (!t) throw HeightFieldError(side.string() + ": write error");
 }
 
 void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z,
-                        std::optional<Vec3> work_offset) {
+                        std::optional<Vec3> work_offset, std::optional<Vec3> work_origin) {
   if (z.size() != grid.size())
     throw std::invalid_argument("height field: " + std::to_string(z.size()) + " values for a grid of " +
                                 std::to_string(grid.size()) + " nodes");
-  HeightFieldWriter w(data_path, grid, work_offset);
+  HeightFieldWriter w(data_path, grid, work_offset, work_origin);
   w.append(z);
   w.finish();
 }
@@ -105,7 +112,8 @@ HeightFieldData read_height_field(const std::filesystem::path& data_path) {
       continue;
     }
     if (key != "nx" && key != "ny" && key != "x0" && key != "y0" && key != "dx" && key != "dy" &&
-        key != "work_offset_x" && key != "work_offset_y" && key != "work_offset_z")
+        key != "work_offset_x" && key != "work_offset_y" && key != "work_offset_z" && key != "work_origin_x" &&
+        key != "work_origin_y" && key != "work_origin_z")
       throw err("unknown key '" + key + "'");
     double d = 0;
     const auto [p, ec] = std::from_chars(val.data(), val.data() + val.size(), d);
@@ -135,6 +143,9 @@ HeightFieldData read_height_field(const std::filesystem::path& data_path) {
   } else if (offsets != 0) {
     throw err("work_offset_x, work_offset_y and work_offset_z go together");
   }
+  const int origins = static_cast<int>(v.count("work_origin_x") + v.count("work_origin_y") + v.count("work_origin_z"));
+  if (origins == 3) out.work_origin = Vec3{v["work_origin_x"], v["work_origin_y"], v["work_origin_z"]};
+  else if (origins != 0) throw err("work_origin_x, work_origin_y and work_origin_z go together");
   if (!(out.grid.dx > 0) || !(out.grid.dy > 0)) throw err("dx and dy must be positive");
   if (out.grid.size() > (std::size_t{1} << 32)) throw err("grid is too large");
 

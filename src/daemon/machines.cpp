@@ -298,6 +298,10 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
       spdlog::info("machine {}: tool change: {}", name, e.text);
       publish(m, {{"type", "event"}, {"kind", "tool-change"}, {"code", 0}, {"line", 0}, {"text", e.text}, {"info", nullptr}});
       return;
+    case SessionEventKind::Routine:  // corner probing, the outline (machine_session.hpp)
+      spdlog::info("machine {}: {}", name, e.text);
+      publish(m, {{"type", "event"}, {"kind", "routine"}, {"code", 0}, {"line", 0}, {"text", e.text}, {"info", nullptr}});
+      return;
     case SessionEventKind::Controller: break;
   }
   const auto& ev = e.controller;

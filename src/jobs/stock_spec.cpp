@@ -90,6 +90,22 @@ WorkStock resolve_stock(const StockSpec& spec, const Box3& part) {
     case StockSpec::Kind::Box: w.box = spec.box; break;
     case StockSpec::Kind::HeightMap: {
       HeightFieldData d = read_height_field(spec.height_map);
+      if (d.work_origin) {
+        const Vec3 o = *d.work_origin;
+        if (!spec.work_origin)
+          throw std::invalid_argument(fmt::format(
+              "stock height map {} was saved with its work zero at machine X{:.3f} Y{:.3f} Z{:.3f}; this job's work "
+              "zero is not known here, so the surface cannot be placed: give this job's work origin (--work-origin "
+              "X,Y,Z, machine coordinates of its work zero: G54 + G92 from $#)",
+              spec.height_map.string(), o.x, o.y, o.z));
+        // Machine = saved work + its origin = this job's work + this origin.
+        const Vec3 shift = o - *spec.work_origin;
+        d.grid.x0 += shift.x;
+        d.grid.y0 += shift.y;
+        for (float& z : d.z)
+          if (std::isfinite(z)) z = static_cast<float>(static_cast<double>(z) + shift.z);
+        d.work_origin = spec.work_origin;
+      }
       double top = -HUGE_VAL;
       for (const float z : d.z)
         if (std::isfinite(z)) top = std::max(top, static_cast<double>(z));

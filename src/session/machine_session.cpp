@@ -201,6 +201,7 @@ CommandResult MachineSession::close() {
 
 void MachineSession::on_port_closed(const std::string& reason) {
   log("port closed: " + reason);
+  end_machine_routine("the controller disconnected (" + reason + ")");
   if (engine_) {
     engine_->disconnected();  // a running job ends as Disconnected; a jog is forgotten
     drain();
@@ -330,6 +331,7 @@ void MachineSession::drain() {
       in_mm(*ev.status);
     }
     if (routine_) tool_change_event(ev);
+    if (machine_routine_) machine_routine_event(ev);
     SessionEvent e;
     e.kind = SessionEventKind::Controller;
     e.text = ev.text;
@@ -351,6 +353,7 @@ void MachineSession::drain() {
   }
   if (!routine_ && job_ && engine_->tool_change_stop()) start_tool_change();
   if (routine_) pump_tool_change();
+  if (machine_routine_) pump_machine_routine();
   if (transport_ && engine_) transport_->write(engine_->take_output());
 }
 
@@ -530,6 +533,7 @@ CommandResult MachineSession::refuse_in_alarm(const char* what) const {
 CommandResult MachineSession::start_job(JobInput job, JobMode mode) {
   if (auto r = needs_engine("start a job"); !r) return r;
   if (job_active()) return CommandResult::refused("start a job: a job is already running");
+  if (auto r = refuse_during_routine("start a job"); !r) return r;
   if (engine_->jogging()) return CommandResult::refused("start a job: a jog is running; release it first");
   if (auto r = refuse_in_alarm("start a job"); !r) return r;
   if (mode != JobMode::Run && marlin_family(profile_))
@@ -611,6 +615,11 @@ CommandResult MachineSession::toggle_hold() {
 CommandResult MachineSession::stop() {
   if (auto r = needs_engine("stop"); !r) return r;
   if (engine_->jogging()) engine_->jog_cancel();
+  if (machine_routine_) {
+    // Nothing more of it is sent; the hold stops the move in flight.
+    end_machine_routine("stopped by the operator");
+    engine_->realtime(Realtime::FeedHold);
+  }
   if (job_active()) engine_->stop();
   drain();
   arm_timer();
@@ -632,6 +641,7 @@ CommandResult MachineSession::refuse_jog() const {
   if (auto r = needs_engine("jog"); !r) return r;
   // At a tool change's prompt the machine is idle and the operator's.
   if (job_active() && !operator_turn()) return CommandResult::refused("jog: a job is running");
+  if (auto r = refuse_during_routine("jog"); !r) return r;
   if (auto r = refuse_in_alarm("jog"); !r) return r;
   if (probe_pending_) return CommandResult::refused("jog: probing Z; wait for it to finish");
   return CommandResult::ok();
@@ -678,6 +688,7 @@ double MachineSession::max_jog_feed() const {
 CommandResult MachineSession::action(const char* what, const std::function<std::vector<std::string>()>& lines) {
   if (auto r = needs_engine(what); !r) return r;
   if (job_active() && !operator_turn()) return CommandResult::refused(std::string(what) + ": a job is running");
+  if (auto r = refuse_during_routine(what); !r) return r;
   if (engine_->jogging()) return CommandResult::refused(std::string(what) + ": a jog is running");
   if (auto r = refuse_in_alarm(what); !r) return r;
   if (probe_pending_) return CommandResult::refused(std::string(what) + ": probing Z; wait for it to finish");
@@ -749,6 +760,7 @@ CommandResult MachineSession::console(const std::string& line) {
   if (auto r = needs_engine("console"); !r) return r;
   if (job_active() && !operator_turn())
     return CommandResult::refused("console: a job is running; lines are refused until it ends");
+  if (auto r = refuse_during_routine("console"); !r) return r;
   if (engine_->jogging()) return CommandResult::refused("console: a jog is running");
   if (alarm_ && line != "$X" && line != "$H")
     return refuse_in_alarm("console");
@@ -782,6 +794,7 @@ CommandResult MachineSession::unlock() {
 CommandResult MachineSession::home() {
   if (auto r = needs_engine("home"); !r) return r;
   if (job_active()) return CommandResult::refused("home: a job is running");
+  if (auto r = refuse_during_routine("home"); !r) return r;
   if (engine_->jogging()) return CommandResult::refused("home: a jog is running");
   engine_->send_command(marlin_family(profile_) ? "G28" : "$H");
   forget_tool_reference("a homing");

@@ -31,6 +31,7 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
   mo.strict = opt_.strict;
   mo.faults = opt_.faults;
   mo.probe_surface_z = opt_.probe_surface_z;
+  mo.start_position = opt_.start_position;
   mo.stick_outs = opt_.stick_outs;
   if (!mo.stick_outs.empty()) {
     mo.start_tool = mo.stick_outs.begin()->first;
@@ -49,6 +50,16 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
       stock_box->lo = opt_.stock->lo;
       stock_box->hi = opt_.stock->hi;
     }
+  } else if (opt_.stock) {
+    stock_box = cncsim::StockBox{opt_.stock->lo, opt_.stock->hi, opt_.resolution};
+  }
+  // What touches the plate, the sensor or a corner plate's wall is the mounted tool's cutter.
+  if (opt_.tools) mo.tool_shapes = *opt_.tools;
+  else if (opt_.cutter) mo.tool_shapes[mo.start_tool] = *opt_.cutter;
+  if (!opt_.corner_plate.empty()) {
+    if (!stock_box) throw std::invalid_argument("the simulator's corner plate sits on the stock's corner: give a stock");
+    mo.probe_faces.push_back(
+        cncsim::parse_corner_plate(opt_.corner_plate, stock_box->lo.x, stock_box->lo.y, stock_box->hi.z));
   }
   if (!opt_.touch_plate.empty()) {
     if (!stock_box) throw std::invalid_argument("the simulator's touch plate lies on the stock: an STL job or --sim-design");
@@ -127,7 +138,10 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
     for (int t : removal_->unknown_tools())
       o << "sim: warning: the program selected T" << t << ", which the tool table does not hold; the cutter was kept\n";
     if (!opt_.result.empty()) {
-      const auto stl = removal_->write_result(opt_.result, opt_.work_offset);
+      // In the job's work coordinates, with where its work zero sat on the
+      // machine, so a later setup (its zero elsewhere) places it.
+      const auto& parser = machine_->parser();
+      const auto stl = removal_->write_result(opt_.result, opt_.work_offset, parser.coord_system + parser.g92);
       o << "sim: machined surface written to " << opt_.result << " (+ .txt) and " << stl.string() << "\n";
     }
     const auto heights = design_heights(*opt_.design, removal_->stock().grid());

@@ -17,6 +17,12 @@
 //     work_offset_x 0
 //     work_offset_y 0
 //     work_offset_z -10.5
+// and where that work zero sat on the machine (machine coordinates of work
+// zero, G5x + G92, when the surface was saved), so a later setup with its own
+// work zero elsewhere places the surface where it physically is:
+//     work_origin_x 120
+//     work_origin_y 80
+//     work_origin_z -42
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -33,6 +39,7 @@ struct HeightFieldData {
   GridSpec grid;
   std::vector<float> z;  // grid.size() values, NaN = no value
   std::optional<Vec3> work_offset;  // work = model + offset, where the file says
+  std::optional<Vec3> work_origin;  // machine coordinates of the work zero the surface is relative to
 };
 
 class HeightFieldError : public std::runtime_error {
@@ -49,14 +56,14 @@ std::filesystem::path height_field_sidecar(const std::filesystem::path& data_pat
 class HeightFieldWriter {
  public:
   HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid,
-                    std::optional<Vec3> work_offset = std::nullopt);
+                    std::optional<Vec3> work_offset = std::nullopt, std::optional<Vec3> work_origin = std::nullopt);
   void append(std::span<const double> z);
   void finish();
 
  private:
   std::filesystem::path path_;
   GridSpec grid_;
-  std::optional<Vec3> work_offset_;
+  std::optional<Vec3> work_offset_, work_origin_;
   std::ofstream out_;
   std::size_t written_ = 0;
 };
@@ -64,7 +71,7 @@ class HeightFieldWriter {
 // Writes both files. Throws HeightFieldError naming the path on failure and
 // std::invalid_argument if z.size() != grid.size().
 void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z,
-                        std::optional<Vec3> work_offset = std::nullopt);
+                        std::optional<Vec3> work_offset = std::nullopt, std::optional<Vec3> work_origin = std::nullopt);
 
 // Reads both files; errors name the file and the sidecar line, or the data
 // file's expected and actual size.

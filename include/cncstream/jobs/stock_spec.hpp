@@ -20,6 +20,12 @@ struct StockSpec {
   double margin = 1.0;  // Auto
   Box3 box;             // Box: work coordinates
   std::filesystem::path height_map;
+  // This job's work zero in machine coordinates (G5x + G92, as $# reports
+  // them; `--work-origin`), to place a height map that records the work zero
+  // it was saved with: the surface moves by (its origin − this one), so a
+  // second setup with its zero elsewhere sees the stock where it physically
+  // is. Unknown with a map that records one: refused.
+  std::optional<Vec3> work_origin;
 };
 
 // Throws std::invalid_argument naming the text and what is wrong with it.
@@ -37,8 +43,11 @@ struct WorkStock {
   double top_at(double x, double y) const;
 };
 
-// Reads the height map where there is one. Throws std::invalid_argument when
-// the stock does not contain the part's footprint or is below its top.
+// Reads the height map where there is one, placed by the recorded work
+// origins (a map without one is read in this job's work coordinates, as
+// before origins were recorded). Throws std::invalid_argument when the stock
+// does not contain the part's footprint or is below its top, or when the map
+// records a work origin and this job's is unknown (naming the map's).
 WorkStock resolve_stock(const StockSpec& spec, const Box3& part);
 
 }  // namespace cncstream::jobs

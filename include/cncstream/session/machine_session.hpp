@@ -28,6 +28,7 @@
 #include "cncstream/protocol/grbl_settings.hpp"
 #include "cncstream/protocol/identifier.hpp"
 #include "cncstream/protocol/machine_actions.hpp"
+#include "cncstream/protocol/machine_routine.hpp"
 #include "cncstream/protocol/tool_change.hpp"
 #include "cncstream/session/job_input.hpp"
 #include "cncstream/session/machine_port.hpp"
@@ -112,6 +113,18 @@ class MachineSession {
   // The tool-length reference (forgotten on a reset, an alarm, a homing or a re-zero).
   const std::optional<protocol::ToolLengthReference>& tool_reference() const { return tool_reference_; }
 
+  // ---- routines outside a job (protocol/machine_routine.hpp) --------------
+  // Corner probing (protocol/corner_probe.hpp), the outline trace
+  // (protocol/outline_trace.hpp): the caller keeps the routine to read its
+  // result after the Routine event that ends it. Refused unless ready and
+  // idle of jobs, jogs, alarms and other routines (GRBL family, mm reports);
+  // while one runs, jobs, jogs, actions and console lines are refused. An
+  // alarm, a hold, a lost link or stop() end it; nothing more of it is sent.
+  CommandResult run_routine(std::shared_ptr<protocol::MachineRoutine> routine);
+  CommandResult routine_confirm();
+  CommandResult routine_decline();
+  bool routine_active() const { return machine_routine_ != nullptr; }
+
   // ---- state -------------------------------------------------------------
   LinkState link() const { return link_; }
   bool ready() const { return link_ == LinkState::Ready; }
@@ -158,6 +171,10 @@ class MachineSession {
   void end_tool_change(const std::string& why);
   void forget_tool_reference(const char* why);
   bool operator_turn() const;
+  CommandResult refuse_during_routine(const char* what) const;
+  void machine_routine_event(const protocol::Event& ev);
+  void pump_machine_routine();
+  void end_machine_routine(const std::string& why);
 
   boost::asio::io_context& io_;
   MachineOptions opt_;
@@ -186,6 +203,9 @@ class MachineSession {
   std::string routine_line_;  // cleaned text of the routine's line in flight ("" none)
   std::optional<protocol::ToolLengthReference> tool_reference_;
   int tool_in_spindle_ = 0;
+
+  std::shared_ptr<protocol::MachineRoutine> machine_routine_;  // outside a job
+  std::string machine_routine_line_;  // cleaned text of its line in flight ("" none)
 
   boost::asio::steady_timer timer_;
   double timer_at_ = 0;

@@ -42,6 +42,9 @@ enum class SessionEventKind {
   // A tool change: the routine asks the operator (`tool_prompt`), or it
   // ended (`tool_record`: done, skipped or failed); `text` says what.
   ToolChange,
+  // A routine outside a job (corner probing, the outline): it asks the
+  // operator (`routine_prompt`), or it ended (`routine_succeeded`); `text` says what.
+  Routine,
 };
 
 struct SessionEvent {
@@ -56,6 +59,8 @@ struct SessionEvent {
   std::size_t lines_answered = 0;                             // JobEnded
   std::optional<protocol::ToolChangePrompt> tool_prompt;      // ToolChange
   std::optional<protocol::ToolChangeRecord> tool_record;      // ToolChange
+  std::optional<std::string> routine_prompt;                  // Routine: the operator is asked
+  std::optional<bool> routine_succeeded;                      // Routine: it ended
 };
 
 // What a display needs at any moment.

@@ -50,6 +50,11 @@ struct SimulatorOptions {
   cncsim::StickOuts stick_outs;
   std::string touch_plate;
   std::string tool_sensor;
+  // A corner plate ("THICKNESS,LIP[,SIZE]", cncsim --corner-plate) on the
+  // stock's X-min/Y-min corner (the stock: `stock`, else the design's box).
+  std::string corner_plate;
+  // Where the tool is at power-on (machine mm): e.g. over the corner plate.
+  std::optional<Vec3> start_position;
 };
 
 // Parses "max" or a positive number; throws std::invalid_argument naming the text.

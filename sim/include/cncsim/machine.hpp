@@ -99,6 +99,10 @@ struct MachineOptions {
   // tool's stick-out beyond the start tool's (a machine does not know it).
   std::map<int, double> stick_outs;
   int start_tool = 0;
+  // The cutters by T number: what touches a probe target is the mounted
+  // tool's cutter (its flank against a corner plate's wall), the tip as a
+  // point for a tool not listed.
+  std::map<int, cncstream::Cutter> tool_shapes;
   // A real machine: a T word changes nothing physical; only the operator
   // mounts a tool (request_mount). Otherwise the T word mounts the tool once
   // the motion before it has run (the old simulated operator).
@@ -176,7 +180,9 @@ class Machine {
   int mounted_tool() const { return mounted_tool_; }
   double tip_drop() const;
   cncstream::Vec3 tip_position() const { return queue_.position() - cncstream::Vec3{0, 0, tip_drop()}; }
-  bool probe_input() const { return probes_.triggered(tip_position()); }
+  bool probe_input() const { return probes_.triggered(tip_position(), probe_tool()); }
+  // The mounted tool's cutter as the probe sees it (nullopt: a point).
+  ProbeTool probe_tool() const;
   // The operator mounts tool T (any thread: applied before the next byte
   // is read or the clock runs). The removal switches to its cutter.
   void request_mount(int tool) { mount_request_.tool.store(tool); }

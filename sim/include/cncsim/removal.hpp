@@ -64,10 +64,14 @@ class MaterialRemoval {
   // Writes the machined surface as a height field (<path> + <path>.txt) and
   // as a closed STL solid down to the stock's bottom (<path> with .stl).
   // `work_offset`: where the part's model sat in the machine's coordinates
-  // (work = model + offset), recorded in the sidecar when known. Returns
-  // the STL's path.
+  // (work = model + offset), recorded in the sidecar when known.
+  // `work_origin`: the machine coordinates of work zero (G5x + G92): the
+  // surface is written in work coordinates (machine − origin) and the origin
+  // recorded, so a later setup places it; nullopt: machine coordinates, no
+  // origin recorded. Returns the STL's path.
   std::filesystem::path write_result(const std::filesystem::path& path,
-                                     std::optional<cncstream::Vec3> work_offset = std::nullopt) const;
+                                     std::optional<cncstream::Vec3> work_offset = std::nullopt,
+                                     std::optional<cncstream::Vec3> work_origin = std::nullopt) const;
 
  private:
   cncstream::HeightFieldStock stock_;

@@ -106,6 +106,9 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
         if (!o->output.empty()) not_written = o->output + " not written, nothing streamed";
         try {
           jobs::ToolpathParams params = toolpath_params(o->tp);
+          // The built-in simulator powers on with G54 and G92 at zero (unless a settings file says otherwise).
+          if (c.port == "sim" && o->sim.settings.empty() && params.stock && !params.stock->work_origin)
+            params.stock->work_origin = Vec3{};
           params.link = planning_link(c, o->sim);  // the machine's own link (the simulator's, a profile's, --serial)
           program = jobs::generate_toolpath(params, generation.control());
         } catch (const jobs::Cancelled&) {

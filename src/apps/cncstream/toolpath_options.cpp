@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <sstream>
 
+#include "cncsim/number_text.hpp"
 #include "cncstream/gcode/gcode_writer.hpp"
 #include "cncstream/protocol/link_model.hpp"
 #include "job_display.hpp"
@@ -59,6 +60,11 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
                   "X0,Y0,Z0:X1,Y1,Z1 in work coordinates, a height map from `cncsim --result` (FILE.f32), or none "
                   "(finish only, from the part's top, no depth check)")
       ->capture_default_str()->group(group);
+  sub->add_option("--work-origin", o.work_origin,
+                  "X,Y,Z: this job's work zero in machine coordinates (G54 + G92, as $# shows them), to place a "
+                  "--stock FILE.f32 saved with its own work origin where it physically is (PORT=sim without "
+                  "--sim-settings: 0,0,0)")
+      ->group(group);
   sub->add_option("--max-depth", o.max_depth,
                   "Deepest cut the finishing cutter takes in one pass, mm (default: half the diameter for ball and "
                   "bull, a quarter for flat); deeper, the job roughs first")
@@ -110,6 +116,11 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   p.origin = o.origin == "center" ? XYOrigin::PartCenter : o.origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
   p.z_zero = o.z_zero == "bottom" ? ZZero::PartBottom : o.z_zero == "model" ? ZZero::Model : ZZero::PartTop;
   if (o.stock != "none") p.stock = jobs::parse_stock_spec(o.stock);
+  if (!o.work_origin.empty()) {
+    const auto v = cncsim::vec3_from(o.work_origin);
+    if (!v) throw std::invalid_argument("--work-origin '" + o.work_origin + "': expected X,Y,Z (machine mm)");
+    if (p.stock) p.stock->work_origin = *v;
+  }
   p.max_depth = o.max_depth;
   if (!o.rough.empty()) p.rough = parse_cutter_spec(o.rough);
   if (!o.rest.empty()) p.rest = parse_cutter_spec(o.rest);

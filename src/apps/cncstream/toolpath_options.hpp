@@ -37,6 +37,7 @@ struct ToolpathOptions {
   unsigned threads = 0;
   // Stock and depth of cut (roughing first where the finishing pass would cut too deep).
   std::string stock = "auto";
+  std::string work_origin;  // X,Y,Z: machine coordinates of this job's work zero (places a saved stock)
   std::optional<double> max_depth;
   std::string rough;
   std::string rest;

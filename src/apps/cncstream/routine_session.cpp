@@ -1,0 +1,117 @@
+#include "routine_session.hpp"
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <csignal>
+#include <iostream>
+#include <string>
+
+#include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/session/machine_session.hpp"
+#include "cncstream/transport/serial_transport.hpp"
+
+namespace cncstream::app {
+
+int run_machine_routine(const ConnectionOptions& conn, const session::SimulatorOptions& sim,
+                        const std::shared_ptr<protocol::MachineRoutine>& routine) {
+  session::MachineOptions mo;
+  mo.name = conn.port;
+  if (conn.port == "sim") {
+    auto port = std::make_shared<session::SimulatorPort>(sim);
+    std::cerr << "simulator: GRBL 1.1h on " << port->path() << " (speed " << sim.speed << ")\n";
+    mo.port = port;
+  } else {
+    const auto device = device_path(conn.port);
+    if (!device) return 2;
+    mo.port = std::make_shared<session::DevicePort>(*device);
+  }
+  mo.serial = transport::parse_serial_settings(conn.serial);
+  mo.profiles_dir = protocol::default_profiles_dir();
+  if (!conn.profile.empty()) mo.force_profile = conn.profile;
+
+  boost::asio::io_context io;
+  session::MachineSession session(io, mo);
+  bool started = false, ended = false, ok = false;
+  std::string why;
+  boost::asio::signal_set signals(io, SIGINT, SIGTERM, SIGHUP);
+  boost::asio::steady_timer deadline(io);
+  auto finish = [&](bool success, const std::string& text) {
+    if (ended) return;
+    ended = true;
+    ok = success;
+    why = text;
+    boost::system::error_code ignored;
+    signals.cancel(ignored);
+    deadline.cancel();
+    session.close();
+  };
+  signals.async_wait([&](const boost::system::error_code& ec, int) {
+    if (ec || ended) return;
+    session.stop();  // a running routine ends; the move in flight is held
+    finish(false, "interrupted: the " + std::string(routine->name()) + " was stopped (feed hold); reset the "
+                  "controller before going on");
+  });
+  if (conn.timeout_s > 0) {
+    deadline.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(conn.timeout_s)));
+    deadline.async_wait([&](const boost::system::error_code& ec) {
+      if (ec || ended) return;
+      session.stop();
+      finish(false, "timed out (--timeout)");
+    });
+  }
+  auto subscription = session.subscribe([&](const session::SessionEvent& e) {
+    using session::SessionEventKind;
+    if (e.kind == SessionEventKind::Log) std::cerr << e.text << "\n";
+    if (e.kind == SessionEventKind::Link) {
+      std::cerr << e.text << "\n";
+      if (e.link == session::LinkState::Ready && !started) {
+        started = true;
+        boost::asio::post(io, [&] {
+          if (auto r = session.run_routine(routine); !r) finish(false, r.reason);
+        });
+      } else if (e.link == session::LinkState::Disconnected && !ended) {
+        finish(false, e.text);
+      }
+    }
+    if (e.kind == SessionEventKind::Controller) {
+      using protocol::EventKind;
+      const auto& c = e.controller;
+      if (c.kind == EventKind::Alarm || c.kind == EventKind::Warning) std::cerr << c.text << "\n";
+      else if (conn.verbose && c.kind != EventKind::Status) std::cerr << c.text << "\n";
+    }
+    if (e.kind == SessionEventKind::Routine) {
+      if (e.routine_prompt) {
+        std::cout << *e.routine_prompt << "\n";
+        // Asked outside the session's call: the answer may come from a person.
+        boost::asio::post(io, [&] {
+          bool yes = conn.yes;
+          if (yes) {
+            std::cout << "(--yes: confirmed)\n";
+          } else {
+            std::cout << "confirm? [y/N] " << std::flush;
+            std::string answer;
+            yes = static_cast<bool>(std::getline(std::cin, answer)) && (answer == "y" || answer == "Y" || answer == "yes");
+          }
+          if (yes) session.routine_confirm();
+          else session.routine_decline();
+        });
+      } else if (e.routine_succeeded) {
+        boost::asio::post(io, [&, success = *e.routine_succeeded, text = e.text] { finish(success, text); });
+      }
+    }
+  });
+  session.open();
+  io.run();
+  if (ok) {
+    std::cout << why << "\n";
+    return 0;
+  }
+  std::cerr << "cncstream: " << why << "\n";
+  return 1;
+}
+
+}  // namespace cncstream::app

@@ -1,0 +1,106 @@
+// The outline (protocol/outline_trace.hpp) against the simulated GRBL 1.1:
+// the traced path is the program's XY extent at the safe height, and a lost
+// link leaves at most the segment in flight.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cncstream/gcode/program_extent.hpp"
+#include "cncstream/protocol/outline_trace.hpp"
+#include "support/routine_bench.hpp"
+
+using namespace cncstream;
+using namespace cncstream::protocol;
+
+namespace {
+
+const std::vector<std::string> kOutlineProgram = {
+    "G21 G90", "G0 Z5", "G0 X2 Y3", "G1 Z-1 F300", "G1 X40 Y3", "G3 X40 Y23 I0 J10", "G1 X2 Y23", "G0 Z5", "M2"};
+
+struct OutlineBench : test::RoutineBench {
+  struct Move {
+    Vec3 a, b;
+    bool rapid;
+  };
+  std::vector<Move> moves;
+  OutlineBench() : RoutineBench(cncsim::MachineOptions{}) {
+    command("G10 L2 P1 X100 Y50 Z-20");
+    command("G0 X0 Y0 Z1");  // work: below the program's travel height
+    m.set_motion_observer([this](const Vec3& a, const Vec3& b, bool rapid) { moves.push_back({a, b, rapid}); });
+  }
+};
+
+}  // namespace
+
+TEST(OutlineTrace, TracesTheProgramsExtentAtTheSafeHeight) {
+  const auto extent = gcode::program_extent(kOutlineProgram);
+  const OutlineConfig c = outline_from_extent(extent, std::nullopt, 2000, "part.nc");
+  // The arc bulges to X50: the extent is the chorded arc's, as the firmware runs it.
+  EXPECT_NEAR(c.x0, 2, 1e-9);
+  EXPECT_NEAR(c.x1, 50, 0.01);
+  EXPECT_NEAR(c.y0, 3, 1e-9);
+  EXPECT_NEAR(c.y1, 23, 1e-9);
+  EXPECT_NEAR(c.safe_z, 5, 1e-9);
+  OutlineBench b;
+  OutlineTraceRoutine r(c);
+  b.run(r);
+  ASSERT_TRUE(r.succeeded()) << r.failure();
+  const Vec3 wco{100, 50, -20};
+  bool corners[4] = {false, false, false, false};
+  for (const auto& mv : b.moves) {
+    const Vec3 a = mv.a - wco, e = mv.b - wco;
+    if (std::hypot(e.x - a.x, e.y - a.y) < 1e-9) continue;  // the climb
+    // Every XY move at the safe height...
+    EXPECT_NEAR(a.z, 5, 1e-6);
+    EXPECT_NEAR(e.z, 5, 1e-6);
+    if (mv.rapid) continue;  // the move to the first corner
+    // ...and every traced segment on the box's edge.
+    const bool on_x = std::fabs(a.x - e.x) < 1e-6 && (std::fabs(a.x - c.x0) < 1e-6 || std::fabs(a.x - c.x1) < 1e-6);
+    const bool on_y = std::fabs(a.y - e.y) < 1e-6 && (std::fabs(a.y - c.y0) < 1e-6 || std::fabs(a.y - c.y1) < 1e-6);
+    EXPECT_TRUE(on_x || on_y) << a.x << "," << a.y << " -> " << e.x << "," << e.y;
+    for (int k = 0; k < 4; ++k) {
+      const double cx = (k == 1 || k == 2) ? c.x1 : c.x0, cy = k >= 2 ? c.y1 : c.y0;
+      if (std::hypot(e.x - cx, e.y - cy) < 1e-6) corners[k] = true;
+    }
+  }
+  for (bool k : corners) EXPECT_TRUE(k);
+  // Up before any XY move (the first move with XY motion is already at the safe Z: checked above), spindle off.
+  EXPECT_TRUE(b.sent_any("M5"));
+  EXPECT_TRUE(b.sent_any("G1 X50.000 Y3.000 F2000.000") || b.sent_any("G1 X49.999") || b.sent_any("G1 X50.001"));
+}
+
+TEST(OutlineTrace, ALostLinkLeavesAtMostTheSegmentInFlight) {
+  const OutlineConfig c = outline_from_extent(gcode::program_extent(kOutlineProgram), 10.0, 2000, "part.nc");
+  OutlineBench b;
+  OutlineTraceRoutine r(c);
+  std::size_t at_loss = 0;
+  b.run(r, 900, [&](double) {
+    if (at_loss == 0 && b.sent.size() >= 2 && b.sent.back().rfind("G1 ", 0) == 0 &&
+        std::count_if(b.sent.begin(), b.sent.end(), [](const std::string& l) { return l.rfind("G1 ", 0) == 0; }) == 2) {
+      r.abort("the controller disconnected");
+      at_loss = b.sent.size();
+    }
+  });
+  ASSERT_GT(at_loss, 0u);
+  EXPECT_FALSE(r.succeeded());
+  EXPECT_EQ(b.sent.size(), at_loss);
+  b.m.run_until_idle();
+  // It stopped where the second segment ends: (x1, y1), not further.
+  const Vec3 w = b.m.work_position();
+  EXPECT_NEAR(w.x, c.x1, 1e-6);
+  EXPECT_NEAR(w.y, c.y1, 1e-6);
+  EXPECT_NEAR(w.z, 10, 1e-6);
+}
+
+TEST(OutlineTrace, RefusesASafeZBelowTheProgramsTravelHeight) {
+  const auto extent = gcode::program_extent(kOutlineProgram);
+  try {
+    outline_from_extent(extent, 2.0, 1000, "part.nc");
+    FAIL() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("part.nc"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("5.000"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(outline_from_extent(extent, std::nullopt, 0, "part.nc"), std::invalid_argument);
+  EXPECT_THROW(outline_from_extent(gcode::program_extent({"G0 Z5"}), std::nullopt, 1000, "z.nc"), std::invalid_argument);
+}
