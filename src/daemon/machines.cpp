@@ -296,6 +296,11 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
     }
     case SessionEventKind::ToolChange: {
       spdlog::info("machine {}: tool change: {}", name, e.text);
+      // The simulated operator mounts the tool when asked to zero it by hand
+      // (the operator mounts, then jogs and zeroes); at a mount prompt, when
+      // the operator confirms (answer_tool_change).
+      if (m.sim && e.tool_prompt && e.tool_prompt->kind == protocol::PromptKind::ZeroManually && e.tool_prompt->tool > 0)
+        m.sim->operator_mount(e.tool_prompt->tool);
       publish(m, {{"type", "event"}, {"kind", "tool-change"}, {"code", 0}, {"line", 0}, {"text", e.text}, {"info", nullptr}});
       json f = {{"type", "tool_change"}, {"state", tool_change(m)}, {"text", e.text}, {"record", nullptr}};
       if (const auto& r = e.tool_record)
@@ -463,9 +468,9 @@ session::CommandResult Machines::answer_tool_change(Machine& m, bool confirm) {
   auto& s = *m.session;
   if (!confirm) return s.tool_change_decline();
   const auto prompt = s.snapshot().tool_prompt;
-  // The simulator has no hands: at a mount (or a manual zero) its operator
-  // mounts the tool the prompt names before the routine goes on.
-  if (m.sim && prompt && prompt->kind != protocol::PromptKind::Question && prompt->tool > 0 &&
+  // The simulator has no hands: at a mount its operator mounts the tool the
+  // prompt names before the routine goes on to measure it.
+  if (m.sim && prompt && prompt->kind == protocol::PromptKind::MountTool && prompt->tool > 0 &&
       !(s.engine() && s.engine()->jogging()))
     m.sim->operator_mount(prompt->tool);
   return s.tool_change_confirm();
