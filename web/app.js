@@ -370,6 +370,47 @@ function renderToolChange(rec, operatorTurn) {
   if (first) panel.scrollIntoView({ block: 'nearest' });
 }
 
+// ---------------------------------------------------------------- start from a line
+// The job shown in the preview starts after a line the operator picks: the
+// daemon's resume planner (the same as `cncstream resume --from-line`) writes
+// the way back in (safe Z, spindle, XY, then Z); the plan is shown, then
+// queued as a new ready job that still needs Start.
+let fromLinePlan = null;  // {job, plan_id}
+function setupFromLine() {
+  $('#from-line-form').addEventListener('submit', (e) => {
+    e.preventDefault();
+    const id = S.previewJob;
+    const j = S.jobs.get(id);
+    if (!j) return;
+    const line = Number($('#from-line').value);
+    run('Plan the start', async () => {
+      const plan = await controlled(j.machine, () => api('POST', `/jobs/${id}/resume-plan`, { from_line: line }));
+      if (!plan) return;
+      fromLinePlan = { job: id, plan_id: plan.plan_id };
+      const op = plan.operation ? ` It continues ${plan.operation.name} with T${plan.operation.tool} (${plan.operation.cutter}): mount it first.` : '';
+      const why = /from-line/.test(plan.reason) ? '' : ` ${plan.reason.replace(/\.$/, '')}.`;  // the planner's own choice only
+      $('#from-line-text').textContent = `Job #${id} continues after line ${plan.from_line}: ${plan.lines.toLocaleString()} lines to send, ` +
+        `the way back in first (safe height, spindle, XY, then Z).${why}${op}`;
+      $('#from-line-preamble').textContent = plan.preamble.join('\n');
+      $('#from-line-plan').hidden = false;
+    });
+  });
+  $('#from-line-cancel').addEventListener('click', () => { fromLinePlan = null; $('#from-line-plan').hidden = true; });
+  $('#from-line-queue').addEventListener('click', () => {
+    const p = fromLinePlan;
+    if (!p) return;
+    const j = S.jobs.get(p.job);
+    run('Queue the start from a line', async () => {
+      const created = await controlled(j.machine, () => api('POST', `/jobs/${p.job}/resume-confirm`, { plan_id: p.plan_id }));
+      if (!created) return;
+      fromLinePlan = null;
+      $('#from-line-plan').hidden = true;
+      S.jobs.set(created.id, created);
+      renderJobs();
+    });
+  });
+}
+
 function setupToolChange() {
   const m = () => S.current;
   const post = (what, path, body = {}) => () => run(what, () => controlled(m(), () => api('POST', `/machines/${enc(m())}/${path}`, body)));
@@ -720,6 +761,7 @@ function renderFormStatus() {
 // never downloads a whole program to see it. The path is drawn over the
 // picture, rapids dashed.
 async function showPreview(id) {
+  if (S.previewJob !== id) { fromLinePlan = null; $('#from-line-plan').hidden = true; }
   S.previewJob = id;
   // The bounds and heights come with the Job: at `ready` for an STL job, a
   // moment later for G-code (the daemon traces it with the time estimate).
@@ -1156,6 +1198,7 @@ setupUpload();
 setupJog();
 setupButtons();
 setupToolChange();
+setupFromLine();
 setupConsole();
 renderMachine();
 renderHistory();

@@ -113,7 +113,7 @@ void Api::machine_routes() {
     if (a != "confirm" && a != "decline")
       throw ApiError{400, "bad_request", "unknown tool-change answer '" + a.substr(0, 40) + "' (confirm or decline)"};
     machines_.require_control(m, r.client_id);
-    res(accepted(machines_.answer_tool_change(m, a == "confirm")));
+    res(accepted(a == "confirm" ? m.session->tool_change_confirm() : m.session->tool_change_decline()));
   });
   router_.add("POST", "/api/v1/machines/{m}/realtime", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);

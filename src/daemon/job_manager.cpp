@@ -800,8 +800,12 @@ void JobManager::resume_plan(std::int64_t id, long from_line, const std::string&
   auto& j = get(id);
   machines_.require_control(machine_of(j), client);
   const auto& s = j.row.state;
-  if (s != "stopped" && s != "failed" && s != "interrupted")
-    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + s + "; resume plans are for stopped, failed or interrupted jobs"};
+  // A ready or finished job too: the operator starts it from a line (the web page's "continue after line").
+  if (s != "stopped" && s != "failed" && s != "interrupted" && s != "ready" && s != "done")
+    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + s +
+                                         "; resume plans are for ready, done, stopped, failed or interrupted jobs"};
+  if (s == "ready" && from_line < 0)
+    throw ApiError{400, "bad_request", "from_line: a job that has not run needs the line to continue after (>= 0)"};
   if (!j.program) {
     // After a restart: find the program by its key in the cache, else it must be generated first.
     for (auto& e : cache_)

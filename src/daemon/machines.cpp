@@ -5,8 +5,6 @@
 
 #include <chrono>
 
-#include "cncsim/probe_targets.hpp"
-#include "cncsim/removal.hpp"
 #include "cncstream/daemon/http_types.hpp"
 #include "cncstream/protocol/profiles_dir.hpp"
 #include "cncstream/transport/port_discovery.hpp"
@@ -120,9 +118,9 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
       so.tolerance = mc.sim_tolerance;
       session::parse_sim_speed(so.speed);  // a bad speed fails at start, naming it
       try {
-        if (!mc.sim_tool_table.empty()) so.stick_outs = cncsim::parse_tool_stick_outs(mc.sim_tool_table);
+        if (!mc.sim_tool_table.empty()) so.stick_outs = session::parse_sim_stick_outs(mc.sim_tool_table);
         so.tool_sensor = mc.sim_tool_sensor;
-        if (!so.tool_sensor.empty()) cncsim::parse_tool_sensor(so.tool_sensor);  // checked at start
+        if (!so.tool_sensor.empty()) session::check_sim_tool_sensor(so.tool_sensor);  // checked at start
       } catch (const std::exception& e) {
         throw std::invalid_argument(cat({"machine '", mc.name, "': ", e.what()}));
       }
@@ -296,10 +294,10 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
     }
     case SessionEventKind::ToolChange: {
       spdlog::info("machine {}: tool change: {}", name, e.text);
-      // The simulated operator mounts the tool when asked to zero it by hand
-      // (the operator mounts, then jogs and zeroes); at a mount prompt, when
-      // the operator confirms (answer_tool_change).
-      if (m.sim && e.tool_prompt && e.tool_prompt->kind == protocol::PromptKind::ZeroManually && e.tool_prompt->tool > 0)
+      // The simulator has no hands: its operator mounts the tool the moment
+      // the prompt asks for it (a real one mounts, then jogs, zeroes and
+      // confirms), whichever front end then answers (page, API, pendant).
+      if (m.sim && e.tool_prompt && e.tool_prompt->kind != protocol::PromptKind::Question && e.tool_prompt->tool > 0)
         m.sim->operator_mount(e.tool_prompt->tool);
       publish(m, {{"type", "event"}, {"kind", "tool-change"}, {"code", 0}, {"line", 0}, {"text", e.text}, {"info", nullptr}});
       json f = {{"type", "tool_change"}, {"state", tool_change(m)}, {"text", e.text}, {"record", nullptr}};
@@ -462,18 +460,6 @@ json Machines::tool_change(const Machine& m) const {
                             : json(nullptr)},
           // Jogs, probe_z and console lines are accepted now (and refused while the routine moves).
           {"operator_turn", prompt.has_value()}};
-}
-
-session::CommandResult Machines::answer_tool_change(Machine& m, bool confirm) {
-  auto& s = *m.session;
-  if (!confirm) return s.tool_change_decline();
-  const auto prompt = s.snapshot().tool_prompt;
-  // The simulator has no hands: at a mount its operator mounts the tool the
-  // prompt names before the routine goes on to measure it.
-  if (m.sim && prompt && prompt->kind == protocol::PromptKind::MountTool && prompt->tool > 0 &&
-      !(s.engine() && s.engine()->jogging()))
-    m.sim->operator_mount(prompt->tool);
-  return s.tool_change_confirm();
 }
 
 json Machines::summary(const Machine& m) const {

@@ -81,6 +81,12 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   EXPECT_EQ(r.status, 409);
   EXPECT_NE(r.body.find("safe_z"), std::string::npos) << r.body;
   EXPECT_EQ(job(h, refused_id)["state"], "ready");
+  // A ready job may start from a line (the page's "continue after line"); it names the line.
+  const std::string plan_path = "/api/v1/jobs/" + std::to_string(refused_id) + "/resume-plan";
+  EXPECT_EQ(h.post(plan_path, {{"from_line", -1}}).status, 400);
+  r = h.post(plan_path, {{"from_line", 8}});
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.j()["from_line"], 8);
 
   // The job's own setting supplies it.
   const auto id = create(h, "tc", file, {{"safe_z", 30}});
@@ -186,4 +192,38 @@ TEST(DaemonToolChange, DeclineAndAMissingSensorEndTheJobWithTheLengthUnknown) {
     EXPECT_FALSE(rows[0].length_known);
   }
   std::filesystem::remove_all(dir);
+}
+
+TEST(DaemonToolChange, TheMachinesToolChangeTableIsReadAndABadFieldNamesTheFileAndLine) {
+  using cncstream::daemon::parse_config;
+  const auto c = parse_config(
+      "[[machine]]\nname = \"r\"\nport = \"sim\"\nsim_tool_table = \"1=flat:6@30\"\nsim_probe_surface_z = 10\n"
+      "[machine.tool_change]\nmethod = \"plate\"\nsafe_z = -1\nplate_at = [20, 25.5]\nplate_thickness = 5\n",
+      "d.toml");
+  ASSERT_EQ(c.machines.size(), 1u);
+  const auto& tc = c.machines[0].tool_change;
+  EXPECT_EQ(tc.method, "plate");
+  ASSERT_TRUE(tc.safe_z && tc.plate_at);
+  EXPECT_EQ(*tc.safe_z, -1);
+  EXPECT_EQ((*tc.plate_at)[1], 25.5);
+  EXPECT_EQ(tc.plate_thickness, 5);
+  EXPECT_EQ(c.machines[0].sim_probe_surface_z, 10);
+  const auto routine = cncstream::daemon::routine_config(tc, true);
+  ASSERT_TRUE(routine);
+  EXPECT_EQ(routine->probe_y, 25.5);
+  try {
+    parse_config("[[machine]]\nname = \"r\"\nport = \"sim\"\n[machine.tool_change]\nmethod = \"laser\"\n", "d.toml");
+    FAIL() << "an unknown method was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("d.toml:4"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("machine.tool_change.method"), std::string::npos) << e.what();
+  }
+  // Pause needs nothing; sensor without its position is refused only for a program that changes tools.
+  cncstream::daemon::ToolChangeSettings s;
+  s.method = "pause";
+  EXPECT_FALSE(cncstream::daemon::routine_config(s, true));
+  s.method = "sensor";
+  s.safe_z = 0;
+  EXPECT_TRUE(cncstream::daemon::routine_config(s, false));
+  EXPECT_THROW(cncstream::daemon::routine_config(s, true), std::invalid_argument);
 }

@@ -640,6 +640,35 @@ def tool_change_flow(args, out, d):
         assert "tool change: the operator zeroed Z with T2" in p.text("#console"), p.text("#console")
         d.execute_script("window.scrollTo(0, 0)")
         p.shot("22-tool-change-done")
+
+        # ---- start from a line: the machine is moved away, the same job continues
+        # after line 9 (its position there is X20 Y0), planned on its preview, queued, started
+        p.click(d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value='10']").find_element(By.XPATH, ".."))
+        p.click("#jogpad [data-axis=X][data-dir='-1']")
+        p.wait("X jogged to 10", lambda: abs(p.dro("x") - 10) < 0.002, 20)
+        wait_stopped(p, "x")
+        d.execute_script("window.cncstream.showPreview(Number(arguments[0]))", jid)
+        p.wait("the preview of the finished job", lambda: p.q("#preview").is_displayed() and p.q("#preview").get_attribute("data-job") == jid, 30)
+        p.q("#from-line").send_keys("9")
+        p.click("#from-line-form button")
+        p.wait("the plan shown", lambda: p.q("#from-line-plan").is_displayed(), 20)
+        plan_text, preamble = p.text("#from-line-text"), p.text("#from-line-preamble")
+        say(f"plan: {plan_text} / {preamble!r}")
+        assert "after line 9" in plan_text, plan_text
+        # Up to the program's safe height first, then over the line's position.
+        pre = preamble.replace(".000", "").splitlines()
+        assert "G0 Z5" in pre and "G0 X20 Y0" in pre and pre.index("G0 Z5") < pre.index("G0 X20 Y0"), preamble
+        p.shot("23-start-from-a-line-plan")
+        p.click("#from-line-queue")
+        ready_new = f"#queue li[data-state=ready]"
+        p.wait("the start-from-a-line job queued", lambda: d.find_elements(By.CSS_SELECTOR, ready_new), 20)
+        rid = d.execute_script(f"return document.querySelector('{ready_new}').dataset.job")
+        assert rid != jid
+        p.click(f"#queue li[data-job='{rid}'] button[data-act=start]")
+        p.wait("the history to show it done", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{rid}'][data-state=done]"), 60)
+        p.wait("the machine idle", lambda: p.state() == "idle", 30)
+        assert abs(p.dro("x") - 20) < 0.002 and abs(p.dro("y") - 10) < 0.002, (p.dro("x"), p.dro("y"))
+        say(f"started after line 9: ended at X {p.dro('x')} Y {p.dro('y')}")
         errs = p.console_errors()
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:

@@ -124,8 +124,6 @@ class Machines {
   // The tool change in progress: its line, tools, the step and what the
   // operator is asked (null when none).
   nlohmann::json tool_change(const Machine& m) const;
-  // The operator's answer at a tool change's prompt (control is checked by the caller).
-  session::CommandResult answer_tool_change(Machine& m, bool confirm);
 
   std::function<nlohmann::json(const std::string& machine)> current_job;  // the job manager's view
 
