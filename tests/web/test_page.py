@@ -209,6 +209,16 @@ class Page:
             return []
 
 
+def drop_text_file(d, name, text):
+    """Drops a text file on the page's drop zone, as a file dragged from the desktop."""
+    d.execute_script("""
+        const dt = new DataTransfer();
+        dt.items.add(new File([arguments[1]], arguments[0], {type: 'text/plain'}));
+        const z = document.getElementById('drop');
+        for (const t of ['dragenter', 'dragover', 'drop'])
+          z.dispatchEvent(new DragEvent(t, {dataTransfer: dt, bubbles: true, cancelable: true}));""", name, text)
+
+
 def wait_stopped(p, axis):
     """The machine is idle and the DRO holds still over several status reports."""
     p.wait("the state to return to Idle", lambda: p.state() == "idle", 15)
@@ -321,12 +331,7 @@ def main_flow(args, out, d):
         # ---- a G-code file dropped on the drop zone, queued as it is: start, hold and
         # resume with the running panel's buttons, stop with the jog pad's STOP; queued again and removed
         square = "G21 G90 G94\nG0 X0 Y0\n" + "G1 X40 F500\nG1 Y40\nG1 X0\nG1 Y0\n" * 3 + "M2\n"  # ~1 min at 500 mm/min
-        d.execute_script("""
-            const dt = new DataTransfer();
-            dt.items.add(new File([arguments[0]], 'square.nc', {type: 'text/plain'}));
-            const z = document.getElementById('drop');
-            for (const t of ['dragenter', 'dragover', 'drop'])
-              z.dispatchEvent(new DragEvent(t, {dataTransfer: dt, bubbles: true, cancelable: true}));""", square)
+        drop_text_file(d, "square.nc", square)
         p.wait("the dropped G-code to be offered for the queue of bench",
                lambda: "square.nc: G-code" in p.text("#upload-status") and p.text("#tp-generate") == "Add to the queue of bench", 20)
 
@@ -578,12 +583,7 @@ def tool_change_flow(args, out, d):
     try:
         d.get(daemon.url)
         p.wait("the page to connect to the tool-change machine", p.connected, 30)
-        d.execute_script("""
-            const dt = new DataTransfer();
-            dt.items.add(new File([arguments[0]], 'two-tools.nc', {type: 'text/plain'}));
-            const z = document.getElementById('drop');
-            for (const t of ['dragenter', 'dragover', 'drop'])
-              z.dispatchEvent(new DragEvent(t, {dataTransfer: dt, bubbles: true, cancelable: true}));""", TWO_TOOLS)
+        drop_text_file(d, "two-tools.nc", TWO_TOOLS)
         p.wait("the G-code offered for the queue", lambda: "two-tools.nc: G-code" in p.text("#upload-status"), 20)
         p.click("#tp-generate")
         sel = "#queue li[data-state=ready]"
