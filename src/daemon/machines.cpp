@@ -108,6 +108,9 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
   for (const auto& mc : config.machines) {
     auto m = std::make_unique<Machine>();
     m->config = mc;
+    // The simulator starts with its work zero at machine zero and nothing to
+    // hit: its tool changes travel 50 mm above it unless told otherwise.
+    if (mc.port == "sim" && !m->config.tool_change.safe_z) m->config.tool_change.safe_z = 50;
     session::MachineOptions o;
     o.name = mc.name;
     if (mc.port == "sim") {
@@ -138,7 +141,7 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
     o.reconnect_interval_s = mc.reconnect_s;
     o.actions.probe_plate_mm = mc.tool_change.plate_thickness;
     // The machine's own routine; each job sets its own before it starts (JobManager::start).
-    o.tool_change = routine_config(mc.tool_change, false);
+    o.tool_change = routine_config(m->config.tool_change, false);
     m->session = std::make_unique<session::MachineSession>(io, o);
     // The journal subscribes first: when our handler sees JobStarted, its job id is set.
     m->journal = std::make_unique<session::JobJournal>(*m->session, journal_path_, mc.name + ":" + mc.port);

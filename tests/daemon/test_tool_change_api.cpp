@@ -46,7 +46,7 @@ cncstream::daemon::MachineConfig tool_machine(const std::string& name, const std
   m.tool_change.method = "sensor";
   m.tool_change.sensor_at = std::array<double, 2>{-30, 0};
   m.tool_change.probe_travel = 50;
-  return m;  // no safe_z: each test gives it (or not) itself
+  return m;
 }
 
 std::int64_t create(const Http& h, const std::string& m, const json& file, const json& tool_change = nullptr) {
@@ -75,11 +75,13 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   EXPECT_EQ(bad.status, 400);
   EXPECT_NE(bad.body.find("tool_change.safe_z"), std::string::npos) << bad.body;
 
-  // The machine has no safe Z for the change: a program that changes tools is refused before it moves.
-  const auto refused_id = create(h, "tc", file);
+  // The job asks for the plate and the machine has no plate position: a program that changes
+  // tools is refused before it moves, naming the setting.
+  const auto refused_id = create(h, "tc", file, {{"method", "plate"}});
   auto r = h.post("/api/v1/jobs/" + std::to_string(refused_id) + "/start");
   EXPECT_EQ(r.status, 409);
-  EXPECT_NE(r.body.find("safe_z"), std::string::npos) << r.body;
+  EXPECT_NE(r.body.find("plate_at"), std::string::npos) << r.body;
+  EXPECT_EQ(machine(h, "tc")["tool_change_settings"]["safe_z"], 50);  // a sim machine's default
   EXPECT_EQ(job(h, refused_id)["state"], "ready");
   // A ready job may start from a line (the page's "continue after line"); it names the line.
   const std::string plan_path = "/api/v1/jobs/" + std::to_string(refused_id) + "/resume-plan";
@@ -88,7 +90,7 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(r.j()["from_line"], 8);
 
-  // The job's own setting supplies it.
+  // The machine's sensor, at the job's own safe Z.
   const auto id = create(h, "tc", file, {{"safe_z", 30}});
   EXPECT_EQ(job(h, id)["tool_change"]["safe_z"], 30);
   WsClient ws;
