@@ -216,8 +216,9 @@ async function loadMachineDetail(name) {
   const d = await api('GET', `/machines/${enc(name)}`);
   const rec = machine(name);
   rec.summary = { ...rec.summary, ...d };
-  if (d.status) rec.status = { ...d.status, link: d.link, alarm: d.alarm, jogging: d.jogging, job_active: d.job_active };
+  if (d.status) rec.status = { ...d.status, link: d.link, alarm: d.alarm, jogging: d.jogging, job_active: d.job_active, tool_change: d.tool_change };
   rec.alarmInfo = d.alarm_info;
+  rec.toolChange = d.tool_change || null;
   renderAll();
 }
 
@@ -297,7 +298,10 @@ function renderMachine() {
   const ready = link === 'ready';
   const alarm = !!s.alarm || st.cls === 'alarm';
   const jobActive = !!s.job_active || !!rec.summary.job_active;
-  const canJog = ready && !alarm && !jobActive;
+  // At a tool change's prompt the machine is idle and the operator's: the pad works.
+  const tc = rec.toolChange;
+  const operatorTurn = !!(tc && tc.operator_turn);
+  const canJog = ready && !alarm && (!jobActive || operatorTurn);
   document.querySelectorAll('#jogpad .jog:not(.jstop)').forEach((b) => { if (!b.classList.contains('held')) b.disabled = !canJog; });
   for (const id of ['zero-xy', 'zero-z', 'go-zero', 'safe-z']) $('#' + id).disabled = !canJog;
   $('#unlock').disabled = !ready || jobActive;
@@ -305,6 +309,115 @@ function renderMachine() {
   $('#reset').disabled = !ready;
   document.querySelectorAll('#panel-job .overrides button').forEach((b) => { b.disabled = !ready; });
   renderAlarm(rec, alarm);
+  renderToolChange(rec, ready && !alarm && operatorTurn);
+}
+
+// ---------------------------------------------------------------- tool change
+// The steps of the session's routine as the operator lives them; the daemon
+// says which one the machine is at (its `step`), the page remembers whether
+// the operator's prompt of this change has passed.
+function toolChangeSteps(tc) {
+  const t = tc.tool ? `T${tc.tool}` : 'the next tool';
+  if (tc.method === 'manual') {
+    return [
+      { key: 'before', text: 'Spindle and coolant off, up to the safe Z' },
+      { key: 'zero_manually', text: `Mount ${t}, jog down, zero work Z (Probe Z on the touch plate, or Zero Z here), then Continue` },
+      { key: 'after', text: 'Back to the work: safe Z, XY, the spindle, then Z' },
+    ];
+  }
+  const where = tc.method === 'sensor' ? 'the tool-length sensor' : 'the touch plate';
+  return [
+    { key: 'before', text: `Spindle and coolant off, up to the safe Z, over ${where}; the tool in the spindle is measured if no reference is kept` },
+    { key: 'mount_tool', text: `Mount ${t}, then Continue` },
+    { key: 'after', text: `${t} measured on ${where}, the work offset written and read back` },
+    { key: 'back', text: 'Back to the work: safe Z, XY, the spindle, then Z' },
+  ];
+}
+
+function renderToolChange(rec, operatorTurn) {
+  const panel = $('#panel-toolchange');
+  const tc = rec.toolChange;
+  if (!tc) {
+    if (!panel.hidden) { panel.hidden = true; delete panel.dataset.step; }
+    return;
+  }
+  const first = panel.hidden;
+  panel.hidden = false;
+  panel.dataset.step = tc.step;
+  panel.dataset.line = tc.line;
+  const key = `${rec.summary.name}:${tc.line}`;
+  if (tc.step !== 'routine') rec.tcPrompted = key;
+  const prompted = rec.tcPrompted === key;
+  $('#tc-what').textContent = `${tc.tool ? 'T' + tc.tool : 'Next tool'}${tc.description ? ' — ' + tc.description : ''}` +
+    ` (line ${tc.line}, ${tc.method}${tc.from_tool ? ', T' + tc.from_tool + ' in the spindle' : ''})`;
+  const steps = toolChangeSteps(tc);
+  let current = 0;
+  if (tc.step === 'mount_tool' || tc.step === 'zero_manually') current = 1;
+  else if (tc.step === 'question') current = 2;
+  else if (prompted) current = 2;
+  const sig = JSON.stringify([steps.map((x) => x.text), current]);
+  if (panel.dataset.sig !== sig) {
+    panel.dataset.sig = sig;
+    $('#tc-steps').replaceChildren(...steps.map((x, i) => el('li', { class: i < current ? 'done' : i === current ? 'current' : '', dataset: { step: x.key } },
+      x.text + (i === current && tc.step === 'routine' ? ' — the machine works, wait' : ''))));
+  }
+  $('#tc-prompt').textContent = tc.prompt ? tc.prompt.text : '';
+  $('#tc-confirm').disabled = !operatorTurn;
+  $('#tc-decline').disabled = !operatorTurn;
+  $('#tc-probe').disabled = !operatorTurn || tc.step === 'question';
+  $('#tc-zero-z').disabled = !operatorTurn || tc.step !== 'zero_manually';
+  $('#tc-confirm').textContent = tc.step === 'question' ? 'Apply the measured length' : 'Continue';
+  if (first) panel.scrollIntoView({ block: 'nearest' });
+}
+
+// ---------------------------------------------------------------- start from a line
+// The job shown in the preview starts after a line the operator picks: the
+// daemon's resume planner (the same as `cncstream resume --from-line`) writes
+// the way back in (safe Z, spindle, XY, then Z); the plan is shown, then
+// queued as a new ready job that still needs Start.
+let fromLinePlan = null;  // {job, plan_id}
+function setupFromLine() {
+  $('#from-line-form').addEventListener('submit', (e) => {
+    e.preventDefault();
+    const id = S.previewJob;
+    const j = S.jobs.get(id);
+    if (!j) return;
+    const line = Number($('#from-line').value);
+    run('Plan the start', async () => {
+      const plan = await controlled(j.machine, () => api('POST', `/jobs/${id}/resume-plan`, { from_line: line }));
+      if (!plan) return;
+      fromLinePlan = { job: id, plan_id: plan.plan_id };
+      const op = plan.operation ? ` It continues ${plan.operation.name} with T${plan.operation.tool} (${plan.operation.cutter}): mount it first.` : '';
+      const why = /from-line/.test(plan.reason) ? '' : ` ${plan.reason.replace(/\.$/, '')}.`;  // the planner's own choice only
+      $('#from-line-text').textContent = `Job #${id} continues after line ${plan.from_line}: ${plan.lines.toLocaleString()} lines to send, ` +
+        `the way back in first (safe height, spindle, XY, then Z).${why}${op}`;
+      $('#from-line-preamble').textContent = plan.preamble.join('\n');
+      $('#from-line-plan').hidden = false;
+    });
+  });
+  $('#from-line-cancel').addEventListener('click', () => { fromLinePlan = null; $('#from-line-plan').hidden = true; });
+  $('#from-line-queue').addEventListener('click', () => {
+    const p = fromLinePlan;
+    if (!p) return;
+    const j = S.jobs.get(p.job);
+    run('Queue the start from a line', async () => {
+      const created = await controlled(j.machine, () => api('POST', `/jobs/${p.job}/resume-confirm`, { plan_id: p.plan_id }));
+      if (!created) return;
+      fromLinePlan = null;
+      $('#from-line-plan').hidden = true;
+      S.jobs.set(created.id, created);
+      renderJobs();
+    });
+  });
+}
+
+function setupToolChange() {
+  const m = () => S.current;
+  const post = (what, path, body = {}) => () => run(what, () => controlled(m(), () => api('POST', `/machines/${enc(m())}/${path}`, body)));
+  $('#tc-confirm').addEventListener('click', post('Continue', 'tool-change/confirm'));
+  $('#tc-decline').addEventListener('click', post('Decline', 'tool-change/decline'));
+  $('#tc-probe').addEventListener('click', post('Probe Z', 'actions/probe_z'));
+  $('#tc-zero-z').addEventListener('click', post('Zero Z', 'actions/zero_axes', { axes: 'Z' }));
 }
 
 function renderAlarm(rec, alarm) {
@@ -648,6 +761,7 @@ function renderFormStatus() {
 // never downloads a whole program to see it. The path is drawn over the
 // picture, rapids dashed.
 async function showPreview(id) {
+  if (S.previewJob !== id) { fromLinePlan = null; $('#from-line-plan').hidden = true; }
   S.previewJob = id;
   // The bounds and heights come with the Job: at `ready` for an STL job, a
   // moment later for G-code (the daemon traces it with the time estimate).
@@ -850,6 +964,7 @@ function onMessage(m) {
       const wasAlarm = rec.status && rec.status.alarm;
       const changed = !rec.status || rec.status.state_text !== m.state_text || rec.status.link !== m.link;
       rec.status = m;
+      if (m.tool_change !== undefined) rec.toolChange = m.tool_change;
       rec.summary.job_active = m.job_active;
       rec.summary.link = m.link ?? rec.summary.link;
       if (m.alarm && !wasAlarm && !rec.alarmInfo) run('Loading the alarm', () => loadMachineDetail(m.machine));
@@ -859,6 +974,13 @@ function onMessage(m) {
       break;
     }
     case 'job': onJobMessage(m); break;
+    case 'tool_change': {
+      const rec = machine(m.machine);
+      rec.toolChange = m.state || null;
+      if (m.record) log(m.machine, `tool change: ${m.record.note}`, m.record.length_known ? 'info' : 'err');
+      if (m.machine === S.current) renderMachine();
+      break;
+    }
     case 'queue': reloadJobsSoon(); break;
     case 'event': onEvent(m); break;
     case 'console': log(m.machine, m.dir === 'out' ? '> ' + m.text : m.text, m.dir === 'out' ? 'out' : /^error|alarm/i.test(m.text) ? 'err' : ''); break;
@@ -1075,6 +1197,8 @@ function renderAll() { renderMachinePicker(); renderMachine(); renderJobs(); }
 setupUpload();
 setupJog();
 setupButtons();
+setupToolChange();
+setupFromLine();
 setupConsole();
 renderMachine();
 renderHistory();

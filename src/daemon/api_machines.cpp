@@ -104,6 +104,17 @@ void Api::machine_routes() {
       res(accepted(s.reset()));
     }
   });
+  // The operator's answer at a tool change's prompt (docs/tool-change.md):
+  // confirm goes on (the tool is mounted, Z is zeroed, the length is right),
+  // decline stops the job. Probing at the prompt is actions/probe_z.
+  router_.add("POST", "/api/v1/machines/{m}/tool-change/{answer}", [this](Request& r, const Respond& res) {
+    Machine& m = machine(r);
+    const std::string& a = r.params.at(1);
+    if (a != "confirm" && a != "decline")
+      throw ApiError{400, "bad_request", "unknown tool-change answer '" + a.substr(0, 40) + "' (confirm or decline)"};
+    machines_.require_control(m, r.client_id);
+    res(accepted(a == "confirm" ? m.session->tool_change_confirm() : m.session->tool_change_decline()));
+  });
   router_.add("POST", "/api/v1/machines/{m}/realtime", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
     const json b = parse_body(r);

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cncstream/daemon/http_types.hpp"
 #include "cncstream/protocol/toml_guard.hpp"
 #include "cncstream/transport/journal.hpp"
 
@@ -92,6 +93,36 @@ struct Reader {
   }
 };
 
+
+// [machine.tool_change]: the same fields as a job's `tool_change` object,
+// checked by the same code; a bad one names the file and line.
+void read_tool_change(const std::string& source, const toml::node& n, ToolChangeSettings& out) {
+  const auto* t = n.as_table();
+  if (!t) fail(source, n, "machine.tool_change: expected a table");
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [k, v] : *t) {
+    const std::string key(k.str());
+    if (v.is_string()) j[key] = v.as_string()->get();
+    else if (v.is_integer()) j[key] = double(v.as_integer()->get());
+    else if (v.is_floating_point()) j[key] = v.as_floating_point()->get();
+    else if (const auto* a = v.as_array()) {
+      nlohmann::json arr = nlohmann::json::array();
+      for (const auto& e : *a) {
+        if (e.is_integer()) arr.push_back(double(e.as_integer()->get()));
+        else if (e.is_floating_point()) arr.push_back(e.as_floating_point()->get());
+        else fail(source, e, "machine.tool_change." + key + ": expected numbers");
+      }
+      j[key] = arr;
+    } else {
+      fail(source, v, "machine.tool_change." + key + ": expected a string, a number or [X, Y]");
+    }
+  }
+  try {
+    apply_tool_change_json(out, j, "machine.tool_change.");
+  } catch (const ApiError& e) {
+    fail(source, n, e.message);
+  }
+}
 
 bool valid_name(const std::string& n) {
   if (n.empty() || n.size() > 32) return false;
@@ -231,7 +262,8 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       if (!t) fail(source, e, "machine: expected a table");
       Reader r{source, *t, "machine."};
       r.known({"name", "port", "baud", "profile", "reconnect_s", "sim_speed", "sim_verify", "sim_vanish_after",
-               "sim_settings", "sim_resolution", "sim_tolerance"});
+               "sim_settings", "sim_resolution", "sim_tolerance", "sim_tool_table", "sim_tool_sensor",
+               "sim_probe_surface_z", "tool_change"});
       MachineConfig m;
       r.str("name", m.name);
       r.str("port", m.port);
@@ -244,6 +276,10 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       r.str("sim_settings", m.sim_settings);
       m.sim_resolution = r.number("sim_resolution", m.sim_resolution, 0.01, 10);
       m.sim_tolerance = r.number("sim_tolerance", m.sim_tolerance, 0.001, 10);
+      r.str("sim_tool_table", m.sim_tool_table);
+      r.str("sim_tool_sensor", m.sim_tool_sensor);
+      if (r.get("sim_probe_surface_z")) m.sim_probe_surface_z = r.number("sim_probe_surface_z", 0, -1e4, 1e4);
+      if (const auto* tc = r.get("tool_change")) read_tool_change(source, *tc, m.tool_change);
       c.machines.push_back(m);
     }
   }

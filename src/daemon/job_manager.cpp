@@ -14,6 +14,7 @@
 #include "cncstream/daemon/auth.hpp"
 #include "cncstream/daemon/job_params.hpp"
 #include "cncstream/gcode/program.hpp"
+#include "cncstream/gcode/tool_change_line.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "cncstream/protocol/link_model.hpp"
 #include "cncstream/protocol/grbl_settings.hpp"
@@ -231,7 +232,8 @@ json JobManager::to_json(const DaemonJob& j) const {
           {"verify", verify},
           {"journal_id", r.journal_id ? json(r.journal_id) : json(nullptr)},
           {"resumed_from", r.resumed_from},
-          {"from_line", r.from_line}};
+          {"from_line", r.from_line},
+          {"tool_change", j.tool_change}};
 }
 
 const EtaTable* JobManager::eta_table(const DaemonJob& j) const {
@@ -313,6 +315,11 @@ json JobManager::create(const json& body) {
   const auto info = files_.get(file_id);
   if (!info) throw ApiError{404, "not_found", "no file '" + file_id.substr(0, 64) + "'"};
   auto j = std::make_unique<DaemonJob>();
+  if (body.contains("tool_change") && !body["tool_change"].is_null()) {
+    ToolChangeSettings check = machines_.find(machine)->config.tool_change;
+    apply_tool_change_json(check, body["tool_change"], "tool_change.");  // a 400 naming the field
+    j->tool_change = body["tool_change"];
+  }
   if (info->kind == "stl") {
     if (!body.contains("params")) throw ApiError{400, "bad_request", "params: required for an STL file (at least tool)"};
     const auto checked = check_toolpath_params(body["params"], *info, config_.limits);
@@ -620,6 +627,18 @@ json JobManager::start(std::int64_t id, const std::string& client) {
     tools = j.program->tools;
     stock = j.program->stock;
   }
+  // The job's tool-change routine: the machine's settings, then the job's own.
+  {
+    ToolChangeSettings tc = m.config.tool_change;
+    if (!j.tool_change.is_null()) apply_tool_change_json(tc, j.tool_change, "tool_change.");
+    std::optional<protocol::ToolChangeConfig> routine;
+    try {
+      routine = routine_config(tc, !gcode::find_tool_changes(in.lines).empty());
+    } catch (const std::invalid_argument& e) {
+      throw ApiError{409, "refused", cat({"job ", std::to_string(id), ": ", e.what()})};
+    }
+    if (auto r = m.session->set_tool_change(routine); !r) throw ApiError{409, "refused", r.reason};
+  }
   // Marked running before the call: a session that starts at once reports
   // JobStarted from inside start_job.
   running_[j.row.machine] = id;
@@ -798,8 +817,12 @@ void JobManager::resume_plan(std::int64_t id, long from_line, const std::string&
   auto& j = get(id);
   machines_.require_control(machine_of(j), client);
   const auto& s = j.row.state;
-  if (s != "stopped" && s != "failed" && s != "interrupted")
-    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + s + "; resume plans are for stopped, failed or interrupted jobs"};
+  // A ready or finished job too: the operator starts it from a line (the web page's "continue after line").
+  if (s != "stopped" && s != "failed" && s != "interrupted" && s != "ready" && s != "done")
+    throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + s +
+                                         "; resume plans are for ready, done, stopped, failed or interrupted jobs"};
+  if (s == "ready" && from_line < 0)
+    throw ApiError{400, "bad_request", "from_line: a job that has not run needs the line to continue after (>= 0)"};
   if (!j.program) {
     // After a restart: find the program by its key in the cache, else it must be generated first.
     for (auto& e : cache_)
@@ -891,6 +914,7 @@ json JobManager::resume_confirm(std::int64_t id, const std::string& plan_id, con
   for (auto* u : unfinished(old.row.machine)) pos = std::max(pos, u->row.position + 1);
   j->row.position = pos;
   j->params = old.params;
+  j->tool_change = old.tool_change;
   j->cache_key = old.cache_key;
   j->program = old.program;
   j->resume = std::move(it->second.plan);

@@ -98,6 +98,10 @@ void SimMachinePort::set_next_design(std::optional<Mesh> design, std::optional<C
 
 std::shared_ptr<session::SimulatorPort> SimMachinePort::retire() { return std::exchange(current_, nullptr); }
 
+void SimMachinePort::operator_mount(int tool) {
+  if (current_) current_->operator_mount(tool);
+}
+
 // ---- machines ---------------------------------------------------------------
 
 gcode::StreamLink machine_link(const MachineConfig& config) {
@@ -121,6 +125,9 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
   for (const auto& mc : config.machines) {
     auto m = std::make_unique<Machine>();
     m->config = mc;
+    // The simulator starts with its work zero at machine zero and nothing to
+    // hit: its tool changes travel 50 mm above it unless told otherwise.
+    if (mc.port == "sim" && !m->config.tool_change.safe_z) m->config.tool_change.safe_z = 50;
     session::MachineOptions o;
     o.name = mc.name;
     if (mc.port == "sim") {
@@ -131,6 +138,14 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
       so.resolution = mc.sim_resolution;
       so.tolerance = mc.sim_tolerance;
       session::parse_sim_speed(so.speed);  // a bad speed fails at start, naming it
+      try {
+        if (!mc.sim_tool_table.empty()) so.stick_outs = session::parse_sim_stick_outs(mc.sim_tool_table);
+        so.tool_sensor = mc.sim_tool_sensor;
+        if (!so.tool_sensor.empty()) session::check_sim_tool_sensor(so.tool_sensor);  // checked at start
+      } catch (const std::exception& e) {
+        throw std::invalid_argument(cat({"machine '", mc.name, "': ", e.what()}));
+      }
+      so.probe_surface_z = mc.sim_probe_surface_z;
       m->sim = std::make_shared<SimMachinePort>(so, mc.sim_vanish_after);
       o.port = m->sim;
     } else if (mc.port == "auto") {
@@ -142,6 +157,9 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
     o.profiles_dir = protocol::default_profiles_dir();
     if (!mc.profile.empty()) o.force_profile = mc.profile;
     o.reconnect_interval_s = mc.reconnect_s;
+    o.actions.probe_plate_mm = mc.tool_change.plate_thickness;
+    // The machine's own routine; each job sets its own before it starts (JobManager::start).
+    o.tool_change = routine_config(m->config.tool_change, false);
     m->session = std::make_unique<session::MachineSession>(io, o);
     // The journal subscribes first: when our handler sees JobStarted, its job id is set.
     m->journal = std::make_unique<session::JobJournal>(*m->session, journal_path_, mc.name + ":" + mc.port);
@@ -199,7 +217,8 @@ std::string Machines::status_frame(Machine& m) {
   json j = {{"type", "status"}, {"machine", m.config.name}, {"seq", ++m.status_seq}, {"link", to_string(s.link())},
             {"alarm", s.in_alarm()}, {"job_active", s.job_active()},
             {"jogging", s.engine() && s.engine()->jogging()},
-            {"jog_held", s.engine() && s.engine()->jog().held()}, {"reported_us", now_us()}};
+            {"jog_held", s.engine() && s.engine()->jog().held()}, {"reported_us", now_us()},
+            {"tool_change", tool_change(m)}, {"tool_in_spindle", s.snapshot().tool_in_spindle}};
   if (st) {
     j["state"] = protocol::to_string(st->state);
     j["state_text"] = st->state_text;
@@ -294,10 +313,22 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
       }
       return;
     }
-    case SessionEventKind::ToolChange:
+    case SessionEventKind::ToolChange: {
       spdlog::info("machine {}: tool change: {}", name, e.text);
+      // The simulator has no hands: its operator mounts the tool the moment
+      // the prompt asks for it (a real one mounts, then jogs, zeroes and
+      // confirms), whichever front end then answers (page, API, pendant).
+      if (m.sim && e.tool_prompt && e.tool_prompt->kind != protocol::PromptKind::Question && e.tool_prompt->tool > 0)
+        m.sim->operator_mount(e.tool_prompt->tool);
       publish(m, {{"type", "event"}, {"kind", "tool-change"}, {"code", 0}, {"line", 0}, {"text", e.text}, {"info", nullptr}});
+      json f = {{"type", "tool_change"}, {"state", tool_change(m)}, {"text", e.text}, {"record", nullptr}};
+      if (const auto& r = e.tool_record)
+        f["record"] = {{"line", r->line}, {"tool", r->tool}, {"method", r->skipped ? "skipped" : protocol::to_string(r->method)},
+                       {"offset_z", r->offset_z ? json(*r->offset_z) : json(nullptr)},
+                       {"length_known", r->length_known}, {"note", r->note}};
+      publish(m, std::move(f));
       return;
+    }
     case SessionEventKind::Routine:  // corner probing, the outline (machine_session.hpp)
       spdlog::info("machine {}: {}", name, e.text);
       publish(m, {{"type", "event"}, {"kind", "routine"}, {"code", 0}, {"line", 0}, {"text", e.text}, {"info", nullptr}});
@@ -319,6 +350,9 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
       return;
     case EventKind::LineAnswered: push_progress(name, m); return;
     case EventKind::JobState:
+      // The routine begins (or ends): the page shows its panel at once, not at the next status.
+      if (m.session->engine() && m.session->engine()->progress().state == protocol::JobState::ToolChange)
+        publish(m, {{"type", "tool_change"}, {"state", tool_change(m)}, {"text", ev.text}, {"record", nullptr}});
       if (m.session->engine() && listener_.state) {
         const auto st = m.session->engine()->progress().state;
         if (st == protocol::JobState::Running) listener_.state(name, "running");
@@ -420,6 +454,39 @@ void Machines::client_gone(const std::string& client_id, std::uint64_t ws_client
   }
 }
 
+namespace detail_machines {
+
+const char* prompt_step(protocol::PromptKind k) {
+  switch (k) {
+    case protocol::PromptKind::MountTool: return "mount_tool";
+    case protocol::PromptKind::ZeroManually: return "zero_manually";
+    case protocol::PromptKind::Question: return "question";
+  }
+  return "question";
+}
+
+}  // namespace detail_machines
+
+json Machines::tool_change(const Machine& m) const {
+  const auto& s = *m.session;
+  const auto& req = s.tool_change_request();
+  if (!req) return nullptr;
+  const auto snap = s.snapshot();
+  const auto& prompt = snap.tool_prompt;
+  const auto& cfg = s.tool_change_config();
+  return {{"line", req->line},
+          {"from_tool", req->from_tool},
+          {"tool", req->to_tool},
+          {"description", req->note},
+          {"method", cfg ? protocol::to_string(cfg->method) : "pause"},
+          // "routine": the machine moves or probes by itself (wait); otherwise the operator's turn.
+          {"step", prompt ? detail_machines::prompt_step(prompt->kind) : "routine"},
+          {"prompt", prompt ? json{{"kind", detail_machines::prompt_step(prompt->kind)}, {"text", prompt->text}}
+                            : json(nullptr)},
+          // Jogs, probe_z and console lines are accepted now (and refused while the routine moves).
+          {"operator_turn", prompt.has_value()}};
+}
+
 json Machines::summary(const Machine& m) const {
   const auto& s = *m.session;
   const auto snap = s.snapshot();
@@ -459,6 +526,9 @@ json Machines::state(const Machine& m) const {
                    {"last_answered_line", snap.progress.last_answered_line},
                    {"total_lines", snap.progress.total_lines}};
   j["alarm_info"] = snap.alarm ? code_info_json(m.last_alarm) : json(nullptr);
+  j["tool_change"] = tool_change(m);
+  j["tool_in_spindle"] = snap.tool_in_spindle;
+  j["tool_change_settings"] = tool_change_json(m.config.tool_change);
   return j;
 }
 

@@ -174,6 +174,12 @@ void PendantController::on_key(Key key, bool fn) {
       command("stop", session_.stop());
       return;
     case Key::StartPause: {
+      // At a tool change's prompt it is the operator's "continue": the tool
+      // is mounted (or zeroed), or the measured length is right.
+      if (session_.snapshot().tool_prompt) {
+        command("tool change: continue", session_.tool_change_confirm());
+        return;
+      }
       auto r = session_.toggle_hold();
       // No job: a hold from a feed hold key or a jog is resumed here too.
       const auto st = session_.status();

@@ -224,6 +224,8 @@ void ToolChangeRoutine::start() {
       prompt(PromptKind::MountTool, "mount " + what + " (spindle off, at the safe Z) and confirm");
     });
     add([this] { mounted_ = req_.to_tool; });
+    // The operator may have jogged at the prompt: back to the safe Z before any travel.
+    add([this] { send("G53 G0 Z" + tool_change_mm(cfg_.safe_z)); });
     add_measure(&new_trigger_);
     add([this] {
       const double diff = new_trigger_ - reference_->trigger_z;

@@ -377,6 +377,7 @@ void MachineSession::start_tool_change() {
     if (src == stop->source_line) req.note = c.note;
   }
   routine_ = std::make_unique<protocol::ToolChangeRoutine>(*opt_.tool_change, req, tool_reference_);
+  routine_request_ = req;
   routine_line_.clear();
   log(fmt::format("tool change at file line {}: T{} -> T{} ({})", req.line, req.from_tool, req.to_tool,
                   protocol::to_string(opt_.tool_change->method)));
@@ -443,6 +444,7 @@ void MachineSession::end_tool_change(const std::string& why) {
   if (ok) tool_reference_ = routine_->reference();
   else tool_reference_.reset();
   routine_.reset();
+  routine_request_.reset();
   routine_line_.clear();
   SessionEvent e;
   e.kind = SessionEventKind::ToolChange;
@@ -459,8 +461,16 @@ bool MachineSession::operator_turn() const {
          engine_->progress().state == protocol::JobState::ToolChange;
 }
 
+CommandResult MachineSession::set_tool_change(std::optional<protocol::ToolChangeConfig> config) {
+  if (job_active()) return CommandResult::refused("tool-change settings: a job is running");
+  opt_.tool_change = config;
+  return CommandResult::ok();
+}
+
 CommandResult MachineSession::tool_change_confirm() {
   if (!operator_turn()) return CommandResult::refused("confirm: no tool change is waiting for the operator");
+  // The routine's next move (safe Z, the probe) must not meet a jog still running.
+  if (engine_->jogging()) return CommandResult::refused("confirm: a jog is running; wait until the machine is still");
   routine_->confirm();
   drain();
   arm_timer();

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include "cncsim/output_file.hpp"
+#include "cncsim/probe_targets.hpp"
 
 #include <sstream>
 #include <stdexcept>
@@ -24,6 +25,10 @@ double parse_sim_speed(const std::string& text) {
     throw std::invalid_argument("--sim-speed '" + text + "': expected 'max' or a positive time scale (1 = real time)");
   return v;
 }
+
+cncsim::StickOuts parse_sim_stick_outs(const std::string& tool_table) { return cncsim::parse_tool_stick_outs(tool_table); }
+
+void check_sim_tool_sensor(const std::string& text) { cncsim::parse_tool_sensor(text); }
 
 SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)) {
   cncsim::MachineOptions mo;

@@ -362,3 +362,65 @@ TEST(PendantController, UnpluggedTheSimulatedMachineStopsWithinItsDeceleration) 
   io.run_for(std::chrono::milliseconds(50));
   sim->finish(false);
 }
+
+// At a tool change the pendant is the operator's hands: its wheel jogs at
+// the prompt, Start/Pause continues (the tool is mounted), and the job goes
+// on with the new tool measured on the sensor.
+TEST(PendantController, AtAToolChangeTheWheelJogsAndStartPauseContinues) {
+  boost::asio::io_context io;
+  cncstream::session::SimulatorOptions so;
+  so.speed = "max";
+  so.stick_outs = {{1, 30.0}, {2, 37.3}};
+  so.tool_sensor = "-30,0,-10";
+  auto sim = std::make_shared<cncstream::session::SimulatorPort>(so);
+  MachineOptions o;
+  o.name = "sim";
+  o.port = sim;
+  o.profiles_dir = cncstream::protocol::default_profiles_dir();
+  cncstream::protocol::ToolChangeConfig tc;
+  tc.method = cncstream::protocol::ToolChangeMethod::Sensor;
+  tc.safe_z = 30;
+  tc.probe_x = -30;
+  tc.probe_y = 0;
+  o.tool_change = tc;
+  MachineSession session(io, o);
+  session.open();
+  ASSERT_TRUE(run_until(io, [&] { return session.ready() && session.status().has_value(); }));
+  FakePendantUsb usb;
+  PendantController controller(session, config(0.2));
+  ReaderOptions ro;
+  ro.reopen_delay = std::chrono::milliseconds(100);
+  auto reader = std::make_unique<UsbPendantReader>(usb, controller, ro);
+  usb.plug();
+  JobInput job;
+  job.file = "two-tools.nc";
+  job.lines = {"G21 G90", "T1", "G0 Z5", "G1 X10 F500", "T2", "M0", "G1 X20 F500", "M2"};
+  job.total_lines = static_cast<std::int64_t>(job.lines.size());
+  std::optional<cncstream::protocol::JobOutcome> outcome;
+  auto sub = session.subscribe([&](const SessionEvent& e) {
+    if (e.kind == SessionEventKind::JobEnded) outcome = e.outcome;
+  });
+  ASSERT_TRUE(session.start_job(job));
+  ASSERT_TRUE(run_until(io, [&] { return session.snapshot().tool_prompt.has_value(); }));
+  ASSERT_EQ(session.snapshot().tool_prompt->kind, cncstream::protocol::PromptKind::MountTool);
+  // One detent down on Z at 1 mm a step: the machine is the operator's at the prompt.
+  const auto mz = [&] { return (*session.status()->mpos)[2]; };
+  const double z0 = mz();
+  usb.send(report(0x10, 0x13));
+  usb.send(report(0x10, 0x13, -1));
+  ASSERT_TRUE(run_until(io, [&] { return std::abs(mz() - (z0 - 1)) < 1e-3 && !session.snapshot().jogging; }))
+      << mz();
+  sim->operator_mount(2);  // the operator's hands
+  usb.send(report(0x10, 0x13, 0, 0x03));  // Start/Pause: continue
+  usb.send(report(0x10, 0x13));
+  ASSERT_TRUE(run_until(io, [&] { return outcome.has_value(); }));
+  EXPECT_EQ(*outcome, cncstream::protocol::JobOutcome::Completed);
+  EXPECT_EQ(session.snapshot().tool_in_spindle, 2);
+  ASSERT_TRUE(session.status() && session.status()->wco);
+  EXPECT_NEAR((*session.status()->wco)[2], 7.3, 1e-3);
+  sub.reset();
+  reader.reset();
+  session.close();
+  io.run_for(std::chrono::milliseconds(50));
+  sim->finish(false);
+}

@@ -62,7 +62,7 @@ def free_port():
 class Daemon:
     """The daemon under test on a free loopback port with a fresh data folder."""
 
-    def __init__(self, args, out, name, require_token=False):
+    def __init__(self, args, out, name, require_token=False, machines=None):
         self.data = tempfile.mkdtemp(prefix="cncstream-web-")
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}/"
@@ -83,8 +83,9 @@ class Daemon:
                         f'data_dir = {json.dumps(os.path.join(self.data, "state"))}\n'
                         # sim: as fast as it goes, for the job; bench: real time, so
                         # a held jog moves for as long as it is held (the dead man matters).
-                        '[[machine]]\nname = "sim"\nport = "sim"\nsim_speed = "max"\n'
-                        '[[machine]]\nname = "bench"\nport = "sim"\nsim_speed = "1"\n'
+                        + (machines or
+                           '[[machine]]\nname = "sim"\nport = "sim"\nsim_speed = "max"\n'
+                           '[[machine]]\nname = "bench"\nport = "sim"\nsim_speed = "1"\n') +
                         f'[security]\nrequire_token = {"true" if require_token else "false"}\n'
                         f'[web]\nroot = {json.dumps(web)}\n')
             cmd = [args.daemon, "--config", cfg]
@@ -208,6 +209,16 @@ class Page:
             return []
 
 
+def drop_text_file(d, name, text):
+    """Drops a text file on the page's drop zone, as a file dragged from the desktop."""
+    d.execute_script("""
+        const dt = new DataTransfer();
+        dt.items.add(new File([arguments[1]], arguments[0], {type: 'text/plain'}));
+        const z = document.getElementById('drop');
+        for (const t of ['dragenter', 'dragover', 'drop'])
+          z.dispatchEvent(new DragEvent(t, {dataTransfer: dt, bubbles: true, cancelable: true}));""", name, text)
+
+
 def wait_stopped(p, axis):
     """The machine is idle and the DRO holds still over several status reports."""
     p.wait("the state to return to Idle", lambda: p.state() == "idle", 15)
@@ -320,12 +331,7 @@ def main_flow(args, out, d):
         # ---- a G-code file dropped on the drop zone, queued as it is: start, hold and
         # resume with the running panel's buttons, stop with the jog pad's STOP; queued again and removed
         square = "G21 G90 G94\nG0 X0 Y0\n" + "G1 X40 F500\nG1 Y40\nG1 X0\nG1 Y0\n" * 3 + "M2\n"  # ~1 min at 500 mm/min
-        d.execute_script("""
-            const dt = new DataTransfer();
-            dt.items.add(new File([arguments[0]], 'square.nc', {type: 'text/plain'}));
-            const z = document.getElementById('drop');
-            for (const t of ['dragenter', 'dragover', 'drop'])
-              z.dispatchEvent(new DragEvent(t, {dataTransfer: dt, bubbles: true, cancelable: true}));""", square)
+        drop_text_file(d, "square.nc", square)
         p.wait("the dropped G-code to be offered for the queue of bench",
                lambda: "square.nc: G-code" in p.text("#upload-status") and p.text("#tp-generate") == "Add to the queue of bench", 20)
 
@@ -558,6 +564,126 @@ def token_flow(args, out, d):
         daemon.stop()
 
 
+# A machine whose tool change is the operator's (manual): two tools of unequal
+# stick-out, a probe plane at machine Z 10 (a touch plate under the tool,
+# 5 mm thick), the change's travel at machine Z 30.
+TOOL_CHANGE_MACHINE = ('[[machine]]\nname = "tc"\nport = "sim"\nsim_speed = "max"\n'
+                       'sim_tool_table = "1=flat:6@30,2=ball:3@37.3"\nsim_probe_surface_z = 10\n'
+                       '[machine.tool_change]\nmethod = "manual"\nsafe_z = 30\nplate_thickness = 5\n')
+TWO_TOOLS = ("G21 G90\nT1\nG0 Z5\nG1 X10 F500\n(finishing: 3 mm ball nose)\nT2\nM0\n"
+             "G0 Z5\nG1 X20 F500\nG1 Y10\nM2\n")
+
+
+def tool_change_flow(args, out, d):
+    """The issue's test: the prompt appears at the change, jog and probe work,
+    continue resumes the job (against the real daemon's simulated machine)."""
+    daemon = Daemon(args, out, "daemon-toolchange", machines=TOOL_CHANGE_MACHINE)
+    p = Page(d, out)
+    p.console_errors()
+    try:
+        d.get(daemon.url)
+        p.wait("the page to connect to the tool-change machine", p.connected, 30)
+        drop_text_file(d, "two-tools.nc", TWO_TOOLS)
+        p.wait("the G-code offered for the queue", lambda: "two-tools.nc: G-code" in p.text("#upload-status"), 20)
+        p.click("#tp-generate")
+        sel = "#queue li[data-state=ready]"
+        p.wait("the job ready", lambda: d.find_elements(By.CSS_SELECTOR, sel), 20)
+        jid = d.execute_script(f"return document.querySelector('{sel}').dataset.job")
+        assert not p.q("#panel-toolchange").is_displayed(), "the tool-change panel shows before any change"
+        p.click(f"#queue li[data-job='{jid}'] button[data-act=start]")
+
+        # ---- the prompt appears at the change, with its steps and the tool
+        p.wait("the tool-change panel at the operator's step",
+               lambda: p.q("#panel-toolchange").is_displayed() and
+               p.q("#panel-toolchange").get_attribute("data-step") == "zero_manually", 30)
+        assert p.q("#panel-toolchange").get_attribute("data-line") == "7"
+        what, prompt = p.text("#tc-what"), p.text("#tc-prompt")
+        say(f"tool change: {what} / {prompt}")
+        assert what.startswith("T2") and "finishing: 3 mm ball nose" in what and "line 7" in what, what
+        assert "mount T2" in prompt, prompt
+        steps = d.execute_script("return [...document.querySelectorAll('#tc-steps li')].map(l => [l.className, l.dataset.step])")
+        assert steps[0] == ["done", "before"] and steps[1] == ["current", "zero_manually"], steps
+        assert p.q("#tc-confirm").is_enabled() and p.q("#tc-probe").is_enabled()
+        assert p.q("#progressbar").get_attribute("data-state") == "running"
+        d.execute_script("window.scrollTo(0, 0)")
+        p.shot("20-tool-change-prompt")
+
+        # ---- the jog pad is live at the prompt: a 1 mm step down moves Z by 1 mm
+        p.click(d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value='1']").find_element(By.XPATH, ".."))
+        zdown = p.q("#jogpad [data-axis=Z][data-dir='-1']")
+        p.wait("the jog pad enabled at the prompt", zdown.is_enabled, 10)
+        z0 = p.dro("z")
+        p.click(zdown)
+        p.wait("Z to move down by the 1 mm step", lambda: abs(p.dro("z") - (z0 - 1)) < 0.002, 20)
+        wait_stopped(p, "z")
+        say(f"jog at the prompt: Z {z0} -> {p.dro('z')}")
+
+        # ---- probe: down onto the plate, work Z set to its 5 mm thickness at the touch
+        p.click("#tc-probe")
+        p.wait("work Z at the plate's thickness after the probe (and its 2 mm retract)",
+               lambda: p.dro("z") is not None and abs(p.dro("z") - 7.0) < 0.01 and p.state() == "idle", 30)
+        mz = p.dro("mz")
+        say(f"probed: work Z {p.dro('z')}, machine Z {mz}")
+        # T2's tip is 7.3 mm below T1's: the plate (machine Z 10) touched with the spindle at 17.3.
+        assert abs(mz - (17.3 + 2)) < 0.01, mz
+        assert p.q("#panel-toolchange").get_attribute("data-step") == "zero_manually"
+        p.shot("21-tool-change-probed")
+
+        # ---- continue resumes the job: the panel goes, the job runs to its end
+        p.click("#tc-confirm")
+        p.wait("the panel gone after continue", lambda: not p.q("#panel-toolchange").is_displayed(), 30)
+        p.wait("the job done", lambda: p.q("#progressbar").get_attribute("data-state") == "done", 60)
+        p.wait("the machine idle after the job", lambda: p.state() == "idle", 30)
+        # The last move ran with T2 zeroed on the plate: work Y 10 at work Z 5 (machine Z 5 + 12.3).
+        assert abs(p.dro("y") - 10) < 0.002 and abs(p.dro("z") - 5) < 0.002, (p.dro("y"), p.dro("z"))
+        assert abs(p.dro("mz") - 17.3) < 0.01, p.dro("mz")
+        assert "tool change: the operator zeroed Z with T2" in p.text("#console"), p.text("#console")
+        d.execute_script("window.scrollTo(0, 0)")
+        p.shot("22-tool-change-done")
+
+        # ---- start from a line: the machine is moved away, the same job continues
+        # after line 9 (its position there is X20 Y0), planned on its preview, queued, started
+        p.click(d.find_element(By.CSS_SELECTOR, "input[name=jogstep][value='10']").find_element(By.XPATH, ".."))
+        p.click("#jogpad [data-axis=X][data-dir='-1']")
+        p.wait("X jogged to 10", lambda: abs(p.dro("x") - 10) < 0.002, 20)
+        wait_stopped(p, "x")
+        d.execute_script("window.cncstream.showPreview(Number(arguments[0]))", jid)
+        p.wait("the preview of the finished job", lambda: p.q("#preview").is_displayed() and p.q("#preview").get_attribute("data-job") == jid, 30)
+        p.q("#from-line").send_keys("9")
+        p.click("#from-line-form button")
+        p.wait("the plan shown", lambda: p.q("#from-line-plan").is_displayed(), 20)
+        plan_text, preamble = p.text("#from-line-text"), p.text("#from-line-preamble")
+        say(f"plan: {plan_text} / {preamble!r}")
+        assert "after line 9" in plan_text, plan_text
+        # Up to the program's safe height first, then over the line's position.
+        pre = preamble.replace(".000", "").splitlines()
+        assert "G0 Z5" in pre and "G0 X20 Y0" in pre and pre.index("G0 Z5") < pre.index("G0 X20 Y0"), preamble
+        p.shot("23-start-from-a-line-plan")
+        p.click("#from-line-queue")
+        ready_new = f"#queue li[data-state=ready]"
+        p.wait("the start-from-a-line job queued", lambda: d.find_elements(By.CSS_SELECTOR, ready_new), 20)
+        rid = d.execute_script(f"return document.querySelector('{ready_new}').dataset.job")
+        assert rid != jid
+        p.click(f"#queue li[data-job='{rid}'] button[data-act=start]")
+        p.wait("the history to show it done", lambda: d.find_elements(By.CSS_SELECTOR, f"#history tr[data-job='{rid}'][data-state=done]"), 60)
+        p.wait("the machine idle", lambda: p.state() == "idle", 30)
+        assert abs(p.dro("x") - 20) < 0.002 and abs(p.dro("y") - 10) < 0.002, (p.dro("x"), p.dro("y"))
+        say(f"started after line 9: ended at X {p.dro('x')} Y {p.dro('y')}")
+        errs = p.console_errors()
+        assert not errs, f"errors in the browser console: {errs}"
+    except Exception:
+        try:
+            p.shot("FAILED-toolchange")
+            with open(os.path.join(out, "FAILED-toolchange.html"), "w") as f:
+                f.write(d.page_source)
+        except Exception:
+            pass
+        raise
+    finally:
+        d.get("about:blank")
+        daemon.stop()
+
+
 def _alert(d):
     try:
         a = d.switch_to.alert
@@ -574,6 +700,7 @@ def main():
     ap.add_argument("--source", default=os.path.normpath(os.path.join(here, "..", "..")))
     ap.add_argument("--output", default=os.environ.get("CNCSTREAM_TEST_OUTPUT", os.path.join(os.getcwd(), "test-output", "web")))
     ap.add_argument("--mock", action="store_true", help="run against tests/web/mock_daemon.py (development only)")
+    ap.add_argument("--only", choices=["main", "token", "toolchange"], help="run one flow (development)")
     args = ap.parse_args()
     if not args.mock and not (args.daemon and os.access(args.daemon, os.X_OK)):
         print(f"FAIL: no cncstreamd to test (--daemon or CNCSTREAMD): {args.daemon!r}")
@@ -585,8 +712,16 @@ def main():
             os.remove(os.path.join(args.output, f))
     d = browser()
     try:
-        shots = main_flow(args, args.output, d)
-        token_flow(args, args.output, d)
+        shots = []
+        if args.only in (None, "main"):
+            shots = main_flow(args, args.output, d)
+        if args.only in (None, "token"):
+            token_flow(args, args.output, d)
+        if args.only in (None, "toolchange"):
+            if args.mock:
+                say("the tool-change flow needs the real daemon's simulator: not run with --mock")
+            else:
+                tool_change_flow(args, args.output, d)
     except Exception:
         traceback.print_exc()
         say(f"FAILED; screenshots and logs in {args.output}")

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "cncstream/daemon/tool_change_settings.hpp"
+
 namespace cncstream::daemon {
 
 struct MachineConfig {
@@ -23,6 +25,15 @@ struct MachineConfig {
   std::string sim_settings;          // persistent simulator settings file ("" : defaults)
   double sim_resolution = 0.1;       // stock grid step of the verify, mm
   double sim_tolerance = 0.05;       // verify tolerance, mm
+  // The simulated machine's tools and probes (docs/tool-change.md): stick-outs
+  // ("1=flat:6@30,2=ball:3.175@37.3"; the simulated operator mounts a tool when
+  // the operator confirms the mount), a tool-length sensor "X,Y,Z" (machine
+  // coordinates, its top) and a plane every probe touches (machine Z).
+  std::string sim_tool_table;
+  std::string sim_tool_sensor;
+  std::optional<double> sim_probe_surface_z;
+  // [machine.tool_change]: the routine a program's tool change runs.
+  ToolChangeSettings tool_change;
 };
 
 // A WHB04B pendant driving one machine ([[pendant]] in the file). The daemon

@@ -71,6 +71,9 @@ struct DaemonJob {
   protocol::JobProgress progress;
   std::optional<SimVerifyReport> verify;
   std::optional<jobs::ResumePlan> resume;  // a confirmed resume: its lines
+  // The job's own tool-change settings over the machine's (its `tool_change`
+  // object as given; null: the machine's). Not kept across a restart.
+  nlohmann::json tool_change = nullptr;
 };
 
 class JobManager {

@@ -43,6 +43,8 @@ class SimMachinePort final : public session::MachinePort {
                        std::optional<Box3> stock = std::nullopt);
   // Hands over the current simulator (to be finished or dropped off the event loop).
   std::shared_ptr<session::SimulatorPort> retire();
+  // The simulated operator mounts tool T (what the operator confirms at a tool change's prompt).
+  void operator_mount(int tool);
 
  private:
   session::SimulatorOptions base_;
@@ -124,6 +126,9 @@ class Machines {
   nlohmann::json state(const Machine& m) const;
   nlohmann::json settings(const Machine& m) const;
   std::string status_frame(Machine& m);
+  // The tool change in progress: its line, tools, the step and what the
+  // operator is asked (null when none).
+  nlohmann::json tool_change(const Machine& m) const;
 
   std::function<nlohmann::json(const std::string& machine)> current_job;  // the job manager's view
 

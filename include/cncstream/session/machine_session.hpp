@@ -112,6 +112,13 @@ class MachineSession {
   CommandResult tool_change_decline();
   // The tool-length reference (forgotten on a reset, an alarm, a homing or a re-zero).
   const std::optional<protocol::ToolLengthReference>& tool_reference() const { return tool_reference_; }
+  // The routine the next job's tool changes run (nullopt: M0/M6 go to the
+  // controller): a front end that lets each job choose (the daemon) sets it
+  // before start_job. Refused while a job runs.
+  CommandResult set_tool_change(std::optional<protocol::ToolChangeConfig> config);
+  const std::optional<protocol::ToolChangeConfig>& tool_change_config() const { return opt_.tool_change; }
+  // The change in progress (nullopt: none): its line, tools and note.
+  const std::optional<protocol::ToolChangeRequest>& tool_change_request() const { return routine_request_; }
 
   // ---- routines outside a job (protocol/machine_routine.hpp) --------------
   // Corner probing (protocol/corner_probe.hpp), the outline trace
@@ -200,6 +207,7 @@ class MachineSession {
   std::optional<JobInput> job_;  // the running job (its lines stay with the engine)
 
   std::unique_ptr<protocol::ToolChangeRoutine> routine_;
+  std::optional<protocol::ToolChangeRequest> routine_request_;  // while routine_ runs
   std::string routine_line_;  // cleaned text of the routine's line in flight ("" none)
   std::optional<protocol::ToolLengthReference> tool_reference_;
   int tool_in_spindle_ = 0;

@@ -59,6 +59,11 @@ struct SimulatorOptions {
 
 // Parses "max" or a positive number; throws std::invalid_argument naming the text.
 double parse_sim_speed(const std::string& text);
+// A front end's simulator settings, checked before any simulator starts
+// (throw std::invalid_argument naming the text): a tool table's stick-outs
+// ("1=flat:6@30,2=ball:3.175@37.3") and a tool-length sensor ("X,Y,Z").
+cncsim::StickOuts parse_sim_stick_outs(const std::string& tool_table);
+void check_sim_tool_sensor(const std::string& text);
 
 class SimulatorPort final : public MachinePort {
  public:

@@ -1,0 +1,231 @@
+// Tool changes of daemon jobs against the simulator (docs/tool-change.md):
+// the session's routine runs at the program's change with the machine's
+// [machine.tool_change] settings or the job's own; the prompt is in the
+// machine's state and on the WebSocket; jogs are refused while the job
+// streams and accepted at the prompt; confirm goes on and the job ends done
+// with the measured offset in the journal; decline and a probe that never
+// triggers end the job with the length unknown.
+#include <gtest/gtest.h>
+
+#include "cncstream/transport/journal.hpp"
+#include "daemon_test_util.hpp"
+
+using namespace dtest;
+
+namespace {
+
+const std::string kClient = "tc-tester";
+
+json upload_text(const Http& h, const std::string& text, const std::string& name) {
+  const auto r = h.request("POST", "/api/v1/files?name=" + name, text, {{"Content-Type", "application/octet-stream"}});
+  EXPECT_TRUE(r.status == 201 || r.status == 200) << r.status << " " << r.body;
+  return r.j();
+}
+
+json job(const Http& h, std::int64_t id) { return h.get("/api/v1/jobs/" + std::to_string(id)).j(); }
+json machine(const Http& h, const std::string& m) { return h.get("/api/v1/machines/" + m).j(); }
+
+bool ready(const Http& h, const std::string& m) { return h.get("/api/v1/machines/" + m).j()["link"] == "ready"; }
+
+Http with_client(Http h) {
+  h.headers["X-Client-Id"] = kClient;
+  return h;
+}
+
+// T1 cuts a slow first move (the job streams for a while), then T2 (7.3 mm
+// longer in the simulator's table) at the T + M0 our programs write, with
+// the note before it, then a last move.
+const char* kTwoTools =
+    "G21 G90\nT1\nG0 Z5\nG1 X50 F100\n(finishing: 6 mm flat end mill)\nT2\nM0\nG1 X40 F500\nG1 Y5\nM2\n";
+
+// A sim machine with two tools of unequal stick-out and a tool-length sensor.
+cncstream::daemon::MachineConfig tool_machine(const std::string& name, const std::string& speed, bool sensor) {
+  auto m = sim_machine(name, speed);
+  m.sim_tool_table = "1=flat:6@30,2=flat:6@37.3";
+  if (sensor) m.sim_tool_sensor = "-30,0,-10";
+  m.tool_change.method = "sensor";
+  m.tool_change.sensor_at = std::array<double, 2>{-30, 0};
+  m.tool_change.probe_travel = 50;
+  return m;
+}
+
+std::int64_t create(const Http& h, const std::string& m, const json& file, const json& tool_change = nullptr) {
+  json body = {{"machine", m}, {"file", file["id"]}};
+  if (!tool_change.is_null()) body["tool_change"] = tool_change;
+  const auto r = h.post("/api/v1/jobs", body);
+  EXPECT_EQ(r.status, 201) << r.body;
+  const auto id = r.j()["id"].get<std::int64_t>();
+  EXPECT_TRUE(wait_for([&] { return job(h, id)["state"] == "ready"; }, 30)) << job(h, id).dump();
+  return id;
+}
+
+}  // namespace
+
+TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTheJob) {
+  const auto dir = temp_dir("toolchange");
+  auto cfg = test_config(dir);
+  cfg.machines = {tool_machine("tc", "20", true)};
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return ready(h, "tc"); }, 30));
+  ASSERT_EQ(h.post("/api/v1/machines/tc/control").status, 200);
+  const auto file = upload_text(h, kTwoTools, "two-tools.nc");
+  // A bad override is a 400 naming the field.
+  auto bad = h.post("/api/v1/jobs", {{"machine", "tc"}, {"file", file["id"]}, {"tool_change", {{"safe_z", "high"}}}});
+  EXPECT_EQ(bad.status, 400);
+  EXPECT_NE(bad.body.find("tool_change.safe_z"), std::string::npos) << bad.body;
+
+  // The job asks for the plate and the machine has no plate position: a program that changes
+  // tools is refused before it moves, naming the setting.
+  const auto refused_id = create(h, "tc", file, {{"method", "plate"}});
+  auto r = h.post("/api/v1/jobs/" + std::to_string(refused_id) + "/start");
+  EXPECT_EQ(r.status, 409);
+  EXPECT_NE(r.body.find("plate_at"), std::string::npos) << r.body;
+  EXPECT_EQ(machine(h, "tc")["tool_change_settings"]["safe_z"], 50);  // a sim machine's default
+  EXPECT_EQ(job(h, refused_id)["state"], "ready");
+  // A ready job may start from a line (the page's "continue after line"); it names the line.
+  const std::string plan_path = "/api/v1/jobs/" + std::to_string(refused_id) + "/resume-plan";
+  EXPECT_EQ(h.post(plan_path, {{"from_line", -1}}).status, 400);
+  r = h.post(plan_path, {{"from_line", 8}});
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.j()["from_line"], 8);
+
+  // The machine's sensor, at the job's own safe Z.
+  const auto id = create(h, "tc", file, {{"safe_z", 30}});
+  EXPECT_EQ(job(h, id)["tool_change"]["safe_z"], 30);
+  WsClient ws;
+  ASSERT_EQ(ws.connect(d.port(), "/api/v1/ws?client_id=" + kClient), 101);
+  ws.send(json{{"type", "subscribe"}, {"machines", {"tc"}}});
+  ASSERT_EQ(h.post("/api/v1/jobs/" + std::to_string(id) + "/start").status, 202);
+  // While the job streams, a jog is refused.
+  r = h.post("/api/v1/machines/tc/jog", {{"dir", {0, 0, 1}}, {"distance", 5}, {"feed", 1000}});
+  EXPECT_EQ(r.status, 409) << r.body;
+  EXPECT_NE(r.body.find("a job is running"), std::string::npos) << r.body;
+  EXPECT_EQ(h.post("/api/v1/machines/tc/tool-change/confirm").status, 409);  // nothing asked yet
+
+  // The prompt: in the WebSocket's tool_change frames and in the machine's state.
+  const auto frame = ws.wait_message(
+      [](const json& j) { return j["type"] == "tool_change" && !j["state"].is_null() && j["state"]["step"] == "mount_tool"; },
+      60);
+  ASSERT_TRUE(frame);
+  const json tc = machine(h, "tc")["tool_change"];
+  ASSERT_FALSE(tc.is_null());
+  EXPECT_EQ(tc["step"], "mount_tool");
+  EXPECT_EQ(tc["tool"], 2);
+  EXPECT_EQ(tc["from_tool"], 1);
+  EXPECT_EQ(tc["line"], 7);
+  EXPECT_EQ(tc["method"], "sensor");
+  EXPECT_TRUE(tc["operator_turn"].get<bool>());
+  EXPECT_NE(tc["description"].get<std::string>().find("finishing"), std::string::npos) << tc.dump();
+  EXPECT_NE(tc["prompt"]["text"].get<std::string>().find("mount T2"), std::string::npos) << tc.dump();
+  EXPECT_EQ(job(h, id)["state"], "running");
+
+  // At the prompt the machine is the operator's: a step jog moves it.
+  const double z0 = machine(h, "tc")["status"]["mpos"][2].get<double>();
+  r = h.post("/api/v1/machines/tc/jog", {{"dir", {0, 0, -1}}, {"distance", 5}, {"feed", 1000}});
+  ASSERT_EQ(r.status, 202) << r.body;
+  ASSERT_TRUE(wait_for([&] {
+    const json s = machine(h, "tc");
+    return !s["jogging"].get<bool>() && std::abs(s["status"]["mpos"][2].get<double>() - (z0 - 5)) < 0.002;
+  }, 20)) << machine(h, "tc").dump();
+
+  // Confirm (the simulated operator mounts T2): measured, the offset written, the job goes on to its end.
+  ASSERT_EQ(h.post("/api/v1/machines/tc/tool-change/confirm").status, 202);
+  ASSERT_TRUE(wait_for([&] { return job(h, id)["state"] == "done"; }, 60)) << job(h, id).dump();
+  EXPECT_TRUE(machine(h, "tc")["tool_change"].is_null());
+  EXPECT_EQ(machine(h, "tc")["tool_in_spindle"], 2);
+  // The new tool is 7.3 mm longer: the work offset's Z moved up by that much.
+  ASSERT_TRUE(wait_for([&] { return !machine(h, "tc")["status"]["wco"].is_null(); }, 5));
+  EXPECT_NEAR(machine(h, "tc")["status"]["wco"][2].get<double>(), 7.3, 0.01) << machine(h, "tc").dump();
+  const auto record = ws.wait_message([](const json& j) { return j["type"] == "tool_change" && !j["record"].is_null(); }, 5);
+  ASSERT_TRUE(record);
+  EXPECT_TRUE((*record)["record"]["length_known"].get<bool>());
+  const auto journal_id = job(h, id)["journal_id"].get<std::int64_t>();
+  d.shutdown();
+  cncstream::transport::Journal journal(cfg.journal);
+  const auto rows = journal.tool_changes(journal_id);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].line, 7);
+  EXPECT_EQ(rows[0].tool, 2);
+  EXPECT_EQ(rows[0].method, "sensor");
+  EXPECT_TRUE(rows[0].length_known);
+  ASSERT_TRUE(rows[0].offset_z);
+  EXPECT_NEAR(*rows[0].offset_z, 7.3, 0.01);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DaemonToolChange, DeclineAndAMissingSensorEndTheJobWithTheLengthUnknown) {
+  const auto dir = temp_dir("toolchange-fail");
+  auto cfg = test_config(dir);
+  auto with = tool_machine("with", "max", true), without = tool_machine("without", "max", false);
+  with.tool_change.safe_z = 30;
+  without.tool_change.safe_z = 30;
+  cfg.machines = {with, without};
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return ready(h, "with") && ready(h, "without"); }, 30));
+  const auto file = upload_text(h, kTwoTools, "two-tools.nc");
+  for (const char* m : {"with", "without"}) ASSERT_EQ(h.post(std::string("/api/v1/machines/") + m + "/control").status, 200);
+
+  // No sensor where the settings say: the reference never triggers; the job fails before any prompt.
+  const auto lost = create(h, "without", file);
+  ASSERT_EQ(h.post("/api/v1/jobs/" + std::to_string(lost) + "/start").status, 202);
+  ASSERT_TRUE(wait_for([&] { return job(h, lost)["state"] == "failed"; }, 60)) << job(h, lost).dump();
+  EXPECT_NE(job(h, lost)["message"].get<std::string>().find("never triggered"), std::string::npos) << job(h, lost).dump();
+
+  // Declined at the mount prompt: the job stops there.
+  const auto declined = create(h, "with", file);
+  ASSERT_EQ(h.post("/api/v1/jobs/" + std::to_string(declined) + "/start").status, 202);
+  ASSERT_TRUE(wait_for([&] {
+    const json tc = machine(h, "with")["tool_change"];
+    return !tc.is_null() && tc["step"] == "mount_tool";
+  }, 60));
+  ASSERT_EQ(h.post("/api/v1/machines/with/tool-change/decline").status, 202);
+  ASSERT_TRUE(wait_for([&] { return job(h, declined)["state"] == "failed"; }, 30)) << job(h, declined).dump();
+  EXPECT_NE(job(h, declined)["message"].get<std::string>().find("declined"), std::string::npos);
+  EXPECT_EQ(h.post("/api/v1/machines/with/tool-change/sideways").status, 400);
+  const auto lost_journal = job(h, lost)["journal_id"].get<std::int64_t>();
+  const auto declined_journal = job(h, declined)["journal_id"].get<std::int64_t>();
+  d.shutdown();
+  cncstream::transport::Journal journal(cfg.journal);
+  for (const auto jid : {lost_journal, declined_journal}) {
+    const auto rows = journal.tool_changes(jid);
+    ASSERT_EQ(rows.size(), 1u) << jid;
+    EXPECT_FALSE(rows[0].length_known);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DaemonToolChange, TheMachinesToolChangeTableIsReadAndABadFieldNamesTheFileAndLine) {
+  using cncstream::daemon::parse_config;
+  const auto c = parse_config(
+      "[[machine]]\nname = \"r\"\nport = \"sim\"\nsim_tool_table = \"1=flat:6@30\"\nsim_probe_surface_z = 10\n"
+      "[machine.tool_change]\nmethod = \"plate\"\nsafe_z = -1\nplate_at = [20, 25.5]\nplate_thickness = 5\n",
+      "d.toml");
+  ASSERT_EQ(c.machines.size(), 1u);
+  const auto& tc = c.machines[0].tool_change;
+  EXPECT_EQ(tc.method, "plate");
+  ASSERT_TRUE(tc.safe_z && tc.plate_at);
+  EXPECT_EQ(*tc.safe_z, -1);
+  EXPECT_EQ((*tc.plate_at)[1], 25.5);
+  EXPECT_EQ(tc.plate_thickness, 5);
+  EXPECT_EQ(c.machines[0].sim_probe_surface_z, 10);
+  const auto routine = cncstream::daemon::routine_config(tc, true);
+  ASSERT_TRUE(routine);
+  EXPECT_EQ(routine->probe_y, 25.5);
+  try {
+    parse_config("[[machine]]\nname = \"r\"\nport = \"sim\"\n[machine.tool_change]\nmethod = \"laser\"\n", "d.toml");
+    FAIL() << "an unknown method was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("d.toml:4"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("machine.tool_change.method"), std::string::npos) << e.what();
+  }
+  // Pause needs nothing; sensor without its position is refused only for a program that changes tools.
+  cncstream::daemon::ToolChangeSettings s;
+  s.method = "pause";
+  EXPECT_FALSE(cncstream::daemon::routine_config(s, true));
+  s.method = "sensor";
+  s.safe_z = 0;
+  EXPECT_TRUE(cncstream::daemon::routine_config(s, false));
+  EXPECT_THROW(cncstream::daemon::routine_config(s, true), std::invalid_argument);
+}
