@@ -4,6 +4,7 @@
 
 #include <oneapi/tbb/task_group.h>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -38,7 +39,12 @@ std::string row_spacing_text(const RasterPath& path) {
   return format_gcode_number(path.stepover_min, 4) + " to " + format_gcode_number(path.stepover, 4);
 }
 
-double default_max_depth(const Cutter& c) { return c.type == CutterType::Flat ? c.diameter() / 4 : c.radius; }
+// A V-bit or tapered ball: as deep as a ball of its top diameter, and never
+// deeper than its flutes (beyond them the shank rubs the wall).
+double default_max_depth(const Cutter& c) {
+  if (!c.is_apt()) return std::min(c.profile_top(), c.radius);
+  return c.type == CutterType::Flat ? c.diameter() / 4 : c.radius;
+}
 
 ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& control) {
   ToolpathProgram r;
