@@ -55,6 +55,11 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     run.stage("load", 0, kPathFrom);
     auto t0 = std::chrono::steady_clock::now();
     const std::shared_ptr<const Mesh> mesh = load_part(p.part);
+    if (control.warn) {
+      const std::string w =
+          units_warning(mesh->bounds(), p.part.units, p.cutter.diameter(), p.part.stl.empty() ? "the part" : p.part.stl);
+      if (!w.empty()) control.warn(w);
+    }
     r.facets = mesh->triangles.size();
     r.seconds_load = seconds_since(t0);
 

@@ -14,6 +14,8 @@
 #include "cam/cl_oracle.hpp"
 #include "cam/cl_test_meshes.hpp"
 #include "cncstream/cam/cl_engine.hpp"
+#include "cncstream/cam/stock.hpp"
+#include "cncstream/jobs/toolpath_job.hpp"
 
 using namespace cncstream;
 
@@ -186,7 +188,7 @@ TEST(ClCutters, FacetAtTheConesSlope) {
     const ClEngine e(m, c);
     ClOptions every;
     every.skip_concave_edges = false;
-    const ClGrid g = e.compute(GridSpec::covering(-1, 2, 11, 8, 0.37, 0.5));
+    const ClGrid g = e.compute(GridSpec::covering(-1, 2, 11, 8, 0.61, 0.83));
     const ClGrid full = ClEngine(m, c, every).compute(g.spec);
     double worst = 0;
     for (std::size_t k = 0; k < g.z.size(); ++k) {
@@ -270,4 +272,64 @@ TEST(ClCutters, InclinedPlanes) {
       }
     }
   }
+}
+
+// The simulator's removal (stock.hpp) sweeps the same profiles: the lowest
+// height a straight cut reaches above a point against brute force (the tip
+// moving along the segment, the profile convex: golden section in t).
+TEST(ClCutters, SweptRemovalAgainstBruteForce) {
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<double> U(0, 6), Z(-2, 2);
+  for (const Cutter& c : new_cutters()) {
+    SCOPED_TRACE(c.spec());
+    const cl_oracle::Tool t = cl_oracle::tool_of(c);
+    double worst = 0;
+    int reached = 0;
+    for (int k = 0; k < 200; ++k) {
+      const Vec3 a{U(rng), U(rng), Z(rng)};
+      const Vec3 b = k % 5 == 0 ? Vec3{a.x, a.y, a.z + 1} : k % 5 == 1 ? Vec3{U(rng), U(rng), a.z} : Vec3{U(rng), U(rng), Z(rng)};
+      const double x = U(rng), y = U(rng);
+      auto surface = [&](double s) {
+        const Vec3 p = a + (b - a) * s;
+        const double rho = std::hypot(x - p.x, y - p.y);
+        return rho > c.radius ? HUGE_VAL : p.z + t.h(rho);
+      };
+      // Where the disc covers the point: an interval of s; bisect its ends, then golden section.
+      const double got = swept_lowest_height(a, b, c, x, y);
+      double best = std::min(surface(0), surface(1));
+      const double s_min = cl_oracle::golden_argmin([&](double s) {
+        const Vec3 p = a + (b - a) * s;
+        return std::hypot(x - p.x, y - p.y);
+      }, 0, 1, 200);
+      if (std::isfinite(surface(s_min))) {
+        double lo = 0, hi = s_min, lo2 = s_min, hi2 = 1;
+        for (int it = 0; it < 200 && std::isinf(surface(lo)); ++it) {
+          const double m = 0.5 * (lo + hi);
+          (std::isinf(surface(m)) ? lo : hi) = m;
+          if (hi - lo < 1e-15) lo = hi;
+        }
+        for (int it = 0; it < 200 && std::isinf(surface(hi2)); ++it) {
+          const double m = 0.5 * (lo2 + hi2);
+          (std::isinf(surface(m)) ? hi2 : lo2) = m;
+          if (hi2 - lo2 < 1e-15) hi2 = lo2;
+        }
+        best = std::min(best, surface(cl_oracle::golden_argmin(surface, lo, hi2, 300)));
+      }
+      if (!std::isfinite(best)) {
+        EXPECT_FALSE(std::isfinite(got) && got < 1e100) << k;
+        continue;
+      }
+      ++reached;
+      worst = std::max(worst, std::fabs(got - best));
+    }
+    EXPECT_GT(reached, 50);
+    EXPECT_LE(worst, 1e-6);
+  }
+}
+
+TEST(ClCutters, DepthLimitFromGeometry) {
+  // As deep as a ball of the top diameter, never deeper than the flutes.
+  EXPECT_DOUBLE_EQ(jobs::default_max_depth(Cutter::tapered_ball(1, 5, 3.175)), 3.175 / 2);
+  const Cutter shallow = Cutter::vbit(150, 10);  // a cone 1.34 mm high
+  EXPECT_NEAR(jobs::default_max_depth(shallow), 5 / std::tan(75 * kPi / 180), 1e-12);
 }
