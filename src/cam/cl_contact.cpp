@@ -27,9 +27,19 @@ FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cut
   f.horizontal = nxy < kHorizontalNxy;
 
   // Offset vector, thesis eq. 3.3: rk * n plus rc along the horizontal part
-  // of n. The contact point is c - shift (xy).
+  // of n. The contact point is c - shift (xy). A general profile: its
+  // contact radius along the horizontal part of n.
   double sx = cutter.rk * n.x, sy = cutter.rk * n.y;
-  if (!f.horizontal && cutter.rc > 0) {
+  PlaneContact pc;
+  if (cutter.general) {
+    pc = plane_contact(cutter.prof, f.horizontal ? 0.0 : nxy, n.z);
+    f.ambiguous = pc.ambiguous;
+    sx = sy = 0;
+    if (!f.horizontal && pc.rho > 0) {
+      sx = pc.rho * n.x / nxy;
+      sy = pc.rho * n.y / nxy;
+    }
+  } else if (!f.horizontal && cutter.rc > 0) {
     sx += cutter.rc * n.x / nxy;
     sy += cutter.rc * n.y / nxy;
   }
@@ -66,7 +76,7 @@ FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cut
   f.gy = -n.y / n.z;
   f.ox = p0.x + sx;
   f.oy = p0.y + sy;
-  f.z0 = p0.z - cutter.rk * (1.0 - n.z);
+  f.z0 = cutter.general ? p0.z - pc.h : p0.z - cutter.rk * (1.0 - n.z);
 
   // Inclusive test: when the contact point lies on a side shared with a
   // coplanar or concave neighbour, that side's edge is not drawn, so one of
@@ -79,7 +89,7 @@ FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cut
     for (const Vec3* q : p) scale = std::fmax(scale, std::fmax(std::fabs(q->x), std::fmax(std::fabs(q->y), std::fabs(q->z))));
     const double eps_n = 4e-16 * scale * (norm(e1) + norm(e2)) / len;
     f.tol = 1e-12 * scale + 100.0 * cutter.R * eps_n;
-    if (!f.horizontal && cutter.rc > 0) f.tol += 100.0 * cutter.rc * eps_n / nxy;
+    if (!f.horizontal && cutter.rc > 0) f.tol += 100.0 * (cutter.general ? pc.rho : cutter.rc) * eps_n / nxy;
   }
   f.active = true;
   return f;
@@ -110,7 +120,7 @@ EdgeGeom make_edge(const Vec3& a, const Vec3& b) {
   return e;
 }
 
-namespace {
+namespace detail_cl_contact {
 
 // Bull-nose against the infinite line through an edge: how far uphill of the
 // node (along the edge's XY direction) the torus touches it. The contact
@@ -122,22 +132,22 @@ namespace {
 // safeguarded by bisection. The contact then lies k cos(theta) (rk + rc/|N_xy|)
 // uphill. (This is the offset-ellipse problem, reduced to one monotone
 // equation.)
-double bull_line_contact_offset(const CutterShape& c, double k, double ad) {
+double torus_line_contact_offset(double rc, double rk, double R, double k, double ad) {
   if (k <= 0) return 0.0;  // horizontal edge: the nearest point is best
   const double k2 = k * k;
   // With phi(u) = u / sqrt(u^2 + k^2 (1 - u^2)) >= u:  R u <= g(u) <= R phi(u),
   // which brackets the root; g is concave, so Newton from the right end
   // approaches it monotonically.
-  const double y = std::min(1.0, ad / c.R);
+  const double y = std::min(1.0, ad / R);
   double lo = y * k / std::sqrt(std::max(1e-300, 1 - y * y * (1 - k2))), hi = y, u = y;
   if (!(lo <= hi)) lo = 0;
   for (int iter = 0; iter < 100; ++iter) {
     const double q = u * u + k2 * (1 - u * u);
     const double sq = std::sqrt(q);
-    const double gval = u * (c.rk + c.rc / sq) - ad;
+    const double gval = u * (rk + rc / sq) - ad;
     if (gval > 0) hi = u; else lo = u;
     if (gval == 0) break;
-    double un = u - gval / (c.rk + c.rc * k2 / (q * sq));
+    double un = u - gval / (rk + rc * k2 / (q * sq));
     if (!(un > lo && un < hi)) un = 0.5 * (lo + hi);
     const bool done = std::fabs(un - u) <= 4e-16 || hi - lo <= 4e-16;
     u = un;
@@ -145,10 +155,72 @@ double bull_line_contact_offset(const CutterShape& c, double k, double ad) {
   }
   const double cos_t = std::sqrt(std::max(0.0, (1 - u) * (1 + u)));
   const double nxy = std::sqrt(u * u + k2 * (1 - u * u));
-  return k * cos_t * (c.rk + c.rc / nxy);
+  return k * cos_t * (rk + rc / nxy);
 }
 
-}  // namespace
+// Slope dh/drho of a band at rho (infinite at an arc's rim).
+double band_slope(const ProfileBand& b, double rho) {
+  if (b.kind == ProfileBand::Kind::Cone) return b.slope;
+  const double u = std::clamp(rho - b.a, 0.0, b.r);
+  const double w = std::sqrt(std::max(0.0, (b.r - u) * (b.r + u)));
+  return w > 0 ? u / w : HUGE_VAL;
+}
+
+}  // namespace detail_cl_contact
+
+PlaneContact plane_contact(const CutterProfile& p, double nxy, double nz) {
+  // Ambiguity margin: a plane within rounding of a cone band's slope.
+  constexpr double kSame = 1e-9;
+  for (std::size_t k = 0; k < p.count; ++k) {
+    const ProfileBand& b = p.band[k];
+    if (nxy < b.sin0 - (b.kind == ProfileBand::Kind::Cone ? kSame : 0.0)) return {b.rho0, b.h0, false};  // a kink
+    if (b.kind == ProfileBand::Kind::Cone) {
+      if (nxy > b.sin1 + kSame) continue;
+      // The plane's slope is the cone's, to rounding: the exact side's end.
+      const bool outer = nxy > b.sin1;
+      return {outer ? b.rho1 : b.rho0, outer ? b.h(b.rho1) : b.h0, true};
+    }
+    if (nxy > b.sin1) continue;
+    if (nxy <= b.sin0) return {b.rho0, b.h0, false};
+    return {b.a + b.r * nxy, b.zc - b.r * nz, false};
+  }
+  return {p.R, p.top, false};
+}
+
+double line_contact_offset(const CutterProfile& p, double k, double ad) {
+  using detail_cl_contact::band_slope;
+  // With t = tan(slope), the maximiser is where t = G(v) = h'(rho) v / rho,
+  // rho = sqrt(ad^2 + v^2). h' and v / rho never decrease with v (h is
+  // convex), so G is monotone: find the band where it crosses t, then solve
+  // there in closed form (cone, sphere) or by the torus's monotone equation.
+  if (!(k > 0)) return 0.0;  // level edge: the nearest point is best
+  const double c = std::sqrt(std::max(0.0, (1 - k) * (1 + k)));
+  const double t = c > 0 ? k / c : HUGE_VAL;
+  auto v_at = [&](double rho) { return std::sqrt(std::max(0.0, (rho - ad) * (rho + ad))); };
+  auto G = [&](const ProfileBand& b, double rho) { return rho > 0 ? band_slope(b, rho) * (v_at(rho) / rho) : 0.0; };
+  for (std::size_t i = 0; i < p.count; ++i) {
+    const ProfileBand& b = p.band[i];
+    if (b.rho1 <= ad) continue;  // all of the band lies nearer the axis than the line
+    const double rho_s = std::max(b.rho0, ad);
+    if (t <= G(b, rho_s)) return v_at(rho_s);  // at the kink where the band begins
+    if (!(t <= G(b, b.rho1))) continue;
+    const double vs = v_at(rho_s), ve = v_at(b.rho1);
+    double v;
+    if (b.kind == ProfileBand::Kind::Cone) {
+      // m v / rho = t  ->  v = t ad / sqrt(m^2 - t^2)   (m > t here).
+      const double m = b.slope;
+      v = ad * k / std::sqrt(std::max(1e-300, (m - t) * (m + t))) / (c > 0 ? c : 1e-300);
+      if (!std::isfinite(v)) v = ve;
+    } else if (b.a == 0) {
+      // Sphere: the cylinder's maximiser, v = sqrt(r^2 - ad^2) sin(slope).
+      v = std::sqrt(std::max(0.0, (b.r - ad) * (b.r + ad))) * k;
+    } else {
+      v = detail_cl_contact::torus_line_contact_offset(b.a, b.r, b.a + b.r, k, ad);
+    }
+    return std::clamp(v, vs, ve);
+  }
+  return v_at(p.R);  // the rim
+}
 
 double edge_drop(const EdgeGeom& e, const CutterShape& c, double x, double y, double current) {
   const double px = x - e.ax, py = y - e.ay;
@@ -168,8 +240,8 @@ double edge_drop(const EdgeGeom& e, const CutterShape& c, double x, double y, do
 
   // Heights along the clipped segment are taken from s in [0, L], so steep
   // edges lose nothing to cancellation.
-  if (c.rk == 0) return e.az + e.dz * ((e.dz > 0 ? hi : lo) * e.inv_L);  // flat: h = 0 on the disc
-  if (c.rc == 0) {
+  if (!c.general && c.rk == 0) return e.az + e.dz * ((e.dz > 0 ? hi : lo) * e.inv_L);  // flat: h = 0 on the disc
+  if (!c.general && c.rc == 0) {
     // Ball: the cylinder's maximiser in closed form, v = w sin(slope).
     const double s = std::clamp(s0 + w * e.sin_slope, lo, hi);
     const double v = s - s0;
@@ -181,7 +253,8 @@ double edge_drop(const EdgeGeom& e, const CutterShape& c, double x, double y, do
   const double top = e.az + e.dz * ((e.dz > 0 ? hi : lo) * e.inv_L);
   const double v_near = std::clamp(0.0, vlo, vhi);
   if (!profile_below(c, d2 + v_near * v_near, top - current)) return kNoContact;
-  const double offset = bull_line_contact_offset(c, std::fabs(e.sin_slope), std::fabs(d));
+  const double offset = c.general ? line_contact_offset(c.prof, std::fabs(e.sin_slope), std::fabs(d))
+                                  : detail_cl_contact::torus_line_contact_offset(c.rc, c.rk, c.R, std::fabs(e.sin_slope), std::fabs(d));
   // The maximiser on the clipped segment: the line's contact clamped to it
   // (the function is concave along the segment).
   const double s = std::clamp(e.dz >= 0 ? s0 + offset : s0 - offset, lo, hi);

@@ -21,34 +21,73 @@ namespace cncstream::cl_detail {
 
 inline constexpr double kNoContact = -std::numeric_limits<double>::infinity();
 
+// The cutter as the contact formulas see it. Flat, ball and bull-nose use
+// the closed forms of the generalized APT cutter (rk, rc); every other
+// profile (V-bit, tapered ball, grown ones) is `general`: a list of bands
+// (cutter.hpp), each with its own exact facet, edge and vertex contact.
 struct CutterShape {
-  double R = 0;   // radius
-  double rk = 0;  // corner radius
-  double rc = 0;  // core radius, R - rk
+  double R = 0;   // radius (reach)
+  double rk = 0;  // corner radius (APT)
+  double rc = 0;  // core radius, R - rk (APT)
+  bool general = false;
+  CutterProfile prof;  // general: the bands
 
-  explicit CutterShape(const Cutter& c)
+  // force_general: use the band formulas for an APT cutter too (tests
+  // compare both).
+  explicit CutterShape(const Cutter& c, bool force_general = false)
       : R(c.radius),
         rk(c.type == CutterType::Flat ? 0.0
            : c.type == CutterType::Ball ? c.radius
                                          : std::fmin(std::fmax(c.corner_radius, 0.0), c.radius)),
-        rc(R - rk) {}
+        rc(R - rk),
+        general(force_general || !c.is_apt()) {
+    if (general) {
+      prof = c.profile();
+      R = prof.R;
+      rk = 0;
+      rc = R;
+    }
+  }
 
   // Profile height above the tip at radius rho, 0 <= rho <= R (clamped).
   double h(double rho) const {
+    if (general) return prof.h(rho);
     if (rho <= rc) return 0.0;
     const double u = std::min(rho - rc, rk);
     return rk - std::sqrt(std::max(0.0, (rk - u) * (rk + u)));
   }
+  // Height of the profile at the rim (its maximum).
+  double top() const { return general ? prof.top : rk; }
 };
 
 // Whether h(rho) < t, from rho^2 (cheap: no square root for flat and ball).
 inline bool profile_below(const CutterShape& c, double rho2, double t) {
+  if (c.general) return t > c.prof.top || c.prof.h(std::sqrt(rho2)) < t;
   if (t > c.rk) return true;  // h <= rk everywhere
   if (c.rc == 0) return c.R * c.R - rho2 > (c.R - t) * (c.R - t);
   if (rho2 <= c.rc * c.rc) return t > 0;
   const double u = std::sqrt(rho2) - c.rc;
   return (c.rk - u) * (c.rk + u) > (c.rk - t) * (c.rk - t);
 }
+
+// Where a general profile touches a plane whose upward unit normal has
+// horizontal length nxy and vertical part nz: the radius rho at which the
+// profile's tilt matches the plane's (inside an arc band rho = a + r nxy; at
+// a kink, or on a cone band of the plane's own slope, its inner end; past
+// the last band, the rim) and the profile height there. `ambiguous`: the
+// plane's slope equals a straight band's (to rounding), so a whole segment
+// of the band touches and the reported point is one of many.
+struct PlaneContact {
+  double rho = 0, h = 0;
+  bool ambiguous = false;
+};
+PlaneContact plane_contact(const CutterProfile& p, double nxy, double nz);
+
+// How far uphill of the node, along an edge's xy direction, a general
+// profile touches the infinite line through the edge: the edge rises at
+// sin(slope) = k >= 0, the node lies ad >= 0 from the line in xy. The
+// maximiser of z(v) - h(sqrt(ad^2 + v^2)) (concave in v), unclamped.
+double line_contact_offset(const CutterProfile& p, double k, double ad);
 
 // Facet interior contact ("face offset"). For nodes c with c - shift inside
 // the facet's xy triangle (within tol), the facet's drop height is linear in
@@ -61,6 +100,7 @@ struct FaceOffset {
   double ox = 0, oy = 0, z0 = 0, gx = 0, gy = 0;
   double tol = 0;            // inclusion tolerance, mm
   double nz = 0;             // upward unit normal's z
+  bool ambiguous = false;    // general profile: a band of the facet's slope touches (see PlaneContact)
 
   bool contains(double x, double y) const {
     for (int k = 0; k < 3; ++k)

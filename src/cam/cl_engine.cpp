@@ -50,6 +50,13 @@ void validate_cutter(const Cutter& c) {
   if (c.type == CutterType::Bull && !(c.corner_radius >= 0 && c.corner_radius <= c.radius))
     throw std::invalid_argument("CL engine: bull-nose corner radius " + std::to_string(c.corner_radius) +
                                 " must lie in [0, " + std::to_string(c.radius) + "]");
+  if (!c.is_apt()) {
+    try {
+      (void)c.profile();
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("CL engine: cutter " + c.spec() + ": " + e.what());
+    }
+  }
 }
 
 void validate_mesh(const Mesh& m) {

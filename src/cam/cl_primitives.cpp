@@ -39,6 +39,9 @@ bool edge_is_redundant(const Mesh& mesh, const CutterShape& cutter, std::uint32_
   };
   const FaceOffset fa = facet_offset(slot.facet[0]), fb = facet_offset(slot.facet[1]);
   if (!fa.active || !fb.active || fa.horizontal != fb.horizontal) return false;
+  // A facet at a straight band's slope touches along a segment, of which its
+  // face offset reports one point: the argument above needs the one.
+  if (fa.ambiguous || fb.ambiguous) return false;
   const double ex = pb.x - pa.x, ey = pb.y - pa.y;
   const double side_a = ex * (oa.y - pa.y) - ey * (oa.x - pa.x);
   const double side_b = ex * (ob.y - pa.y) - ey * (ob.x - pa.x);
@@ -63,6 +66,7 @@ EdgeBand edge_band(const Vec3& a, const Vec3& b, const Vec3& na, const Vec3& nb,
   const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
   const double L = std::sqrt(dx * dx + dy * dy), len = std::sqrt(L * L + dz * dz);
   if (!(L > 1e-12 * (1 + len))) return {};  // (near) vertical edge: no band
+  if (c.general) return {};                  // (not derived for band profiles: drawn in full)
   const double ux = dx / L, uy = dy / L;
   const double sin_b = dz / len, cos_b = L / len;
   // In the plane normal to the edge: w horizontal (the direction of d), bv

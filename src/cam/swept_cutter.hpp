@@ -12,10 +12,13 @@
 // its minimum is the clamped root of f'. Flat: an end of the interval. Ball:
 // closed form s* = -m w / sqrt(1 + m^2), w = sqrt(R^2 - e^2). Bull-nose: a
 // safeguarded Newton iteration on f' (monotone), bracketed by the flat core.
+// Any other profile (V-bit, tapered ball): mirrored, this is the CL
+// engine's edge contact (the line's maximiser of -m s - h), band by band.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "cl_contact.hpp"
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
@@ -23,7 +26,7 @@ namespace cncstream::detail {
 
 class SweptCutter {
  public:
-  enum class Shape { Flat, Ball, Bull };
+  enum class Shape { Flat, Ball, Bull, General };
 
   SweptCutter(const Vec3& a, const Vec3& b, const Cutter& c) : a_(a) {
     R_ = c.radius;
@@ -31,6 +34,11 @@ class SweptCutter {
     rc_ = R_ - rk_;
     shape_ = rk_ <= R_ * 1e-12 ? Shape::Flat : (rc_ <= R_ * 1e-12 ? Shape::Ball : Shape::Bull);
     if (shape_ == Shape::Ball) rc_ = 0, rk_ = R_;
+    if (!c.is_apt()) {
+      shape_ = Shape::General;
+      prof_ = c.profile();
+      R_ = prof_.R;
+    }
     const double ddx = b.x - a.x, ddy = b.y - a.y, ddz = b.z - a.z;
     L_ = std::sqrt(ddx * ddx + ddy * ddy);
     vertical_ = L_ < 1e-9;
@@ -54,6 +62,7 @@ class SweptCutter {
 
   // Height of the cutter surface's profile at distance rho (rho <= R).
   double h(double rho) const {
+    if (shape_ == Shape::General) return prof_.h(rho);
     const double q = rho - rc_;
     if (q <= 0) return 0;
     const double u = std::min(q, rk_);
@@ -108,6 +117,12 @@ class SweptCutter {
         const double s = bull_argmin(m, e2, w, l, r);
         return z0 + m * s + h(std::sqrt(s * s + e2));
       }
+      case Shape::General: {
+        const double m = std::fabs(m_);
+        const double l = m_ > 0 ? lo : -hi, r = m_ > 0 ? hi : -lo;
+        const double s = std::clamp(-cl_detail::line_contact_offset(prof_, std::fabs(k_), std::sqrt(e2)), l, r);
+        return z0 + m * s + h(std::sqrt(s * s + e2));
+      }
     }
     return kOut;
   }
@@ -159,6 +174,7 @@ class SweptCutter {
   Vec3 a_;
   double R_ = 0, rk_ = 0, rc_ = 0;
   Shape shape_ = Shape::Ball;
+  CutterProfile prof_;  // General
   double L_ = 0, ux_ = 1, uy_ = 0, m_ = 0, k_ = 0, zmin_ = 0;
   bool vertical_ = false, level_ = true;
 };

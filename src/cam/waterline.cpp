@@ -419,9 +419,13 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
           ++out.point_queries;
         }
         // Between samples a round cutter's CL sags at most step^2 / (8 rk)
-        // under its chord; a flat one's gets a fixed margin.
-        const double rk = engine.cutter().corner_radius;
+        // under its chord; a flat one's gets a fixed margin, a V-bit's at
+        // least the apex's slope times half a step.
+        const Cutter& cut = engine.cutter();
+        const double rk = cut.tip_round_radius();
         zb += rk > 0 ? o.sample_step * o.sample_step / (8 * rk) + 1e-3 : 0.05;
+        if (cut.type == CutterType::VBit)
+          zb += 0.5 * o.sample_step / std::tan(cut.half_angle_deg * std::numbers::pi / 180);
         Polyline& last = out.pieces.back();
         if (zb > from.z) last.push_back({from.x, from.y, zb});
         if (zb > to.z) last.push_back({to.x, to.y, zb});

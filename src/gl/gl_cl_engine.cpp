@@ -409,6 +409,11 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
                           GlClStats* stats_out) {
   check_spec(spec);
   if (opt.floor && !std::isfinite(*opt.floor)) throw std::invalid_argument("GL CL engine: floor must be finite");
+  // The offset tessellation knows the generalized APT profile only: a V-bit
+  // or tapered ball would be drawn as another cutter (fail closed).
+  if (!cutter.is_apt())
+    throw std::invalid_argument("GL CL engine: draws flat, ball and bull-nose cutters only, not " + cutter.spec() +
+                                " (use the exact engine)");
   const CutterCap cap(cutter, opt.tolerance);
   const Box3 box = mesh.bounds();
   ClGrid grid;

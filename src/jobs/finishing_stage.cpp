@@ -35,10 +35,15 @@ FinishSpacing finish_spacing(const ToolpathParams& p) {
   s.z_step = p.stepover;
   if (!p.scallop) return s;
   const double h = *p.scallop;
-  if (!(rk > 0))
-    throw std::invalid_argument("a scallop height needs a ball or bull-nose cutter (a flat end leaves terraces, not "
-                                "scallops): give --stepover instead");
-  const double spacing = std::sqrt(8 * rk * h);
+  const bool vbit = p.cutter.type == CutterType::VBit;
+  if (!(rk > 0) && !vbit)
+    throw std::invalid_argument("a scallop height needs a ball, bull-nose, tapered ball or V-bit (a flat end leaves "
+                                "terraces, not scallops): give --stepover instead");
+  // A tapered ball's scallop comes from its ball tip (rk), not its top
+  // diameter. A V-bit's passes d apart leave a V ridge between their flat
+  // tips: (d - tip) / 2 wide, as high as the cone rises over that.
+  const double spacing = vbit ? 2 * p.cutter.tip_radius + 2 * h * std::tan(radians(p.cutter.half_angle_deg))
+                              : std::sqrt(8 * rk * h);
   const bool split = p.strategy == FinishStrategy::SteepShallow;
   const double row_angle = split ? std::min(89.0, p.steep_angle + kOverlapDeg) : p.steep_angle;
   s.stepover = std::cos(radians(row_angle)) * spacing;

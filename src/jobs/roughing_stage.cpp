@@ -75,6 +75,18 @@ constexpr double kRestLeave = 0.05;
 }  // namespace
 
 double round_stepover(const Cutter& c, double step_down) {
+  if (!c.is_apt()) {
+    // A tapered ball or V-bit: from its tip, not its top (the cone rises
+    // steeply beyond the tip): half the radius at which the profile rises a
+    // quarter of the step down.
+    const double t = std::min(c.profile_top(), step_down / 4);
+    double lo = 0, hi = c.radius;
+    for (int it = 0; it < 60; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (c.profile_height(mid) < t ? lo : hi) = mid;
+    }
+    return std::max(0.02, 0.5 * lo);
+  }
   const double t = std::min(c.corner_radius, step_down / 4);
   const double reach =
       c.core_radius() + std::sqrt(c.corner_radius * c.corner_radius - (c.corner_radius - t) * (c.corner_radius - t));

@@ -36,6 +36,30 @@ void check_part_size(const Box3& bounds, const std::string& source, double limit
                                           source, size.x, size.y, size.z, limit_mm, hint));
 }
 
+std::string units_warning(const Box3& bounds, LengthUnit units, double cutter_diameter, const std::string& source) {
+  if (bounds.empty()) return {};
+  const Vec3 size = bounds.hi - bounds.lo;
+  const double largest = std::max({size.x, size.y, size.z});
+  if (!std::isfinite(largest) || !(largest > 0)) return {};
+  // A part a router makes is rarely under 10 mm; under the cutter's own
+  // width it cannot be machined at all. Read in another unit, it would be
+  // this long: the candidates that land between 10 mm and 3 m.
+  const bool tiny = largest < 10, under_cutter = largest < cutter_diameter;
+  if (!tiny && !under_cutter) return {};
+  const double to_mm = unit_to_mm(units);
+  std::string hint;
+  for (LengthUnit u : {LengthUnit::Inch, LengthUnit::Metre}) {
+    if (u == units) continue;
+    const double would = largest / to_mm * unit_to_mm(u);
+    if (would < 10 || would > 3000) continue;
+    hint += fmt::format("{}--units {} ({:.0f} mm)", hint.empty() ? "" : " or ", u == LengthUnit::Inch ? "in" : "m", would);
+  }
+  const std::string why = under_cutter ? fmt::format("smaller than the {:g} mm cutter", cutter_diameter)
+                                       : std::string("only a few millimetres");
+  return fmt::format("{}: the part is {:.3g} x {:.3g} x {:.3g} mm, {}{}", source, size.x, size.y, size.z, why,
+                     hint.empty() ? std::string("; check its units") : "; were its numbers meant as " + hint + "?");
+}
+
 std::size_t memory_budget_bytes() {
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
   if (pages <= 0 || page <= 0) return std::size_t{4} << 30;  // unknown: 4 GiB

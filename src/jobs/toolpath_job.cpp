@@ -4,6 +4,7 @@
 
 #include <oneapi/tbb/task_group.h>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -38,7 +39,12 @@ std::string row_spacing_text(const RasterPath& path) {
   return format_gcode_number(path.stepover_min, 4) + " to " + format_gcode_number(path.stepover, 4);
 }
 
-double default_max_depth(const Cutter& c) { return c.type == CutterType::Flat ? c.diameter() / 4 : c.radius; }
+// A V-bit or tapered ball: as deep as a ball of its top diameter, and never
+// deeper than its flutes (beyond them the shank rubs the wall).
+double default_max_depth(const Cutter& c) {
+  if (!c.is_apt()) return std::min(c.profile_top(), c.radius);
+  return c.type == CutterType::Flat ? c.diameter() / 4 : c.radius;
+}
 
 ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& control) {
   ToolpathProgram r;
@@ -49,6 +55,11 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     run.stage("load", 0, kPathFrom);
     auto t0 = std::chrono::steady_clock::now();
     const std::shared_ptr<const Mesh> mesh = load_part(p.part);
+    if (control.warn) {
+      const std::string w =
+          units_warning(mesh->bounds(), p.part.units, p.cutter.diameter(), p.part.stl.empty() ? "the part" : p.part.stl);
+      if (!w.empty()) control.warn(w);
+    }
     r.facets = mesh->triangles.size();
     r.seconds_load = seconds_since(t0);
 

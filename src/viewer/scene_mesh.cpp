@@ -52,13 +52,30 @@ TriangleMesh cutter_surface(const Cutter& cutter, const Vec3& tip, double length
   };
   std::vector<P> prof;
   const double rc = cutter.core_radius(), rk = cutter.corner_radius, R = cutter.radius;
-  prof.push_back({0, 0, 0, -1});
-  if (rc > 0) prof.push_back({rc, 0, 0, -1});
-  if (rk > 0) {
-    const int steps = 8;
-    for (int k = 0; k <= steps; ++k) {
-      const double phi = std::numbers::pi / 2 * k / steps;
-      prof.push_back({rc + rk * std::sin(phi), rk * (1 - std::cos(phi)), std::sin(phi), -std::cos(phi)});
+  if (cutter.is_apt()) {
+    prof.push_back({0, 0, 0, -1});
+    if (rc > 0) prof.push_back({rc, 0, 0, -1});
+    if (rk > 0) {
+      const int steps = 8;
+      for (int k = 0; k <= steps; ++k) {
+        const double phi = std::numbers::pi / 2 * k / steps;
+        prof.push_back({rc + rk * std::sin(phi), rk * (1 - std::cos(phi)), std::sin(phi), -std::cos(phi)});
+      }
+    }
+  } else {
+    // V-bit, tapered ball: band by band (a cone piece is straight, an arc
+    // is stepped by its tilt), a crease where the tilt jumps.
+    const CutterProfile bands = cutter.profile();
+    for (std::size_t b = 0; b < bands.count; ++b) {
+      const ProfileBand& band = bands.band[b];
+      const int steps = band.kind == ProfileBand::Kind::Arc ? 8 : 1;
+      for (int k = 0; k <= steps; ++k) {
+        const double sn = band.sin0 + (band.sin1 - band.sin0) * k / steps;
+        const double cs = std::sqrt(std::max(0.0, 1 - sn * sn));
+        const double rho = band.kind == ProfileBand::Kind::Arc ? band.a + band.r * sn
+                                                               : band.rho0 + (band.rho1 - band.rho0) * k / steps;
+        prof.push_back({rho, band.h(rho), sn, -cs});
+      }
     }
   }
   prof.push_back({R, cutter.profile_top(), 1, 0});

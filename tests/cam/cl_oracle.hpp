@@ -8,6 +8,7 @@
 // to about 1e-8 mm.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include <vector>
@@ -23,9 +24,13 @@ inline constexpr double kNone = -std::numeric_limits<double>::infinity();
 
 struct Tool {
   double R, rk;  // radius, corner radius (flat: 0, ball: R)
+  // Any other axisymmetric profile (V-bit, tapered ball): its height above
+  // the tip at radius rho, written by the test from the shape's geometry.
+  std::function<double(double)> profile = {};
   // xy distance up to which points count as reached.
   double reach() const { return R; }
   double h(double rho) const {
+    if (profile) return profile(std::min(rho, R));
     const double rc = R - rk;
     if (rho <= rc) return 0.0;
     const double t = std::min(rho - rc, rk);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "cam/cl_cutter_tools.hpp"
 #include "cam/cl_oracle.hpp"
 #include "cam/cl_test_meshes.hpp"
 #include "cncstream/cam/cl_engine.hpp"
@@ -19,9 +20,16 @@ std::vector<Cutter> cutters() {
           Cutter::bull(10, 0.2)};
 }
 
-cl_oracle::Tool tool_of(const Cutter& c) {
-  return {c.radius, c.type == CutterType::Flat ? 0.0 : c.type == CutterType::Ball ? c.radius : c.corner_radius};
+// The same and the cone-based cutters (for the tests that need only h).
+std::vector<Cutter> all_cutters() {
+  std::vector<Cutter> c = cutters();
+  for (const Cutter& n : {Cutter::vbit(60, 6), Cutter::vbit(90, 8, 1.5), Cutter::tapered_ball(1, 5, 3.175),
+                          Cutter::tapered_ball(3, 20, 9)})
+    c.push_back(n);
+  return c;
 }
+
+using cl_oracle::tool_of;
 
 double rk_of(const Cutter& c) { return tool_of(c).rk; }
 double rc_of(const Cutter& c) { return c.radius - rk_of(c); }
@@ -34,7 +42,7 @@ TEST(ClKnown, BoxTopAndVerticalWalls) {
   // top edge: z = 10 - h(d), d the distance to the top rectangle; beyond R
   // nothing is touched. (The thesis's bounding-space trimming gouges here.)
   const Mesh m = cl_test::box({10, 10, 0}, {30, 30, 10});
-  for (const Cutter& c : cutters()) {
+  for (const Cutter& c : all_cutters()) {
     SCOPED_TRACE(c.spec());
     const cl_oracle::Tool t = tool_of(c);
     ClOptions o;
@@ -124,7 +132,7 @@ TEST(ClKnown, SingleVertex) {
   Mesh m;
   m.vertices = {{3.3, -1.2, 7.5}};
   m.triangles = {{0, 0, 0}};
-  for (const Cutter& c : cutters()) {
+  for (const Cutter& c : all_cutters()) {
     SCOPED_TRACE(c.spec());
     const cl_oracle::Tool t = tool_of(c);
     ClOptions o;
@@ -158,7 +166,7 @@ TEST(ClKnown, SingleEdgeAtSlopes) {
     Mesh m;
     m.vertices = {A, B};
     m.triangles = {{0, 1, 1}};
-    for (const Cutter& c : cutters()) {
+    for (const Cutter& c : all_cutters()) {
       SCOPED_TRACE(c.spec() + " slope " + std::to_string(b_deg));
       const double R = c.radius;
       const cl_oracle::Tool t = tool_of(c);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cam/cl_cutter_tools.hpp"
 #include "cam/cl_oracle.hpp"
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/geometry/stl.hpp"
@@ -36,9 +37,7 @@ Mesh load(const RealMesh& r) {
   return m;
 }
 
-cl_oracle::Tool tool_of(const Cutter& c) {
-  return {c.radius, c.type == CutterType::Flat ? 0.0 : c.type == CutterType::Ball ? c.radius : c.corner_radius};
-}
+using cl_oracle::tool_of;
 
 class ClRealMesh : public ::testing::TestWithParam<RealMesh> {};
 
@@ -49,7 +48,8 @@ TEST_P(ClRealMesh, NoGougeTouchedAndConcaveEdgesRedundant) {
   const double span = std::fmax(b.size().x, b.size().y);
   const std::vector<std::size_t> by_top = cl_oracle::facets_by_top(m);
   std::mt19937 rng(42);
-  for (const Cutter& c : {Cutter::ball(6), Cutter::flat(6), Cutter::bull(6, 1)}) {
+  for (const Cutter& c : {Cutter::ball(6), Cutter::flat(6), Cutter::bull(6, 1), Cutter::vbit(60, 6),
+                         Cutter::tapered_ball(1, 5, 6)}) {
     SCOPED_TRACE(GetParam().file + " " + c.spec());
     const double step = span / 90;
     const GridSpec spec = GridSpec::covering(b.lo.x - 2, b.lo.y - 2, b.hi.x + 2, b.hi.y + 2, step, step * 1.07);

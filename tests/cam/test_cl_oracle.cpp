@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "cam/cl_cutter_tools.hpp"
 #include "cam/cl_oracle.hpp"
 #include "cam/cl_test_meshes.hpp"
 #include "cncstream/cam/cl_engine.hpp"
@@ -15,9 +16,7 @@ using namespace cncstream;
 
 namespace {
 
-cl_oracle::Tool tool_of(const Cutter& c) {
-  return {c.radius, c.type == CutterType::Flat ? 0.0 : c.type == CutterType::Ball ? c.radius : c.corner_radius};
-}
+using cl_oracle::tool_of;
 
 // Every node: touched exactly as the oracle says (within tol), else floor.
 void expect_matches_oracle(const Mesh& m, const Cutter& c, const ClGrid& g, double tol) {
@@ -45,8 +44,9 @@ void expect_matches_oracle(const Mesh& m, const Cutter& c, const ClGrid& g, doub
 }
 
 std::vector<Cutter> cutters() {
-  return {Cutter::flat(2), Cutter::ball(3), Cutter::bull(4, 1), Cutter::bull(6, 2.5), Cutter::ball(0.6),
-          Cutter::flat(7)};
+  return {Cutter::flat(2),          Cutter::ball(3),        Cutter::bull(4, 1),
+          Cutter::bull(6, 2.5),     Cutter::ball(0.6),      Cutter::flat(7),
+          Cutter::vbit(60, 5),      Cutter::vbit(90, 6, 1), Cutter::tapered_ball(1, 5, 4)};
 }
 
 // A soup with the facets that break naive code: generic, vertical, nearly

@@ -72,3 +72,20 @@ TEST(SizeLimits, AToolPathOnAHugePartIsRefusedAtOnce) {
   q.step = 0.0001;
   EXPECT_NE(refusal([&] { (void)jobs::generate_toolpath(q); }).find("the tool path"), std::string::npos);
 }
+
+TEST(SizeLimits, UnitsWarningNamesTheLikelyUnits) {
+  using jobs::units_warning;
+  // A plaque drawn in metres (0.12 m), read as mm: --units m gives 120 mm.
+  const std::string m = units_warning(box(0.12, 0.1, 0.02), LengthUnit::Millimetre, 3.175, "plaque.stl");
+  EXPECT_NE(m.find("plaque.stl"), std::string::npos) << m;
+  EXPECT_NE(m.find("--units m (120 mm)"), std::string::npos) << m;
+  // A part drawn in inches (4.7 x 3.9 in): --units in; metres would make it 4.7 m, too large to suggest.
+  const std::string in = units_warning(box(4.7, 3.9, 0.8), LengthUnit::Millimetre, 6, "sign.stl");
+  EXPECT_NE(in.find("--units in (119 mm)"), std::string::npos) << in;
+  EXPECT_EQ(in.find("--units m"), std::string::npos) << in;
+  EXPECT_NE(in.find("smaller than the 6 mm cutter"), std::string::npos) << in;
+  // Plausible parts: no warning.
+  EXPECT_EQ(units_warning(box(120, 100, 20), LengthUnit::Millimetre, 3.175, "p"), "");
+  EXPECT_EQ(units_warning(box(4.7, 3.9, 0.8), LengthUnit::Inch, 6, "p").find("--units in"), std::string::npos);
+  EXPECT_EQ(units_warning(box(12, 12, 3), LengthUnit::Millimetre, 6, "p"), "");
+}

@@ -32,6 +32,9 @@ struct JobControl {
   // shared pool of all cores, shared with any other job computing at once);
   // n: the whole job runs in a task arena of n slots.
   unsigned threads = 0;
+  // A warning about the job's input (a part in the wrong units, ...), one
+  // sentence, before the work it concerns; the job goes on.
+  std::function<void(std::string_view)> warn;
 };
 
 }  // namespace cncstream::jobs

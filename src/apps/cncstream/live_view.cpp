@@ -21,7 +21,8 @@ constexpr auto kSurfaceEvery = std::chrono::milliseconds(250);  // the cut's mes
 constexpr std::size_t kSlice = 2000;  // segments cut between looks at new reports
 
 bool same_cutter(const Cutter& a, const Cutter& b) {
-  return a.type == b.type && a.radius == b.radius && a.corner_radius == b.corner_radius;
+  return a.type == b.type && a.radius == b.radius && a.corner_radius == b.corner_radius &&
+         a.half_angle_deg == b.half_angle_deg && a.tip_radius == b.tip_radius && a.grown == b.grown;
 }
 
 }  // namespace

@@ -13,6 +13,12 @@ jobs::JobControl LongJob::control() {
   c.stop = guard_.token();
   c.threads = threads_;
   if (progress_.enabled()) c.progress = [this](std::string_view stage, double f) { progress_.report(stage, f); };
+  c.warn = [this](std::string_view w) {
+    progress_.clear();
+    std::string msg = "cncstream: warning: ";
+    msg.append(w).append("\n");
+    put_text(stderr, msg);
+  };
   return c;
 }
 
