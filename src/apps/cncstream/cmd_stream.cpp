@@ -81,7 +81,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
     // daemon is handed the job (its library is not this one). The
     // simulator's rates are known; a real controller's come from its $$
     // only once connected: then --max-feed.
-    FeedsPlan feeds;
+    std::optional<jobs::FeedsRequest> feeds_request;
     if (is_stl(o->file)) {
       tooling::MachineLimits machine;
       if (c.port == "sim") {
@@ -89,7 +89,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
         machine.max_feed_xy = std::min(sim_limits.max_rate.x, sim_limits.max_rate.y);
         machine.max_feed_z = sim_limits.max_rate.z;
       }
-      feeds = resolve_tool_options(o->tp, machine);
+      feeds_request = resolve_tool_options(o->tp, machine);
     }
     // A running daemon owns the port: it runs the job, this command follows it.
     if (const auto daemon = daemon_owning_port(c.port)) {
@@ -115,13 +115,16 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       // nothing, exit 130); the guard is gone before streaming, whose Ctrl-C
       // holds and stops the machine instead.
       std::optional<jobs::ToolpathProgram> program;
+      jobs::FeedsPlan feeds;
       std::filesystem::path out;
       {
         LongJob generation(o->progress, o->tp.threads);
         std::string not_written = "no program written, nothing streamed";
         if (!o->output.empty()) not_written = o->output + " not written, nothing streamed";
         try {
-          program = jobs::generate_toolpath(toolpath_params(o->tp), generation.control());
+          jobs::ToolpathParams params = toolpath_params(o->tp);
+          feeds = apply_feeds(params, feeds_request);
+          program = jobs::generate_toolpath(params, generation.control());
         } catch (const jobs::Cancelled&) {
           return generation.interrupted_exit(not_written);
         }
@@ -140,7 +143,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       std::cout << "plan for " << o->file << ":\n";
       if (r.stock)
         std::cout << "  stock in work coordinates: " << bounds_text(*r.stock) << "\n";
-      std::cout << operations_text(r, &eta) << feeds_plan_text(feeds, r)
+      std::cout << operations_text(r, &eta) << jobs::feeds_plan_text(feeds, r)
                 << "  tool tip in work coordinates: " << bounds_text(r.stats.work_bounds) << "\n"
                 << "  work origin: XY at the part's " << o->tp.origin << ", Z0 at the part's " << o->tp.z_zero
                 << " (set G54 there before cutting)\n"

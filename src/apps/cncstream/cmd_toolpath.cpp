@@ -74,8 +74,9 @@ void register_toolpath(CLI::App& app, CommandRegistry& registry) {
   add_progress_option(sub, o->progress);
   registry.add(sub, [o] {
     const auto t0 = std::chrono::steady_clock::now();
-    const FeedsPlan feeds = resolve_tool_options(o->tp);
+    const auto feeds_request = resolve_tool_options(o->tp);
     jobs::ToolpathParams params = toolpath_params(o->tp);
+    const jobs::FeedsPlan feeds = apply_feeds(params, feeds_request);
     params.output = o->out;
     if (o->engine != "gl" && o->gl_tolerance) throw std::invalid_argument("--gl-tolerance applies to --engine gl only");
     auto gl_stats = std::make_shared<DepthBufferGrids>();
@@ -89,7 +90,7 @@ void register_toolpath(CLI::App& app, CommandRegistry& registry) {
     }
     job.clear_progress();
     const jobs::ToolpathProgram& r = *program;
-    std::cout << toolpath_report(r) << feeds_plan_text(feeds, r);
+    std::cout << toolpath_report(r) << jobs::feeds_plan_text(feeds, r);
     if (gl_stats->grids > 0)
       std::cout << "CL grid: the depth buffer (" << gl_stats->renderer << "), " << gl_stats->grids << " grid"
                 << (gl_stats->grids == 1 ? "" : "s") << " of " << gl_stats->nodes << " nodes in " << gl_stats->seconds

@@ -1,7 +1,6 @@
 #include "selection_options.hpp"
 
 #include "tool_choice.hpp"
-#include "toolpath_options.hpp"
 
 #include <sstream>
 #include <stdexcept>
@@ -70,31 +69,31 @@ jobs::PlanParams plan_params(const SelectionOptions& o, std::string* feeds_repor
   p.max_rate = o.max_rate;
   p.accel = o.accel;
   if (!o.material.empty()) {
-    // Each cutter as the finishing tool of a toolpath job (no stock: the
-    // plan finishes from the part's top), within the machine's rate.
+    // Each cutter as the finishing tool of a job without a stock (the plan
+    // finishes from the part's top), within the machine's rate.
     std::string report;
+    ToolLookup lookup(o.tool_library);
     const Cutter* cutters[] = {&p.selection.cutters.ball, &p.selection.cutters.radiused};
     std::optional<jobs::PlanParams::CutterRate>* rates[] = {&p.ball_rate, &p.radiused_rate};
     for (int k = 0; k < 2; ++k) {
-      ToolpathOptions t;
-      t.tool = cutters[k]->spec();
-      t.tool_library = o.tool_library;
-      t.material = o.material;
-      t.stock = "none";
+      jobs::ToolpathParams t;
       t.stepover = o.stepover;
-      t.spindle_max = o.spindle_max;
-      t.max_feed = o.max_rate;
       t.feed = o.feed;
       t.rpm = o.rpm;
       t.plunge_feed = o.plunge_feed;
-      t.feed_given = o.feed_given;
-      t.rpm_given = o.rpm_given;
-      t.plunge_feed_given = o.plunge_feed_given;
-      FeedsPlan plan = resolve_tool_options(t);
+      jobs::FeedsRequest q;
+      q.material = o.material;
+      const tooling::ToolChoice c = lookup.choose(cutters[k]->spec());
+      q.finish = jobs::OperationTool{c.geometry, std::nullopt};
+      q.limits.spindle_max = o.spindle_max;
+      q.limits.max_feed_xy = o.max_rate;
+      if (o.feed_given) q.feed = o.feed;
+      if (o.rpm_given) q.rpm = o.rpm;
+      if (o.plunge_feed_given) q.plunge_feed = o.plunge_feed;
+      jobs::FeedsPlan plan = jobs::apply_material_feeds(t, q);
       *rates[k] = jobs::PlanParams::CutterRate{t.feed, t.plunge_feed, t.rpm};
-      if (k == 1) plan.operations.front().operation = "radiused";
-      else plan.operations.front().operation = "ball";
-      std::string text = feeds_plan_text(plan);
+      plan.operations.front().operation = k == 0 ? "ball" : "radiused";
+      const std::string text = jobs::feeds_plan_text(plan);
       report += k == 0 ? text : text.substr(text.find('\n') + 1);
     }
     if (feeds_report) *feeds_report = report;

@@ -2,14 +2,12 @@
 // The CLI's tool library and feeds and speeds: `--tool 3` or `--tool "1/8
 // tapered ball"` picks from the library (a spec still works), and
 // `--material walnut` computes the rpm and feeds the operator did not give,
-// per operation, within the machine's limits.
+// per operation, within the machine's limits (jobs/operation_feeds.hpp).
 #include <filesystem>
 #include <optional>
 #include <string>
-#include <vector>
 
-#include "cncstream/jobs/toolpath_job.hpp"
-#include "cncstream/tooling/feeds_speeds.hpp"
+#include "cncstream/jobs/operation_feeds.hpp"
 #include "cncstream/tooling/tool_library.hpp"
 
 namespace cncstream::app {
@@ -29,32 +27,14 @@ class ToolLookup {
   std::optional<tooling::ToolLibrary> library_;
 };
 
-// The feeds of one operation, for the plan.
-struct OperationFeeds {
-  std::string operation;  // "finishing", "roughing", "rest machining"
-  std::string tool;       // "T3 1/8 tapered ball [taper:1:5:3.175]" or "[ball:3.175]"
-  int flutes = 2;
-  double depth_of_cut = 0, radial_engagement = 0;
-  tooling::Feeds feeds;
-};
-
-struct FeedsPlan {
-  std::string material;  // as the table names it ("hardwood" for walnut)
-  std::vector<OperationFeeds> operations;
-};
-
 // Turns --tool, --rough and --rest into specs (from the library where they
-// name a tool) and, with --material, sets the feeds and rpm not given on the
-// command line (--feed, --rpm, --plunge-feed and --rough-feed win). Returns
-// the feeds per operation (empty without a material). Throws for an unknown
-// or ambiguous tool or material, listing the candidates.
-FeedsPlan resolve_tool_options(ToolpathOptions& o, const tooling::MachineLimits& machine = {});
+// name a tool). With --material, returns what jobs::apply_material_feeds
+// needs: the tools, the operator's values and the machine's limits (the
+// options' --spindle-max/--spindle-min/--max-feed over `machine`). Throws
+// for an unknown or ambiguous tool, listing the candidates.
+std::optional<jobs::FeedsRequest> resolve_tool_options(ToolpathOptions& o, const tooling::MachineLimits& machine = {});
 
-// "feeds and speeds for hardwood (walnut):" and a line per operation: tool,
-// rpm and what set it, feed and what set it, the chip that results and the
-// material removal rate; then any warning.
-std::string feeds_plan_text(const FeedsPlan& plan);
-// Only the operations the program has (a roughing the job found unneeded is left out).
-std::string feeds_plan_text(const FeedsPlan& plan, const jobs::ToolpathProgram& program);
+// The job's parameters with the material's feeds applied (none without one).
+jobs::FeedsPlan apply_feeds(jobs::ToolpathParams& p, const std::optional<jobs::FeedsRequest>& request);
 
 }  // namespace cncstream::app

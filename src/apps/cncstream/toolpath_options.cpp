@@ -141,9 +141,6 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   p.rough_stepover = o.rough_stepover;
   p.rough_feed = o.rough_feed;
   p.tool_change = o.tool_change == "m6" ? ToolChangeCode::M6 : ToolChangeCode::PauseM0;
-  p.rough_rpm = o.rough_rpm;
-  p.rest_rpm = o.rest_rpm;
-  p.rest_feed = o.rest_feed;
   if (!o.link_rate.empty()) {
     gcode::StreamLink link = protocol::grbl_default_link();
     link.bytes_per_second = protocol::parse_link_rate(o.link_rate);

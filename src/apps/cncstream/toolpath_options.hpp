@@ -60,8 +60,6 @@ struct ToolpathOptions {
   double max_feed = 0;       // mm/min ($110/$111); 0: not known
   double max_feed_z = 0;     // mm/min ($112); 0: not known
   bool feed_given = false, plunge_feed_given = false, rpm_given = false;
-  // Per operation, set by resolve_tool_options (default: feed and rpm).
-  std::optional<double> rough_rpm, rest_rpm, rest_feed;
 };
 
 
