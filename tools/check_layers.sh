@@ -67,4 +67,4 @@ while IFS= read -r -d '' f; do check "$f" sim "$sim_may_include" yes; done \
   < <(find sim -type f \( -name '*.cpp' -o -name '*.hpp' \) -print0)
 
 if (( bad )); then echo "layer order broken (see above)"; exit 1; fi
-echo "layers: every include follows the table (geometry < image < cam < gcode < jobs; gcode < protocol < transport < session < pendant; daemon above jobs, session and pendant; apps above all); sim/ stays below protocol"
+echo "layers: every include follows the table (geometry < image < cam < gcode < jobs; cam, protocol < tooling < jobs; gcode < protocol < transport < session < pendant; daemon above jobs, session and pendant; apps above all); sim/ stays below protocol"

@@ -23,14 +23,7 @@ json tool_json(const tooling::Tool& t) {
   json cutting = json::array();
   for (const auto& c : t.cutting) {
     json d = {{"material", c.material}};
-    auto opt = [&](const char* key, const std::optional<double>& v) { d[key] = v ? json(*v) : json(nullptr); };
-    opt("rpm", c.rpm);
-    opt("feed", c.feed);
-    opt("plunge_feed", c.plunge_feed);
-    opt("chip_load", c.chip_load);
-    opt("surface_speed", c.surface_speed);
-    opt("stepdown", c.stepdown);
-    opt("stepover", c.stepover);
+    tooling::for_each_value(c, [&](const char* key, const std::optional<double>& v) { d[key] = v ? json(*v) : json(nullptr); });
     cutting.push_back(d);
   }
   return {{"number", t.number},
@@ -63,10 +56,10 @@ std::string text(const json& b, const char* key, std::size_t max) {
   return s;
 }
 
-tooling::Tool tool_from(const json& b, int number) {
+tooling::Tool tool_from(const json& b, int tool_no) {
   if (!b.is_object()) bad("expected a tool object");
   tooling::Tool t;
-  t.number = number;
+  t.number = tool_no;
   t.name = text(b, "name", 80);
   const std::string shape = text(b, "shape", 64);
   if (shape.empty()) bad("shape: required, a spec such as ball:3.175 or taper:1:5:3.175");
@@ -90,17 +83,9 @@ tooling::Tool tool_from(const json& b, int number) {
       if (!c.is_object()) bad("cutting: expected objects");
       tooling::CuttingData d;
       d.material = text(c, "material", 64);
-      auto opt = [&](const char* key) -> std::optional<double> {
-        if (!c.contains(key) || c.at(key).is_null()) return std::nullopt;
-        return number(c, key, 0);
-      };
-      d.rpm = opt("rpm");
-      d.feed = opt("feed");
-      d.plunge_feed = opt("plunge_feed");
-      d.chip_load = opt("chip_load");
-      d.surface_speed = opt("surface_speed");
-      d.stepdown = opt("stepdown");
-      d.stepover = opt("stepover");
+      tooling::for_each_value(d, [&](const char* key, std::optional<double>& v) {
+        if (c.contains(key) && !c.at(key).is_null()) v = number(c, key, 0);
+      });
       t.cutting.push_back(d);
     }
   }

@@ -17,44 +17,37 @@ void ToolStore::save() const {
   if (!path_.empty()) jobs::write_text_file_atomically(path_, tooling::format_tool_library(library_));
 }
 
-void ToolStore::put(const tooling::Tool& tool, bool replace) {
+template <class F>
+auto ToolStore::change(F&& f) {
   std::lock_guard lock(mutex_);
   tooling::ToolLibrary next = library_;
-  next.put(tool, replace);
+  auto result = f(next);
   std::swap(library_, next);
   try {
     save();
   } catch (...) {
-    std::swap(library_, next);  // not saved: not changed
+    std::swap(library_, next);
     throw;
   }
+  return result;
+}
+
+void ToolStore::put(const tooling::Tool& tool, bool replace) {
+  change([&](tooling::ToolLibrary& lib) {
+    lib.put(tool, replace);
+    return 0;
+  });
 }
 
 void ToolStore::remove(int number) {
-  std::lock_guard lock(mutex_);
-  tooling::ToolLibrary next = library_;
-  next.remove(number);
-  std::swap(library_, next);
-  try {
-    save();
-  } catch (...) {
-    std::swap(library_, next);
-    throw;
-  }
+  change([&](tooling::ToolLibrary& lib) {
+    lib.remove(number);
+    return 0;
+  });
 }
 
 std::vector<std::string> ToolStore::merge(const tooling::ImportResult& import, bool replace) {
-  std::lock_guard lock(mutex_);
-  tooling::ToolLibrary next = library_;
-  auto lines = tooling::merge_import(next, import, replace);
-  std::swap(library_, next);
-  try {
-    save();
-  } catch (...) {
-    std::swap(library_, next);
-    throw;
-  }
-  return lines;
+  return change([&](tooling::ToolLibrary& lib) { return tooling::merge_import(lib, import, replace); });
 }
 
 }  // namespace cncstream::daemon

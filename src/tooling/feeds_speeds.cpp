@@ -2,17 +2,13 @@
 
 #include <fmt/format.h>
 
-#define TOML_HEADER_ONLY 1
-#define TOML_EXCEPTIONS 1
-#include <toml++/toml.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 
-#include "cncstream/protocol/toml_guard.hpp"
+#include "toml_read.hpp"
 
 namespace cncstream::tooling {
 
@@ -80,14 +76,7 @@ const Material& MaterialTable::find(std::string_view name) const {
 MaterialTable parse_material_table(std::string_view text, const std::string& source) {
   using detail_feeds::fail;
   using detail_feeds::number;
-  protocol::check_toml_text(text, source);
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    throw std::invalid_argument(fmt::format("{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column,
-                                            e.description()));
-  }
+  const toml::table root = detail_toml_read::parse_toml(text, source);
   MaterialTable table;
   const auto* arr = root["material"].as_array();
   if (!arr) throw std::invalid_argument(source + ": no [[material]] tables");

@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "cncstream/tooling/tool_import.hpp"
+#include "import_common.hpp"
 #include "import_json.hpp"
 
 namespace cncstream::tooling {
@@ -108,17 +109,7 @@ void read_bit(const json& j, const JsonPlace& p, const std::string& entry_prefix
     t.cutting.push_back(c);
     extra = fmt::format(", chip load {:g} mm for {}", *cl, c.material);
   }
-  try {
-    Tool checked = t;
-    if (checked.number == 0) checked.number = 1;
-    check_tool(checked);
-  } catch (const std::invalid_argument& e) {
-    r.skipped.push_back(fmt::format("{}: {}", entry, e.what()));
-    return;
-  }
-  r.understood.push_back(fmt::format("{} -> {} {} flutes{}{}", entry, g.spec(), t.flutes,
-                                     number ? fmt::format(", T{}", number) : std::string(), extra));
-  r.tools.push_back(std::move(t));
+  detail_import_common::accept_tool(r, std::move(t), entry, extra);
 }
 
 std::optional<std::string> read_file(const std::filesystem::path& path) {

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "cncstream/tooling/tool_import.hpp"
+#include "import_common.hpp"
 #include "import_json.hpp"
 
 namespace cncstream::tooling {
@@ -138,19 +139,8 @@ ImportResult import_fusion_library(std::string_view text, const std::string& sou
         }
       }
     }
-    try {
-      Tool checked = t;
-      if (checked.number == 0) checked.number = 1;
-      check_tool(checked);
-    } catch (const std::invalid_argument& e) {
-      r.skipped.push_back(fmt::format("{}: {}", entry, e.what()));
-      continue;
-    }
-    std::string line = fmt::format("{} -> {} {} flutes", entry, geo.spec(), t.flutes);
-    if (t.number) line += fmt::format(", T{}", t.number);
-    if (!presets.empty()) line += fmt::format(", presets: {}", fmt::join(presets, ", "));
-    r.understood.push_back(line);
-    r.tools.push_back(std::move(t));
+    detail_import_common::accept_tool(
+        r, std::move(t), entry, presets.empty() ? std::string() : fmt::format(", presets: {}", fmt::join(presets, ", ")));
   }
   return r;
 }

@@ -21,6 +21,7 @@
 #include <stdexcept>
 
 #include "cncstream/tooling/tool_import.hpp"
+#include "import_common.hpp"
 
 namespace cncstream::tooling {
 
@@ -227,25 +228,15 @@ ImportResult import_vectric_database(const std::filesystem::path& path) {
         t.cutting.push_back(d);
       });
     });
-    try {
-      Tool checked = t;
-      if (checked.number == 0) checked.number = 1;
-      check_tool(checked);
-    } catch (const std::invalid_argument& e) {
-      r.skipped.push_back(fmt::format("{}: {}", entry, e.what()));
-      continue;
-    }
-    std::string line = fmt::format("{} -> {} {} flutes", entry, geo.spec(), t.flutes);
-    if (t.number) line += fmt::format(", T{}", t.number);
+    std::string extra;
     if (!with.empty()) {
-      line += ", cutting data for";
+      extra = ", cutting data for";
       for (std::size_t k = 0; k < with.size(); ++k) {
-        line.append(k ? ", " : " ");
-        line.append(with[k]);
+        extra.append(k ? ", " : " ");
+        extra.append(with[k]);
       }
     }
-    r.understood.push_back(line);
-    r.tools.push_back(std::move(t));
+    detail_import_common::accept_tool(r, std::move(t), entry, extra);
   }
   return r;
 }

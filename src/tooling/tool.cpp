@@ -214,8 +214,9 @@ void check_tool(const Tool& t) {
   }
   for (const auto& c : t.cutting) {
     if (c.material.empty()) fail("cutting data without a material");
-    for (const auto& v : {c.rpm, c.feed, c.plunge_feed, c.chip_load, c.surface_speed, c.stepdown, c.stepover})
-      if (v && !(*v > 0 && *v < 1e6)) fail(fmt::format("cutting data for {}: values must be positive", c.material));
+    for_each_value(c, [&](const char* key, const std::optional<double>& v) {
+      if (v && !(*v > 0 && *v < 1e6)) fail(fmt::format("cutting data for {}: {} must be positive", c.material, key));
+    });
   }
 }
 

@@ -3,18 +3,14 @@
 // well and keeps a comment with each tool's shape in words.
 #include <fmt/format.h>
 
-#define TOML_HEADER_ONLY 1
-#define TOML_EXCEPTIONS 1
-#include <toml++/toml.h>
-
 #include <cmath>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
-#include "cncstream/protocol/toml_guard.hpp"
 #include "cncstream/tooling/tool_library.hpp"
+#include "toml_read.hpp"
 
 namespace cncstream::tooling {
 
@@ -78,14 +74,7 @@ std::string num(double v) {
 
 ToolLibrary parse_tool_library(std::string_view text, const std::string& source) {
   using namespace detail_library_toml;
-  protocol::check_toml_text(text, source);
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    throw std::invalid_argument(fmt::format("{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column,
-                                            e.description()));
-  }
+  const toml::table root = detail_toml_read::parse_toml(text, source);
   const Place place{source};
   Fields top{place, root, ""};
   top.known({"tool"});
@@ -134,13 +123,7 @@ ToolLibrary parse_tool_library(std::string_view text, const std::string& source)
         c.known({"material", "rpm", "feed", "plunge_feed", "chip_load", "surface_speed", "stepdown", "stepover"});
         CuttingData d;
         d.material = c.str("material").value_or("");
-        d.rpm = c.number("rpm");
-        d.feed = c.number("feed");
-        d.plunge_feed = c.number("plunge_feed");
-        d.chip_load = c.number("chip_load");
-        d.surface_speed = c.number("surface_speed");
-        d.stepdown = c.number("stepdown");
-        d.stepover = c.number("stepover");
+        for_each_value(d, [&](const char* key, std::optional<double>& v) { v = c.number(key); });
         tool.cutting.push_back(d);
       }
     }
@@ -172,16 +155,9 @@ std::string format_tool_library(const ToolLibrary& library) {
     if (!t.notes.empty()) o += fmt::format("notes = {}\n", quoted(t.notes));
     for (const auto& c : t.cutting) {
       o += fmt::format("[[tool.cutting]]\nmaterial = {}\n", quoted(c.material));
-      auto opt = [&](const char* key, const std::optional<double>& v) {
+      for_each_value(c, [&](const char* key, const std::optional<double>& v) {
         if (v) o += fmt::format("{} = {}\n", key, num(*v));
-      };
-      opt("rpm", c.rpm);
-      opt("feed", c.feed);
-      opt("plunge_feed", c.plunge_feed);
-      opt("chip_load", c.chip_load);
-      opt("surface_speed", c.surface_speed);
-      opt("stepdown", c.stepdown);
-      opt("stepover", c.stepover);
+      });
     }
   }
   return o;

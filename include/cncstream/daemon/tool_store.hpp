@@ -26,6 +26,9 @@ class ToolStore {
 
  private:
   void save() const;
+  // Applies `f` to a copy, saves it, and only then keeps it (a failed save changes nothing).
+  template <class F>
+  auto change(F&& f);
   std::filesystem::path path_;
   mutable std::mutex mutex_;
   tooling::ToolLibrary library_;

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 namespace cncstream::tooling {
@@ -58,6 +59,20 @@ struct CuttingData {
   std::optional<double> stepdown;   // mm
   std::optional<double> stepover;   // mm
 };
+
+// Each optional value of the cutting data with its key (the library file's
+// and the API's): f(key, value).
+template <class Data, class F>
+  requires std::is_same_v<std::remove_const_t<Data>, CuttingData>
+void for_each_value(Data& c, F&& f) {
+  f("rpm", c.rpm);
+  f("feed", c.feed);
+  f("plunge_feed", c.plunge_feed);
+  f("chip_load", c.chip_load);
+  f("surface_speed", c.surface_speed);
+  f("stepdown", c.stepdown);
+  f("stepover", c.stepover);
+}
 
 struct Tool {
   int number = 0;  // the T number; 1..9999, unique in a library
