@@ -168,8 +168,12 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   p.rough_rpm = opt_number(j, "rough_rpm", 0, 100000);
   p.rest_feed = opt_number(j, "rest_feed", 0.1, 100000);
   p.rest_rpm = opt_number(j, "rest_rpm", 0, 100000);
-  // Feeds and speeds from a material: what the request does not give.
+  // Feeds and speeds from a material: what the request does not give. The
+  // canonical params of an earlier check carry the result and its name.
   std::string material;
+  if (j.contains("material_used") && j.at("material_used").is_string() &&
+      j.at("material_used").get<std::string>().size() <= 64)
+    material = j.at("material_used").get<std::string>();
   if (j.contains("material") && !j.at("material").is_null()) {
     if (!j.at("material").is_string() || j.at("material").get<std::string>().size() > 64)
       bad("material", "expected a material such as walnut, mdf or acrylic");

@@ -5,6 +5,7 @@
 
 #include <fstream>
 
+#include "cncstream/daemon/http_types.hpp"
 #include "cncstream/daemon/job_params.hpp"
 #include "daemon_test_util.hpp"
 
@@ -67,7 +68,8 @@ TEST(JobParams, LibraryToolsAndAMaterialBecomeSpecsAndFeeds) {
     }
     return "";
   };
-  EXPECT_NE(err({{"tool", "ball"}}).find("params.tool: no tool named 'ball'"), std::string::npos) << err({{"tool", "ball"}});
+  EXPECT_NE(err({{"tool", "drill"}}).find("params.tool: no tool named 'drill'"), std::string::npos) << err({{"tool", "drill"}});
+  EXPECT_NE(err({{"tool", "drill"}}).find("T4 '1/8 ball'"), std::string::npos);
   EXPECT_NE(err({{"tool", "4"}, {"material", "cheese"}}).find("params.material: unknown material 'cheese'"),
             std::string::npos);
   EXPECT_NE(err({{"tool", "4"}, {"rest", "9"}}).find("params.rest: no tool number 9"), std::string::npos);
@@ -76,7 +78,7 @@ TEST(JobParams, LibraryToolsAndAMaterialBecomeSpecsAndFeeds) {
 TEST(DaemonTools, CreateReplaceDeleteImportAndKeepAcrossARestart) {
   const auto dir = temp_dir("tools");
   auto cfg = test_config(dir);
-  cfg.machines.clear();
+  cfg.machines = {sim_machine("sim1")};
   {
     RunningDaemon d(cfg);
     const Http& h = d.http;
