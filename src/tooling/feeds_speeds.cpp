@@ -223,8 +223,18 @@ Feeds compute_feeds(const CutRequest& q) {
     f.feed = f.rpm * q.flutes * cl * f.thinning;
   }
   if (!q.feed && q.limits.max_feed_xy > 0 && f.feed > q.limits.max_feed_xy) {
+    const double wanted = f.feed;
     f.feed_from = fmt::format("max rate $110/$111 = {:.0f} (wanted {:.0f}: {})", q.limits.max_feed_xy, f.feed, f.feed_from);
     f.feed = q.limits.max_feed_xy;
+    // A computed spindle speed comes down with the feed, so that the chip keeps
+    // its load (a thin chip rubs and, in wood, burns); not below $31.
+    if (!q.rpm && !(data && data->rpm)) {
+      const double slower = std::max(f.rpm * f.feed / wanted, q.limits.spindle_min);
+      f.rpm_from = fmt::format("lowered from {:.0f} with the feed to keep the chip{}", f.rpm,
+                               slower == q.limits.spindle_min ? fmt::format(", to spindle min $31 = {:.0f}", slower)
+                                                              : std::string());
+      f.rpm = slower;
+    }
   }
   f.plunge_feed = data && data->plunge_feed ? *data->plunge_feed : f.feed / 3;
   if (q.limits.max_feed_z > 0) f.plunge_feed = std::min(f.plunge_feed, q.limits.max_feed_z);

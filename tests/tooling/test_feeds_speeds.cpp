@@ -112,14 +112,29 @@ TEST(FeedsSpeeds, MachineLimitsBindAndSayWhich) {
   q.limits.spindle_max = 18000;
   q.limits.max_feed_xy = 5000;
   q.limits.max_feed_z = 500;
+  q.limits.spindle_min = 6000;
   const Feeds f = compute_feeds(q);
-  EXPECT_DOUBLE_EQ(f.rpm, 18000);
-  EXPECT_EQ(f.rpm_from.rfind("spindle max $30 = 18000", 0), 0u) << f.rpm_from;
-  EXPECT_DOUBLE_EQ(f.feed, 5000);  // 18000 x 2 x 0.254 = 9144 wanted
+  // 22557 rpm wanted: $30 binds at 18000; then 18000 x 2 x 0.254 = 9144 mm/min wanted: $110 binds at 5000,
+  // and the rpm comes down with it so that the chip keeps 0.254 mm: 5000 / (2 x 0.254) = 9843.
+  EXPECT_NEAR(f.rpm, 5000 / (2 * 0.254), 1e-9);
+  EXPECT_EQ(f.rpm_from, "lowered from 18000 with the feed to keep the chip") << f.rpm_from;
+  EXPECT_DOUBLE_EQ(f.feed, 5000);
   EXPECT_EQ(f.feed_from.rfind("max rate $110/$111 = 5000 (wanted 9144", 0), 0u) << f.feed_from;
-  EXPECT_NEAR(f.chip_load, 5000.0 / 36000, 1e-12);
+  EXPECT_NEAR(f.chip_load, 0.254, 1e-12);
   EXPECT_DOUBLE_EQ(f.plunge_feed, 500);
   EXPECT_NEAR(f.removal_rate, 3 * 6.35 * 5000, 1e-9);
+  EXPECT_TRUE(f.warnings.empty());
+  // Only the spindle's rpm, with the operator's rpm kept: the chip thins.
+  CutRequest fixed = q;
+  fixed.rpm = 18000;
+  EXPECT_NEAR(compute_feeds(fixed).chip_load, 5000.0 / 36000, 1e-12);
+  // Down to $31 at most: then the chip thins.
+  CutRequest slow = q;
+  slow.limits.max_feed_xy = 1000;
+  const Feeds s = compute_feeds(slow);
+  EXPECT_DOUBLE_EQ(s.rpm, 6000);
+  EXPECT_EQ(s.rpm_from, "lowered from 18000 with the feed to keep the chip, to spindle min $31 = 6000");
+  EXPECT_NEAR(s.chip_load, 1000.0 / 12000, 1e-12);
   // The spindle's minimum binds a large tool in a slow material.
   CutRequest big = q;
   big.geometry = parse_tool_spec("flat:25");
@@ -203,6 +218,7 @@ TEST(FeedsSpeeds, ARubbingChipIsWarned) {
   q.material = &builtin_materials().find("oak");
   q.depth_of_cut = 3;
   q.limits.max_feed_xy = 1000;  // 22557 rpm x 2 flutes: 0.022 mm a tooth
+  q.rpm = 22557;                // the operator's: it stays
   const Feeds f = compute_feeds(q);
   ASSERT_EQ(f.warnings.size(), 1u);
   EXPECT_NE(f.warnings[0].find("rubs"), std::string::npos) << f.warnings[0];
