@@ -9,16 +9,13 @@
 #include <stdexcept>
 
 #include "toml_read.hpp"
+#include "lower_case.hpp"
 
 namespace cncstream::tooling {
 
 namespace detail_feeds {
 
-std::string lower(std::string_view s) {
-  std::string o(s);
-  for (char& c : o) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return o;
-}
+using detail_lower_case::lower;
 
 double deg(double d) { return d * std::numbers::pi / 180; }
 

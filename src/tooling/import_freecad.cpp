@@ -19,6 +19,7 @@
 #include "cncstream/tooling/tool_import.hpp"
 #include "import_common.hpp"
 #include "import_json.hpp"
+#include "lower_case.hpp"
 
 namespace cncstream::tooling {
 
@@ -49,10 +50,7 @@ std::optional<double> quantity(const json& params, const char* key, const JsonPl
   place.at(key).fail(fmt::format("'{}': unknown unit '{}'", s, unit));
 }
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
+using detail_lower_case::lower;
 
 // One bit; appends to r. `entry` names it in the report.
 void read_bit(const json& j, const JsonPlace& p, const std::string& entry_prefix, int number, ImportResult& r) {

@@ -11,16 +11,13 @@
 #include <stdexcept>
 
 #include "cncstream/tooling/tool_import.hpp"
+#include "lower_case.hpp"
 
 namespace cncstream::tooling {
 
 namespace detail_linuxcnc {
 
-std::string lower(std::string_view s) {
-  std::string o(s);
-  for (char& c : o) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return o;
-}
+using detail_lower_case::lower;
 
 std::string trim(std::string_view s) {
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);

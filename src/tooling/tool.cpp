@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "cncstream/cam/cutter.hpp"
+#include "lower_case.hpp"
 
 namespace cncstream::tooling {
 
@@ -161,11 +162,7 @@ ToolGeometry parse_tool_spec(std::string_view spec) {
 }
 
 const CuttingData* Tool::cutting_for(std::string_view material) const {
-  auto lower = [](std::string_view s) {
-    std::string o(s);
-    for (char& c : o) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return o;
-  };
+  using detail_lower_case::lower;
   const std::string m = lower(material);
   for (const auto& c : cutting)
     if (lower(c.material) == m) return &c;

@@ -1,4 +1,5 @@
 #include "cncstream/tooling/tool_import.hpp"
+#include "lower_case.hpp"
 
 #include <fmt/format.h>
 
@@ -20,10 +21,7 @@ std::string read_text(const std::filesystem::path& path) {
   return s.str();
 }
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
+using detail_lower_case::lower;
 
 }  // namespace detail_tool_import
 

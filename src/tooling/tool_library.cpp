@@ -1,4 +1,5 @@
 #include "cncstream/tooling/tool_library.hpp"
+#include "lower_case.hpp"
 
 #include <fmt/format.h>
 
@@ -12,11 +13,7 @@ namespace cncstream::tooling {
 
 namespace detail_library {
 
-std::string lower(std::string_view s) {
-  std::string o(s);
-  for (char& c : o) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return o;
-}
+using detail_lower_case::lower;
 
 std::string list_tools(const std::vector<const Tool*>& tools) {
   std::string out;
