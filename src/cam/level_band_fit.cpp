@@ -141,18 +141,32 @@ void fit_stretch(const Polyline& p, std::size_t b, std::size_t e, double tol, co
     // try a few, keep the farthest (the middle on ties).
     constexpr int kCandidates = 5;
     constexpr int kOrder[kCandidates] = {2, 1, 3, 0, 4};
-    Vec3 best_at;
-    Reach best{};
-    Frame best_f{};
-    bool have = false;
+    struct Candidate {
+      Vec3 at;
+      Reach next;
+      Frame f;
+    };
+    Candidate cands[kCandidates];
+    int n = 0;
     for (int c : kOrder) {
       const double t = r.lo + (r.hi - r.lo) * double(c) / double(kCandidates - 1);
       const Vec3 q = on_lattice_in_band(p, a, j, at, vertex_on(f, t, p[j]), tol, lat);
       if (r.hi - r.lo <= 0 && c != kOrder[0]) break;  // one slope: one candidate
-      if (clear && (moved(q, j) || moved(at, a)) && !clear(at, q)) continue;
       const Frame nf = frame_at(q, p[j + 1]);
-      const Reach next = reach_level(p, j + 1, e + 1, nf, tol, margin);
-      if (!have || next.last > best.last) best = next, best_at = q, best_f = nf, have = true;
+      cands[n++] = {q, reach_level(p, j + 1, e + 1, nf, tol, margin), nf};
+    }
+    // The farthest-reaching candidate that is clear of the part (the middle
+    // on ties): the geometry first, the exact check (the costly part) only
+    // until one passes.
+    std::stable_sort(cands, cands + n, [](const Candidate& u, const Candidate& w) { return u.next.last > w.next.last; });
+    Vec3 best_at;
+    Reach best{};
+    Frame best_f{};
+    bool have = false;
+    for (int c = 0; c < n && !have; ++c) {
+      const Vec3& q = cands[c].at;
+      if (clear && (moved(q, j) || moved(at, a)) && !clear(at, q)) continue;
+      best = cands[c].next, best_at = q, best_f = cands[c].f, have = true;
     }
     if (!have) {
       own_points_to(j);

@@ -1,6 +1,7 @@
 #include "cncstream/daemon/job_manager.hpp"
 
 #include <boost/asio/post.hpp>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -63,11 +64,12 @@ std::shared_ptr<Program> make_program(const std::string& text, const fs::path& p
   return p;
 }
 
-std::shared_ptr<EtaTable> make_eta(const gcode::ProgramTrace& trace, std::size_t lines, const gcode::MotionLimits& limits) {
+std::shared_ptr<EtaTable> make_eta(const gcode::ProgramTrace& trace, std::size_t lines, const gcode::MotionLimits& limits,
+                                   const gcode::StreamLink& link) {
   auto e = std::make_shared<EtaTable>();
-  // The ETA over GRBL 1.1's 115,200-baud link: a program that starves the
-  // planner shows the wire's time, not a flattering one.
-  const auto ends = gcode::estimate_line_end_times(trace, limits, lines, protocol::grbl_default_link());
+  // The ETA over the machine's own link: a program that starves the planner
+  // shows the wire's time, not a flattering one.
+  const auto ends = gcode::estimate_line_end_times(trace, limits, lines, link);
   e->end_by_line.assign(lines + 1, 0.0);
   for (std::size_t i = 0; i < ends.size() && i + 1 < e->end_by_line.size(); ++i) e->end_by_line[i + 1] = ends[i];
   e->estimated_s = ends.empty() ? 0 : ends.back() + trace.dwell_seconds;
@@ -126,7 +128,7 @@ void JobManager::recover() {
     } catch (const std::exception&) {
       j->params = nullptr;
     }
-    j->cache_key = row.file_id + ":" + (j->params.is_null() ? std::string("gcode") : j->params.dump());
+    j->cache_key = generation_key(row.file_id, j->params, row.machine);
     if (row.state == "running" || row.state == "held") {
       // The daemon died under a running job: the machine may have moved on
       // its buffered lines or stopped; never resume by itself.
@@ -179,7 +181,11 @@ json JobManager::to_json(const DaemonJob& j) const {
                      {"detail", op.detail},
                      {"first_line", op.first_line},
                      {"lines", op.lines},
-                     {"feed_time_s", op.feed_time_s}});
+                     {"feed_time_s", op.feed_time_s},
+                     // The feed the machine's link delivers this operation's densest stretch at (null: any)
+                     // and the share of its path where F was lowered to it.
+                     {"wire_feed", op.link_checked && std::isfinite(op.wire_feed) ? json(op.wire_feed) : json(nullptr)},
+                     {"share_below_feed", op.link_checked ? json(op.share_below_feed) : json(nullptr)}});
     prog = {{"lines", j.program->lines.size()},
             {"estimated_s", et ? json(et->estimated_s) : json(nullptr)},
             {"operations", ops},
@@ -320,11 +326,10 @@ json JobManager::create(const json& body) {
     const tooling::ToolLibrary library = tools_.snapshot();
     const auto checked = check_toolpath_params(body["params"], *info, config_.limits, &library, machine_limits);
     j->params = checked.canonical;
-    j->cache_key = file_id + ":" + checked.canonical.dump();
   } else {
     j->params = nullptr;
-    j->cache_key = file_id + ":gcode";
   }
+  j->cache_key = generation_key(file_id, j->params, machine);
   auto& r = j->row;
   r.machine = machine;
   r.file_id = file_id;
@@ -404,6 +409,14 @@ void JobManager::cache_put(const std::string& key, std::shared_ptr<const Program
   while (cache_.size() > kCacheEntries) cache_.pop_front();
 }
 
+std::string JobManager::generation_key(const std::string& file_id, const json& params, const std::string& machine) {
+  if (params.is_null()) return file_id + ":gcode";
+  // The same part for machines on different links is a different program (F lowered where each wire is short).
+  const Machine* m = machines_.find(machine);
+  const double rate = (m ? machine_link(m->config) : protocol::grbl_default_link()).bytes_per_second;
+  return fmt::format("{}:{}:link={:.0f}", file_id, params.dump(), rate);
+}
+
 void JobManager::kick_generation(DaemonJob& j) {
   if (j.row.resumed_from && !j.resume) {
     // A confirmed resume whose lines were lost with a restart: plan it again from its recorded line.
@@ -439,8 +452,11 @@ void JobManager::kick_generation(DaemonJob& j) {
     return;
   }
   gcode::MotionLimits limits = protocol::grbl_default_motion_limits();
-  if (Machine* m = machines_.find(j.row.machine))
+  gcode::StreamLink link = protocol::grbl_default_link();
+  if (Machine* m = machines_.find(j.row.machine)) {
     if (auto l = protocol::motion_limits_from(m->session->settings())) limits = *l;
+    link = machine_link(m->config);
+  }
   jobs::ToolpathParams params;
   const bool stl = j.row.kind == "stl";
   if (stl) {
@@ -448,6 +464,7 @@ void JobManager::kick_generation(DaemonJob& j) {
     if (!info) info = FileInfo{};
     params = check_toolpath_params(j.params, *info, config_.limits).params;
     params.part.stl = path->string();
+    params.link = link;  // F lowered where the machine's wire cannot keep up (the plan says where)
   }
   const std::string key = j.cache_key;
   const std::string label = j.row.file_name;
@@ -455,7 +472,7 @@ void JobManager::kick_generation(DaemonJob& j) {
     std::atomic<int> last_percent{-1};
   };
   auto shared = std::make_shared<Shared>();
-  boost::asio::post(pool_, [this, key, label, stl, params, limits, file = *path, stop, shared, alive = alive_] {
+  boost::asio::post(pool_, [this, key, label, stl, params, limits, link, file = *path, stop, shared, alive = alive_] {
     std::shared_ptr<Program> prog;
     std::string text;
     std::string error;
@@ -510,7 +527,7 @@ void JobManager::kick_generation(DaemonJob& j) {
     // waits for it.
     try {
       const auto trace = gcode::trace_program(text);
-      auto eta = make_eta(trace, prog->lines.size(), limits);
+      auto eta = make_eta(trace, prog->lines.size(), limits, link);
       std::shared_ptr<const jobs::HeightPreview> height;
       if (!stl) height = std::make_shared<const jobs::HeightPreview>(jobs::height_preview_from_trace(trace));
       boost::asio::post(io_, [this, prog, eta, height, alive] {

@@ -6,6 +6,8 @@
 #include <chrono>
 
 #include "cncstream/daemon/http_types.hpp"
+#include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/protocol/link_model.hpp"
 #include "cncstream/protocol/profiles_dir.hpp"
 #include "cncstream/transport/port_discovery.hpp"
 
@@ -98,6 +100,21 @@ std::shared_ptr<session::SimulatorPort> SimMachinePort::retire() { return std::e
 
 // ---- machines ---------------------------------------------------------------
 
+gcode::StreamLink machine_link(const MachineConfig& config) {
+  if (!config.profile.empty()) {
+    try {
+      return protocol::link_model(
+          protocol::load_firmware_profile(protocol::default_profiles_dir() / (config.profile + ".toml")));
+    } catch (const std::exception& e) {
+      spdlog::warn("machine {}: profile {}: {}; its programs are planned for {} baud", config.name, config.profile,
+                   e.what(), config.baud);
+    }
+  }
+  gcode::StreamLink link = protocol::grbl_default_link();
+  link.bytes_per_second = gcode::bytes_per_second_for_baud(config.baud);
+  return link;
+}
+
 Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, const DaemonConfig& config, WsHub& hub,
                    std::filesystem::path journal_path)
     : io_(io), pool_(pool), config_(config), hub_(hub), journal_path_(std::move(journal_path)) {
@@ -109,6 +126,7 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
     if (mc.port == "sim") {
       session::SimulatorOptions so;
       so.speed = mc.sim_speed;
+      so.baud = mc.baud;  // the simulator's wire is paced like the board's
       so.settings_file = mc.sim_settings;
       so.resolution = mc.sim_resolution;
       so.tolerance = mc.sim_tolerance;

@@ -459,3 +459,42 @@ TEST(DaemonApi, StartsWithAPendantForAMachineAndNoReceiverPluggedIn) {
   ASSERT_TRUE(wait_for([&] { return machines_ready(h); }, 30));
   d.shutdown();
 }
+
+// Each machine's programs are fitted to its own link: the same part and
+// parameters for a 115,200-baud machine and a 9,600-baud one are two
+// programs; on the slow wire F is lowered where the moves cannot arrive in
+// time, the operations say what the wire allows, and the estimate is longer.
+TEST(DaemonApi, EachMachinesProgramIsFittedToItsOwnLink) {
+  const auto dir = temp_dir("link");
+  auto cfg = test_config(dir);
+  cfg.machines[1].baud = 9600;
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return machines_ready(h); }, 30));
+  const auto f = upload(h, read_file(plaque()), "plaque.stl");
+  const json params = {{"tool", "ball:3.175"}, {"stepover", 3}, {"stock", "none"}, {"strategy", "raster"}, {"feed", 3000}};
+  std::vector<std::int64_t> ids;
+  for (const char* m : {"sim1", "sim2"}) {
+    const auto r = h.post("/api/v1/jobs", {{"machine", m}, {"file", f["id"]}, {"params", params}});
+    ASSERT_EQ(r.status, 201) << r.body;
+    ids.push_back(r.j()["id"].get<std::int64_t>());
+  }
+  for (auto id : ids) ASSERT_TRUE(wait_state(h, id, "ready", 60)) << job(h, id).dump();
+  for (auto id : ids)
+    ASSERT_TRUE(wait_for([&] { return !job(h, id)["program"]["estimated_s"].is_null(); }, 60)) << job(h, id).dump();
+  const json fast = job(h, ids[0]), slow = job(h, ids[1]);
+  EXPECT_EQ(slow["generation"]["cached"], false) << "another link is another program";
+  const json& fop = fast["program"]["operations"][0];
+  const json& sop = slow["program"]["operations"][0];
+  ASSERT_TRUE(fop["share_below_feed"].is_number() && sop["share_below_feed"].is_number()) << fop.dump() << sop.dump();
+  EXPECT_EQ(fop["share_below_feed"].get<double>(), 0.0) << fop.dump();
+  EXPECT_GT(sop["share_below_feed"].get<double>(), 0.0) << sop.dump();
+  ASSERT_TRUE(sop["wire_feed"].is_number()) << sop.dump();
+  EXPECT_LT(sop["wire_feed"].get<double>(), 3000.0) << "F3000 cannot arrive over 9,600 baud everywhere";
+  if (fop["wire_feed"].is_number()) {
+    EXPECT_GT(fop["wire_feed"].get<double>(), 9 * sop["wire_feed"].get<double>());  // twelve times the bytes a second
+  }
+  EXPECT_GT(slow["program"]["estimated_s"].get<double>(), fast["program"]["estimated_s"].get<double>());
+  d.shutdown();
+  std::filesystem::remove_all(dir);
+}

@@ -119,6 +119,8 @@ class JobManager {
 
  private:
   void kick_generation(DaemonJob& j);
+  // The program cache's key: the file, the job's parameters and, for a part, the machine's link.
+  std::string generation_key(const std::string& file_id, const nlohmann::json& params, const std::string& machine);
   void on_generated(const std::string& key, const std::shared_ptr<const Program>& p, const std::string& error,
                     bool cancelled);
   void persist(DaemonJob& j);

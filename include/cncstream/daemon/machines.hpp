@@ -19,6 +19,7 @@
 
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/daemon/config.hpp"
+#include "cncstream/gcode/stream_link.hpp"
 #include "cncstream/daemon/ws_hub.hpp"
 #include "cncstream/geometry/mesh.hpp"
 #include "cncstream/session/job_journal.hpp"
@@ -67,6 +68,10 @@ struct MachineJobListener {
   std::function<void(const std::string& machine, SimVerifyReport)> verified;
   std::function<void(const std::string& machine, bool ok, const std::string& why)> start_failed;
 };
+
+// The link a machine's programs stream over: its profile's, else GRBL 1.1's
+// at its configured baud (the simulator's wire is paced at the same baud).
+gcode::StreamLink machine_link(const MachineConfig& config);
 
 struct Machine {
   MachineConfig config;

@@ -124,6 +124,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
         try {
           jobs::ToolpathParams params = toolpath_params(o->tp);
           feeds = apply_feeds(params, feeds_request);
+          params.link = planning_link(c, o->sim);  // the machine's own link (the simulator's, a profile's, --serial)
           program = jobs::generate_toolpath(params, generation.control());
         } catch (const jobs::Cancelled&) {
           return generation.interrupted_exit(not_written);

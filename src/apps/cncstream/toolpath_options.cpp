@@ -81,8 +81,9 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
   sub->add_option("--rough-feed", o.rough_feed, "Roughing feed, mm/min (default: --feed)")
       ->check(CLI::PositiveNumber)->group(group);
   sub->add_option("--link-rate", o.link_rate,
-                  "The link the program streams over: bytes/s (11520), a baud rate (115200baud) or 'usb'; where a "
-                  "stretch of moves cannot arrive in time at its feed, F is lowered there, and the plan says so")
+                  "The link the program streams over: bytes/s (11520), a baud rate (115200baud) or 'usb' (default: "
+                  "the machine's; GRBL 1.1's 115200baud without one); where a stretch of moves cannot arrive in "
+                  "time at its feed, F is lowered there, and the plan says so")
       ->group(group);
   const char* feeds = "Tool library, feeds and speeds";
   sub->add_option("--material", o.material,
@@ -141,11 +142,12 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   p.rough_stepover = o.rough_stepover;
   p.rough_feed = o.rough_feed;
   p.tool_change = o.tool_change == "m6" ? ToolChangeCode::M6 : ToolChangeCode::PauseM0;
-  if (!o.link_rate.empty()) {
-    gcode::StreamLink link = protocol::grbl_default_link();
-    link.bytes_per_second = protocol::parse_link_rate(o.link_rate);
-    p.link = link;
-  }
+  // The program is fitted to the link it will stream over: GRBL 1.1's 115,200
+  // baud unless --link-rate says otherwise ('usb': unbounded, F never lowered).
+  // The main command replaces it with the machine's own (planning_link).
+  gcode::StreamLink link = protocol::grbl_default_link();
+  if (!o.link_rate.empty()) link.bytes_per_second = protocol::parse_link_rate(o.link_rate);
+  p.link = link;
   if (!p.stock && (p.rough || p.max_depth || p.step_down))
     throw std::invalid_argument("--stock none finishes from the part's top without a depth check: --rough, "
                                 "--max-depth and --step-down need a stock");
@@ -187,7 +189,8 @@ std::string toolpath_report(const jobs::ToolpathProgram& r) {
     o << format_gcode_number(100.0 * (1.0 - double(path.points_after_merge) / double(path.points_before_merge)), 1)
       << " % fewer lines";
   o << ")\n";
-  if (r.operations.size() > 1 || !r.notes.empty()) o << "operations:\n" << operations_text(r);
+  const bool wire_checked = !r.operations.empty() && r.operations.front().link_checked;
+  if (r.operations.size() > 1 || !r.notes.empty() || wire_checked) o << "operations:\n" << operations_text(r);
   o << "G-code: " << stats.lines << " lines (" << stats.arcs << " arcs), cut " << format_gcode_number(stats.cut_length / 1000, 2) << " m, feed time "
     << format_duration(stats.feed_time_s) << " (no acceleration)\n";
   o << "tool tip in work coordinates: X " << format_gcode_number(b.lo.x) << " .. " << format_gcode_number(b.hi.x) << ", Y "
