@@ -73,6 +73,7 @@ void Api::add_routes() {
   machine_routes();
   file_routes();
   job_routes();
+  tool_routes();
   static_routes();
 }
 

@@ -98,6 +98,7 @@ JobManager::JobManager(boost::asio::io_context& io, boost::asio::thread_pool& po
       hub_(hub),
       programs_dir_(programs_dir),
       journal_(journal_path),
+      tools_(config.data_dir.empty() ? fs::path() : config.data_dir / "tools.toml"),
       previews_(io, pool) {
   fs::create_directories(programs_dir_);
   MachineJobListener l;
@@ -322,7 +323,15 @@ json JobManager::create(const json& body) {
   }
   if (info->kind == "stl") {
     if (!body.contains("params")) throw ApiError{400, "bad_request", "params: required for an STL file (at least tool)"};
-    const auto checked = check_toolpath_params(body["params"], *info, config_.limits);
+    // The machine's rates bound the feeds a material gives.
+    tooling::MachineLimits machine_limits;
+    if (Machine* m = machines_.find(machine))
+      if (auto l = protocol::motion_limits_from(m->session->settings())) {
+        machine_limits.max_feed_xy = std::min(l->max_rate.x, l->max_rate.y);
+        machine_limits.max_feed_z = l->max_rate.z;
+      }
+    const tooling::ToolLibrary library = tools_.snapshot();
+    const auto checked = check_toolpath_params(body["params"], *info, config_.limits, &library, machine_limits);
     j->params = checked.canonical;
   } else {
     j->params = nullptr;

@@ -6,6 +6,7 @@
 
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/daemon/http_types.hpp"
+#include "cncstream/jobs/operation_feeds.hpp"
 
 namespace cncstream::daemon {
 
@@ -48,13 +49,25 @@ std::string choice(const json& j, const char* key, const std::string& dflt, std:
 
 }  // namespace
 
-CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const Limits& limits) {
+CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const Limits& limits,
+                                    const tooling::ToolLibrary* tools, const tooling::MachineLimits& machine) {
   if (!j.is_object()) throw ApiError{400, "bad_request", "params: expected an object"};
   CheckedParams out;
   auto& p = out.params;
-  if (!j.contains("tool") || !j.at("tool").is_string()) bad("tool", "required: a cutter such as ball:3.175");
-  const std::string tool = j.at("tool").get<std::string>();
-  if (tool.size() > 64) bad("tool", "too long");
+  const tooling::ToolLibrary no_tools;
+  // A spec, or a tool of the library by number or name: its spec and the tool.
+  auto choose = [&](const char* field, const std::string& text) {
+    try {
+      return tooling::choose_tool(tools ? *tools : no_tools, text);
+    } catch (const std::exception& e) {
+      bad(field, e.what());
+    }
+  };
+  if (!j.contains("tool") || !j.at("tool").is_string())
+    bad("tool", "required: a cutter such as ball:3.175, or a tool of the library by number or name");
+  if (j.at("tool").get<std::string>().size() > 64) bad("tool", "too long");
+  const tooling::ToolChoice tool_choice = choose("tool", j.at("tool").get<std::string>());
+  const std::string tool = tool_choice.spec();
   try {
     p.cutter = parse_cutter_spec(tool);
   } catch (const std::exception& e) {
@@ -118,10 +131,12 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   }
   p.max_depth = opt_number(j, "max_depth", 0.01, 100);
   std::string rough;
+  std::optional<tooling::ToolChoice> rough_choice, rest_choice;
   if (j.contains("rough") && !j.at("rough").is_null()) {
     if (!j.at("rough").is_string() || j.at("rough").get<std::string>().size() > 64)
       bad("rough", "expected a cutter such as flat:6");
-    rough = j.at("rough").get<std::string>();
+    rough_choice = choose("rough", j.at("rough").get<std::string>());
+    rough = rough_choice->spec();
     try {
       p.rough = parse_cutter_spec(rough);
     } catch (const std::exception& e) {
@@ -132,8 +147,9 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   if (j.contains("rest") && !j.at("rest").is_null()) {
     if (!j.at("rest").is_string() || j.at("rest").get<std::string>().size() > 64)
       bad("rest", "expected a cutter such as ball:1");
+    rest_choice = choose("rest", j.at("rest").get<std::string>());
     try {
-      p.rest = parse_cutter_spec(j.at("rest").get<std::string>());
+      p.rest = parse_cutter_spec(rest_choice->spec());
     } catch (const std::exception& e) {
       bad("rest", e.what());
     }
@@ -149,6 +165,42 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   if (!p.stock && (p.rough || p.max_depth || p.step_down))
     bad("stock", "none finishes from the part's top without a depth check: rough, max_depth and step_down need a stock");
   auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  p.rough_rpm = opt_number(j, "rough_rpm", 0, 100000);
+  p.rest_feed = opt_number(j, "rest_feed", 0.1, 100000);
+  p.rest_rpm = opt_number(j, "rest_rpm", 0, 100000);
+  // Feeds and speeds from a material: what the request does not give. The
+  // canonical params of an earlier check carry the result and its name.
+  std::string material;
+  if (j.contains("material_used") && j.at("material_used").is_string() &&
+      j.at("material_used").get<std::string>().size() <= 64)
+    material = j.at("material_used").get<std::string>();
+  if (j.contains("material") && !j.at("material").is_null()) {
+    if (!j.at("material").is_string() || j.at("material").get<std::string>().size() > 64)
+      bad("material", "expected a material such as walnut, mdf or acrylic");
+    material = j.at("material").get<std::string>();
+    jobs::FeedsRequest q;
+    q.material = material;
+    auto op_tool = [](const tooling::ToolChoice& c) {
+      return jobs::OperationTool{c.geometry, c.tool ? std::optional<tooling::Tool>(*c.tool) : std::nullopt};
+    };
+    q.finish = op_tool(tool_choice);
+    if (rough_choice) q.rough = op_tool(*rough_choice);
+    if (rest_choice) q.rest = op_tool(*rest_choice);
+    q.limits = machine;
+    if (q.limits.spindle_max <= 0) q.limits.spindle_max = 24000;
+    auto given = [&](const char* key) {
+      return j.contains(key) && !j.at(key).is_null() ? std::optional<double>(j.at(key).get<double>()) : std::nullopt;
+    };
+    q.feed = given("feed");
+    q.plunge_feed = given("plunge_feed");
+    q.rpm = given("rpm");
+    q.rough_feed = p.rough_feed;
+    try {
+      jobs::apply_material_feeds(p, q);
+    } catch (const std::invalid_argument& e) {
+      bad("material", e.what());
+    }
+  }
 
   // The grid the CL engine samples: rows across, samples along.
   const double to_mm = (units == "in" ? 25.4 : 1.0) * p.part.scale;
@@ -181,7 +233,10 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
                    {"rough_max_depth", opt(p.rough_max_depth)}, {"leave", p.leave},
                    {"step_down", opt(p.step_down)}, {"rough_stepover", p.rough_stepover},
                    {"rough_feed", opt(p.rough_feed)}, {"tool_change", tool_change},
-                   {"rest", p.rest ? json(p.rest->spec()) : json(nullptr)}};
+                   {"rest", p.rest ? json(p.rest->spec()) : json(nullptr)},
+                   {"rough_rpm", opt(p.rough_rpm)}, {"rest_feed", opt(p.rest_feed)}, {"rest_rpm", opt(p.rest_rpm)},
+                   // Informational: the feeds above are the material's, computed once.
+                   {"material_used", material.empty() ? json(nullptr) : json(material)}};
   return out;
 }
 

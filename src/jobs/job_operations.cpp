@@ -81,9 +81,9 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
   JobProgram program(jo);
 
   // An operation's lines and time begin with its tool change.
-  auto begin = [&](const std::string& name, int tool, const Cutter& c) {
+  auto begin = [&](const std::string& name, int tool, const Cutter& c, double rpm) {
     auto at = std::make_pair(program.writer().lines().size(), program.stats());
-    program.begin_operation({name, tool, c, p.rpm});
+    program.begin_operation({name, tool, c, rpm});
     return at;
   };
   auto summary = [&](OperationSummary o, const std::pair<std::size_t, ProgramStats>& at) {
@@ -96,9 +96,10 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
 
   int tool = 1;
   if (rough.path) {
-    const auto at = begin("roughing", tool, rough.path->cutter);
+    const auto at = begin("roughing", tool, rough.path->cutter, p.rough_rpm.value_or(p.rpm));
     MachiningParams rm = mp;
     rm.feed = p.rough_feed.value_or(p.feed);
+    rm.rpm = p.rough_rpm.value_or(p.rpm);
     write_roughing(program.writer(), *rough.path, r.work_offset, rm, program.stats());
     OperationSummary o;
     o.name = "roughing";
@@ -107,13 +108,15 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
     o.detail = fmt::format("Z-level, {} levels, stepover {} mm, leave {} mm", rough.path->levels.size(),
                            format_gcode_number(rough.path->stepover, 3), format_gcode_number(p.leave, 3));
     o.max_depth = rough.rough_max_depth;
+    o.rpm = rm.rpm;
+    o.feed = rm.feed;
     summary(std::move(o), at);
     // The same cutter finishes without a tool change.
     if (rough.path->cutter.spec() != p.cutter.spec()) ++tool;
   }
   if (!rough.rest.empty()) {
     // With the finishing cutter: the finishing follows without a tool change.
-    const auto at = begin("rest roughing", tool, p.cutter);
+    const auto at = begin("rest roughing", tool, p.cutter, p.rpm);
     std::size_t levels = 0;
     for (const auto& rest : rough.rest) {
       write_roughing(program.writer(), rest, r.work_offset, mp, program.stats());
@@ -128,24 +131,31 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
                            rough.rest_spots, levels, format_gcode_number(rough.rest.front().stepover, 3),
                            format_gcode_number(rough.rest_leave, 3));
     o.max_depth = rough.rest_step_down;
+    o.rpm = p.rpm;
+    o.feed = mp.feed;
     summary(std::move(o), at);
   }
-  const auto at = begin("finishing", tool, p.cutter);
+  const auto at = begin("finishing", tool, p.cutter, p.rpm);
   write_pieces(program.writer(), r.finish_pieces, r.work_offset, mp, program.stats());
   OperationSummary f = finishing_summary(r, p, ProgramStats{});
   f.tool = tool;
   f.max_depth = rough.finish_depth;
+  f.rpm = p.rpm;
+  f.feed = mp.feed;
   summary(std::move(f), at);
   if (rest && !rest->pieces.empty()) {
     ++tool;
-    const auto at_rest = begin("rest machining", tool, rest->cutter);
+    const auto at_rest = begin("rest machining", tool, rest->cutter, p.rest_rpm.value_or(p.rpm));
+    MachiningParams restp = mp;
+    restp.feed = p.rest_feed.value_or(p.feed);
+    restp.rpm = p.rest_rpm.value_or(p.rpm);
     OperationSummary o;
     o.name = "rest machining";
     o.tool = tool;
     o.cutter = rest->cutter;
     std::size_t levels = 0;
     for (const auto& l : rest->levels) {
-      write_roughing(program.writer(), l, r.work_offset, mp, program.stats());
+      write_roughing(program.writer(), l, r.work_offset, restp, program.stats());
       levels += l.levels.size();
     }
     o.detail = fmt::format("{}rows {} mm apart where the {} cannot reach ({} pieces), {} pencil passes along the "
@@ -156,8 +166,10 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
                                   : "",
                            format_gcode_number(rest->stepover, 3), p.cutter.spec(),
                            rest->pieces.size() - rest->pencils, rest->pencils);
-    write_pieces(program.writer(), rest->pieces, r.work_offset, mp, program.stats());
+    write_pieces(program.writer(), rest->pieces, r.work_offset, restp, program.stats());
     o.max_depth = rest->depth;
+    o.rpm = restp.rpm;
+    o.feed = restp.feed;
     summary(std::move(o), at_rest);
   }
   r.gcode = program.finish();

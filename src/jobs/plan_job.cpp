@@ -92,6 +92,17 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
       for (const auto& row : cr->path.rows)
         for (const auto& pt : row) top = std::max(top, pt.z);
     mp.safe_z = top + r.work_offset.z + 5;
+    // A cutter's own feeds and speed, where the plan has them (--material).
+    auto rate_for = [&](const Cutter& c) {
+      const auto& rate = c.type == CutterType::Ball ? params.ball_rate : params.radiused_rate;
+      MachiningParams m = mp;
+      if (rate) {
+        m.feed = rate->feed;
+        m.plunge_feed = rate->plunge_feed;
+        m.rpm = rate->rpm;
+      }
+      return m;
+    };
     // The simulated clean-up, with its retracts (a straight move between
     // pieces would cut where the program does not).
     std::vector<Polyline> sim_pieces;
@@ -107,7 +118,7 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
 
     run.stage("programs", 0.85, 0.88);
     auto header = [&](const Cutter& c, const std::string& what, int tool) {
-      MachiningParams h = mp;
+      MachiningParams h = rate_for(c);
       h.tool = tool;
       h.header_comments = {"cncstream plan: " + what, "part: " + so.part.stl,
                            "tool: " + c.description() + " [" + c.spec() + "]",
@@ -128,18 +139,21 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
                                                 : ", then clean-up with " + second.cutter.spec()),
                             "part: " + so.part.stl, "work origin: XY at the part's min, Z0 at the part's top"};
       JobProgram job(jo);
-      job.begin_operation({"finishing", 1, first.cutter, mp.rpm});
-      write_pieces(job.writer(), raster_as_one_cut(first.path), r.work_offset, mp, job.stats());
+      job.begin_operation({"finishing", 1, first.cutter, rate_for(first.cutter).rpm});
+      write_pieces(job.writer(), raster_as_one_cut(first.path), r.work_offset, rate_for(first.cutter), job.stats());
       if (!pieces.empty()) {
-        job.begin_operation({"clean-up", 2, second.cutter, mp.rpm});
-        write_pieces(job.writer(), pieces, r.work_offset, mp, job.stats());
+        job.begin_operation({"clean-up", 2, second.cutter, rate_for(second.cutter).rpm});
+        write_pieces(job.writer(), pieces, r.work_offset, rate_for(second.cutter), job.stats());
       }
       p.program_job = job.finish();
     }
     const std::string prog_ball =
-        first.cutter.type == CutterType::Ball ? p.program_first : finishing_program(r.ball.path, r.work_offset, mp);
+        first.cutter.type == CutterType::Ball ? p.program_first
+                                              : finishing_program(r.ball.path, r.work_offset, rate_for(r.ball.cutter));
     const std::string prog_rad =
-        first.cutter.type == CutterType::Bull ? p.program_first : finishing_program(r.radiused.path, r.work_offset, mp);
+        first.cutter.type == CutterType::Bull
+            ? p.program_first
+            : finishing_program(r.radiused.path, r.work_offset, rate_for(r.radiused.cutter));
 
     run.stage("estimates", 0.88, 1.0);
     gcode::MotionLimits limits;

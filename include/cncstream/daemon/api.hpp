@@ -51,6 +51,7 @@ class Api {
   void machine_routes();
   void file_routes();
   void job_routes();
+  void tool_routes();
   void static_routes();
   Machine& machine(const Request& r, std::size_t param = 0);
   std::int64_t job_id(const Request& r) const;

@@ -22,6 +22,7 @@
 #include "cncstream/daemon/http_types.hpp"
 #include "cncstream/daemon/machines.hpp"
 #include "cncstream/daemon/previews.hpp"
+#include "cncstream/daemon/tool_store.hpp"
 #include "cncstream/gcode/program_extent.hpp"
 #include "cncstream/jobs/height_preview.hpp"
 #include "cncstream/jobs/resume_job.hpp"
@@ -116,6 +117,9 @@ class JobManager {
   // Cache statistics (tests, benchmarks).
   std::size_t cache_size() const { return cache_.size(); }
 
+ // The daemon's tool library (<data_dir>/tools.toml).
+  ToolStore& tools() { return tools_; }
+
  private:
   void kick_generation(DaemonJob& j);
   // The program cache's key: the file, the job's parameters and, for a part, the machine's link.
@@ -150,6 +154,7 @@ class JobManager {
   WsHub& hub_;
   std::filesystem::path programs_dir_;
   transport::Journal journal_;
+  ToolStore tools_;
   std::map<std::int64_t, std::unique_ptr<DaemonJob>> jobs_;
   std::map<std::string, std::int64_t> running_;   // machine -> job
   std::map<std::string, std::int64_t> last_run_;  // machine -> the last job started there (its verify report)

@@ -7,6 +7,8 @@
 #include "cncstream/daemon/config.hpp"
 #include "cncstream/daemon/file_store.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
+#include "cncstream/tooling/feeds_speeds.hpp"
+#include "cncstream/tooling/tool_library.hpp"
 
 namespace cncstream::daemon {
 
@@ -16,7 +18,13 @@ struct CheckedParams {
   double grid_nodes = 0;        // samples the tool path will take (estimate)
 };
 
-// `file` gives the part's box for the grid estimate.
-CheckedParams check_toolpath_params(const nlohmann::json& j, const FileInfo& file, const Limits& limits);
+// `file` gives the part's box for the grid estimate. "tool", "rough" and
+// "rest" may name a tool of `tools` (number or name; the canonical params
+// hold its spec); with "material", the feeds and rpm not given are computed
+// per operation within `machine` (jobs/operation_feeds.hpp) and the
+// canonical params hold them.
+CheckedParams check_toolpath_params(const nlohmann::json& j, const FileInfo& file, const Limits& limits,
+                                    const tooling::ToolLibrary* tools = nullptr,
+                                    const tooling::MachineLimits& machine = {});
 
 }  // namespace cncstream::daemon

@@ -7,6 +7,7 @@
 // and largest residual of ball only, radiused only, and combined; and both
 // as one job program with the tool change in it.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,12 @@ struct PlanParams {
   SelectionParams selection;
   double feed = 1000, plunge_feed = 300, rpm = 18000;
   double max_rate = 500, accel = 10;  // per axis, for predicted times ($110-$112, $120-$122)
+  // Set (feeds and speeds from a material): that cutter's operations use
+  // these instead of feed, plunge_feed and rpm.
+  struct CutterRate {
+    double feed = 0, plunge_feed = 0, rpm = 0;
+  };
+  std::optional<CutterRate> ball_rate, radiused_rate;
 };
 
 struct PlanOption {

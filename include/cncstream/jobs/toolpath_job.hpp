@@ -82,10 +82,12 @@ struct ToolpathParams {
   std::optional<double> step_down;        // default: the largest that keeps every pass within both depths
   double rough_stepover = 0;              // mm; 0: 40 % of the roughing cutter's diameter
   std::optional<double> rough_feed;       // mm/min; default: feed
+  std::optional<double> rough_rpm;        // the roughing's spindle speed; default: rpm
   // Rest machining after the finishing: a smaller cutter, only where the
   // finishing cutter cannot reach the part (grooves, gaps and inside
   // corners narrower than it), with a tool change before it.
   std::optional<Cutter> rest;
+  std::optional<double> rest_feed, rest_rpm;  // the rest machining's; default: feed, rpm
   ToolChangeCode tool_change = ToolChangeCode::PauseM0;
   // Set: the raster finishing's CL grids come from here instead of the exact
   // engine (the CLI's --engine gl: the depth buffer), and `grid_note` (asked
@@ -119,6 +121,7 @@ struct OperationSummary {
   // With a link (ToolpathParams::link): the feed its densest stretch streams
   // at (mm/min; infinite: any) and the share of its feed-move length that
   // now runs below the commanded feed.
+  double rpm = 0, feed = 0;  // the operation's spindle speed and cutting feed (mm/min)
   bool link_checked = false;
   double wire_feed = 0;
   double share_below_feed = 0;

@@ -13,6 +13,7 @@
 #include "job_display.hpp"
 #include "long_job.hpp"
 #include "selection_options.hpp"
+#include "tool_choice.hpp"
 
 namespace cncstream::app {
 
@@ -26,9 +27,17 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
   auto* sub = app.add_subcommand(
       "plan", "Combined-tool plan: the cutter removing more material, then the other only where scallops exceed --scallop-tol");
   add_selection_options(sub, o->sel);
-  sub->add_option("--feed", o->sel.feed, "Cutting feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--plunge-feed", o->sel.plunge_feed, "Plunge feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--rpm", o->sel.rpm, "Spindle speed")->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--feed", o->sel.feed, "Cutting feed, mm/min (default: from --material, else 1000)")
+      ->check(CLI::PositiveNumber)->each([o](const std::string&) { o->sel.feed_given = true; });
+  sub->add_option("--plunge-feed", o->sel.plunge_feed, "Plunge feed, mm/min (default: from --material, else 300)")
+      ->check(CLI::PositiveNumber)->each([o](const std::string&) { o->sel.plunge_feed_given = true; });
+  sub->add_option("--rpm", o->sel.rpm, "Spindle speed (default: from --material, else 18000)")
+      ->check(CLI::NonNegativeNumber)->each([o](const std::string&) { o->sel.rpm_given = true; });
+  sub->add_option("--material", o->sel.material,
+                  "Each cutter's rpm and feeds from chip load for this material (walnut, mdf, acrylic ...), within "
+                  "--max-rate and --spindle-max; --feed, --rpm and --plunge-feed win");
+  sub->add_option("--spindle-max", o->sel.spindle_max, "The spindle's highest speed, rpm ($30)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--max-rate", o->sel.max_rate, "Machine's max rate per axis for the time estimate, mm/min ($110-$112)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--accel", o->sel.accel, "Machine's acceleration per axis for the time estimate, mm/s^2 ($120-$122)")
@@ -36,7 +45,8 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("-o,--output", o->out, "Folder for the G-code files and plan.json")->capture_default_str();
   add_progress_option(sub, o->progress);
   registry.add(sub, [o] {
-    const jobs::PlanParams params = plan_params(o->sel);
+    std::string feeds_report;
+    const jobs::PlanParams params = plan_params(o->sel, &feeds_report);
     LongJob job(o->progress, o->sel.threads);
     std::optional<jobs::PlanResult> result;
     try {
@@ -65,6 +75,8 @@ void register_plan(CLI::App& app, CommandRegistry& registry) {
     std::cout << "  (residual: all material left; scallop: less what no stepover of these cutters removes, such as gaps "
                  "narrower than the cutter)\n";
     std::cout << std::defaultfloat;
+    // Feeds and speeds per cutter (--material): tool, rpm, feed, chip, removal rate.
+    std::cout << feeds_report;
     std::cout << "wrote " << files.first.string() << " (" << first.cutter.description() << ")\n";
     if (!plan.cleanup_pieces.empty())
       std::cout << "wrote " << files.second.string() << " (" << second.cutter.description() << ", "

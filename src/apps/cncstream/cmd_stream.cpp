@@ -3,6 +3,7 @@
 // confirm, stream. PORT may be a device, `auto`, or `sim` (built-in simulator).
 // Ctrl-C or `s` asks for a controlled stop (hold, wait, soft reset). When a
 // running daemon owns PORT, the job is handed to it (daemon_handoff.hpp).
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "daemon_handoff.hpp"
 #include "job_session.hpp"
 #include "long_job.hpp"
+#include "tool_choice.hpp"
 #include "toolpath_options.hpp"
 
 namespace cncstream::app {
@@ -75,6 +77,20 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
   registry.add(sub, [o] {
     o->conn.link_rate = o->tp.link_rate;  // --link-rate: the program's link is the ETA's too
     const auto& c = o->conn;
+    // Library tools become specs and --material sets the feeds, before a
+    // daemon is handed the job (its library is not this one). The
+    // simulator's rates are known; a real controller's come from its $$
+    // only once connected: then --max-feed.
+    std::optional<jobs::FeedsRequest> feeds_request;
+    if (is_stl(o->file)) {
+      tooling::MachineLimits machine;
+      if (c.port == "sim") {
+        const auto sim_limits = planning_limits(c, o->sim);
+        machine.max_feed_xy = std::min(sim_limits.max_rate.x, sim_limits.max_rate.y);
+        machine.max_feed_z = sim_limits.max_rate.z;
+      }
+      feeds_request = resolve_tool_options(o->tp, machine);
+    }
     // A running daemon owns the port: it runs the job, this command follows it.
     if (const auto daemon = daemon_owning_port(c.port)) {
       HandoffJob h;
@@ -99,6 +115,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       // nothing, exit 130); the guard is gone before streaming, whose Ctrl-C
       // holds and stops the machine instead.
       std::optional<jobs::ToolpathProgram> program;
+      jobs::FeedsPlan feeds;
       std::filesystem::path out;
       {
         LongJob generation(o->progress, o->tp.threads);
@@ -109,6 +126,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
           // The built-in simulator powers on with G54 and G92 at zero (unless a settings file says otherwise).
           if (c.port == "sim" && o->sim.settings.empty() && params.stock && !params.stock->work_origin)
             params.stock->work_origin = Vec3{};
+          feeds = apply_feeds(params, feeds_request);
           params.link = planning_link(c, o->sim);  // the machine's own link (the simulator's, a profile's, --serial)
           program = jobs::generate_toolpath(params, generation.control());
         } catch (const jobs::Cancelled&) {
@@ -129,7 +147,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       std::cout << "plan for " << o->file << ":\n";
       if (r.stock)
         std::cout << "  stock in work coordinates: " << bounds_text(*r.stock) << "\n";
-      std::cout << operations_text(r, &eta)
+      std::cout << operations_text(r, &eta) << jobs::feeds_plan_text(feeds, r)
                 << "  tool tip in work coordinates: " << bounds_text(r.stats.work_bounds) << "\n"
                 << "  work origin: XY at the part's " << o->tp.origin << ", Z0 at the part's " << o->tp.z_zero
                 << " (set G54 there before cutting)\n"

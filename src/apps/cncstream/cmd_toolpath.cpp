@@ -10,6 +10,7 @@
 #include "cncstream/jobs/toolpath_job.hpp"
 #include "commands.hpp"
 #include "long_job.hpp"
+#include "tool_choice.hpp"
 #include "toolpath_options.hpp"
 
 namespace cncstream::app {
@@ -73,7 +74,9 @@ void register_toolpath(CLI::App& app, CommandRegistry& registry) {
   add_progress_option(sub, o->progress);
   registry.add(sub, [o] {
     const auto t0 = std::chrono::steady_clock::now();
+    const auto feeds_request = resolve_tool_options(o->tp);
     jobs::ToolpathParams params = toolpath_params(o->tp);
+    const jobs::FeedsPlan feeds = apply_feeds(params, feeds_request);
     params.output = o->out;
     if (o->engine != "gl" && o->gl_tolerance) throw std::invalid_argument("--gl-tolerance applies to --engine gl only");
     auto gl_stats = std::make_shared<DepthBufferGrids>();
@@ -87,7 +90,7 @@ void register_toolpath(CLI::App& app, CommandRegistry& registry) {
     }
     job.clear_progress();
     const jobs::ToolpathProgram& r = *program;
-    std::cout << toolpath_report(r);
+    std::cout << toolpath_report(r) << jobs::feeds_plan_text(feeds, r);
     if (gl_stats->grids > 0)
       std::cout << "CL grid: the depth buffer (" << gl_stats->renderer << "), " << gl_stats->grids << " grid"
                 << (gl_stats->grids == 1 ? "" : "s") << " of " << gl_stats->nodes << " nodes in " << gl_stats->seconds

@@ -41,5 +41,6 @@ void register_status(CLI::App& app, CommandRegistry& registry);
 void register_view(CLI::App& app, CommandRegistry& registry);
 void register_probe(CLI::App& app, CommandRegistry& registry);
 void register_outline(CLI::App& app, CommandRegistry& registry);
+void register_tools(CLI::App& app, CommandRegistry& registry);
 
 }  // namespace cncstream::app

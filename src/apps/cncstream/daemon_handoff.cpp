@@ -108,6 +108,13 @@ json job_params_from(const ToolpathOptions& tp) {
   p["feed"] = tp.feed;
   p["plunge_feed"] = tp.plunge_feed;
   p["rpm"] = tp.rpm;
+  // A material: the daemon computes what the operator did not give, within its machine's rates.
+  if (!tp.material.empty()) {
+    p["material"] = tp.material;
+    if (!tp.feed_given) p.erase("feed");
+    if (!tp.plunge_feed_given) p.erase("plunge_feed");
+    if (!tp.rpm_given) p.erase("rpm");
+  }
   p["safe_z"] = tp.safe_z ? json(*tp.safe_z) : json(nullptr);
   p["tolerance"] = tp.tolerance;
   p["arcs"] = tp.arcs;

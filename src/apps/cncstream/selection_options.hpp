@@ -24,12 +24,19 @@ struct SelectionOptions {
   double max_rate = 500, accel = 10;  // plan only: for predicted times ($110-$112, $120-$122)
   unsigned threads = 0;
   bool nodes_csv = false;  // also write every CL point's heights, d and choices (large)
+  std::string tool_library;  // --tools may name library tools; empty: the default library
+  // plan only: feeds and speeds per cutter from a material (tool_choice.hpp).
+  std::string material;
+  double spindle_max = 24000;
+  bool feed_given = false, rpm_given = false, plunge_feed_given = false;
 };
 
 void add_selection_options(CLI::App* sub, SelectionOptions& o);
 
 // Throws for a --tools that is not one ball and one radiused cutter.
 jobs::SelectionParams selection_params(const SelectionOptions& o);
-jobs::PlanParams plan_params(const SelectionOptions& o);
+// With a material: each cutter's feeds and rpm (what the operator did not
+// give), and `feeds_report` (if not null) gets the plan's feeds text.
+jobs::PlanParams plan_params(const SelectionOptions& o, std::string* feeds_report = nullptr);
 
 }  // namespace cncstream::app

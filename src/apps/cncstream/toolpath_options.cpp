@@ -15,7 +15,9 @@ namespace cncstream::app {
 
 void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required) {
   add_part_options(sub, o.part);
-  auto* tool = sub->add_option("--tool", o.tool, "Cutter: flat:D, ball:D, bull:D:r (mm; e.g. ball:3.175, ball:1/8in)");
+  auto* tool = sub->add_option("--tool", o.tool,
+                               "Cutter: a tool of the library by number or name (3, \"1/8 tapered ball\"), or a spec "
+                               "flat:D, ball:D, bull:D:r (mm; e.g. ball:3.175, ball:1/8in)");
   if (tool_required) tool->required();
   sub->add_option("--stepover", o.stepover, "Distance between rows, mm")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--step", o.step, "Sampling step along a row, mm (default: min(stepover/4, 0.1))")->check(CLI::NonNegativeNumber);
@@ -33,9 +35,12 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
   sub->add_option("--rest", o.rest,
                   "Rest machining after the finishing with this smaller cutter, only where the finishing cutter cannot "
                   "reach (grooves, gaps, inside corners), e.g. ball:1");
-  sub->add_option("--feed", o.feed, "Cutting feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--plunge-feed", o.plunge_feed, "Plunge feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--rpm", o.rpm, "Spindle speed (0: no spindle commands)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--feed", o.feed, "Cutting feed, mm/min (default: from --material, else 1000)")
+      ->check(CLI::PositiveNumber)->each([&o](const std::string&) { o.feed_given = true; });
+  sub->add_option("--plunge-feed", o.plunge_feed, "Plunge feed, mm/min (default: from --material, else 300)")
+      ->check(CLI::PositiveNumber)->each([&o](const std::string&) { o.plunge_feed_given = true; });
+  sub->add_option("--rpm", o.rpm, "Spindle speed (0: no spindle commands; default: from --material, else 18000)")
+      ->check(CLI::NonNegativeNumber)->each([&o](const std::string&) { o.rpm_given = true; });
   sub->add_option("--safe-z", o.safe_z, "Retract height in work coordinates (default: 5 mm above the part top)");
   sub->add_option("--tolerance", o.tolerance, "Merge points on a line within this, mm (one-sided, never below the CL)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
@@ -86,6 +91,24 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
                   "the machine's; GRBL 1.1's 115200baud without one); where a stretch of moves cannot arrive in "
                   "time at its feed, F is lowered there, and the plan says so")
       ->group(group);
+  const char* feeds = "Tool library, feeds and speeds";
+  sub->add_option("--material", o.material,
+                  "Compute rpm and feeds per operation from chip load for this material (walnut, maple, pine, mdf, "
+                  "plywood, acrylic, hdpe, aluminium, brass ...); --feed, --rpm, --plunge-feed and --rough-feed win")
+      ->group(feeds);
+  sub->add_option("--tool-library", o.tool_library,
+                  "The tool library file (default: $CNCSTREAM_TOOLS, else tools.toml beside the journal)")
+      ->group(feeds);
+  sub->add_option("--flutes", o.flutes, "Flutes of a tool given as a spec (default 2; a library tool has its own)")
+      ->check(CLI::Range(1, 12))->group(feeds);
+  sub->add_option("--spindle-max", o.spindle_max, "The spindle's highest speed, rpm ($30): computed rpm stays within it")
+      ->check(CLI::NonNegativeNumber)->capture_default_str()->group(feeds);
+  sub->add_option("--spindle-min", o.spindle_min, "The spindle's lowest speed, rpm ($31)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str()->group(feeds);
+  sub->add_option("--max-feed", o.max_feed,
+                  "The machine's highest X/Y rate, mm/min ($110/$111): computed feeds stay within it (0: the "
+                  "controller's, where the command knows it)")
+      ->check(CLI::NonNegativeNumber)->group(feeds);
   sub->add_option("--tool-change", o.tool_change,
                   "How the program pauses for a tool change: m0 (GRBL: a pause and a comment) or m6")
       ->check(CLI::IsMember({"m0", "m6"}))->capture_default_str()->group(group);

@@ -51,6 +51,16 @@ struct ToolpathOptions {
   // Set: F is lowered where the link cannot deliver a stretch in time, and
   // the ETA uses it. Empty: the feeds as commanded; the ETA uses the profile's.
   std::string link_rate;
+  // The tool library and feeds and speeds (tool_choice.hpp): --tool, --rough
+  // and --rest may name a library tool; --material computes what the
+  // operator did not give (the *_given flags: set when given on the command line).
+  std::string tool_library;  // empty: tooling::default_tool_library_path()
+  std::string material;
+  int flutes = 0;            // a spec's flutes; 0: 2 (a library tool has its own)
+  double spindle_max = 24000, spindle_min = 0;  // rpm ($30, $31)
+  double max_feed = 0;       // mm/min ($110/$111); 0: not known
+  double max_feed_z = 0;     // mm/min ($112); 0: not known
+  bool feed_given = false, plunge_feed_given = false, rpm_given = false;
 };
 
 
