@@ -14,7 +14,7 @@ std::string MachineState::to_json() const {
 }
 
 MachineState derive_machine_state(const session::MachineSnapshot& snap, const std::string& program,
-                                  bool just_completed, const std::string& alarm_text) {
+                                  const std::string& alarm_text) {
   using protocol::MachineState;
   shop::MachineState s;
   s.program = program;
@@ -51,7 +51,7 @@ MachineState derive_machine_state(const session::MachineSnapshot& snap, const st
     case MachineState::Run: s.execution = "ACTIVE"; break;
     default:
       // Idle between the last answer and the engine's end of the job is still the job.
-      s.execution = job ? "ACTIVE" : just_completed ? "PROGRAM_COMPLETED" : "READY";
+      s.execution = job ? "ACTIVE" : "READY";
       break;
   }
   return s;

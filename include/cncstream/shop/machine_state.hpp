@@ -14,7 +14,7 @@ namespace cncstream::shop {
 
 struct MachineState {
   std::string availability = "UNAVAILABLE";  // AVAILABLE | UNAVAILABLE
-  std::string execution = "READY";           // READY, ACTIVE, INTERRUPTED, FEED_HOLD, STOPPED, PROGRAM_COMPLETED ...
+  std::string execution = "READY";           // READY, ACTIVE, INTERRUPTED, FEED_HOLD, STOPPED
   std::string controller_mode = "MANUAL";    // AUTOMATIC, MANUAL, MANUAL_DATA_INPUT
   std::string program;                       // the job's file name ("" : none)
   long line = 0;                             // the last line the session knows it sent and was answered
@@ -33,9 +33,9 @@ struct MachineState {
 
 // The mapping (docs/shop.md): no link -> UNAVAILABLE; a job streaming ->
 // ACTIVE/AUTOMATIC; Hold -> FEED_HOLD; Door -> INTERRUPTED; Alarm -> STOPPED
-// with the alarm; Jog/Home -> ACTIVE/MANUAL; Idle -> READY (PROGRAM_COMPLETED
-// right after a completed job), AUTOMATIC with a job loaded, else MANUAL.
+// with the alarm; Jog/Home -> ACTIVE/MANUAL; Idle -> READY, AUTOMATIC with a
+// job loaded, else MANUAL.
 MachineState derive_machine_state(const session::MachineSnapshot& snap, const std::string& program,
-                                  bool just_completed, const std::string& alarm_text);
+                                  const std::string& alarm_text);
 
 }  // namespace cncstream::shop

@@ -39,5 +39,6 @@ void register_pendant(CLI::App& app, CommandRegistry& registry);
 void register_jog(CLI::App& app, CommandRegistry& registry);
 void register_status(CLI::App& app, CommandRegistry& registry);
 void register_view(CLI::App& app, CommandRegistry& registry);
+void register_shop(CLI::App& app, CommandRegistry& registry);
 
 }  // namespace cncstream::app

@@ -30,6 +30,7 @@ int run_cncstream(int argc, char** argv) {
   cncstream::app::register_jog(app, registry);
   cncstream::app::register_status(app, registry);
   cncstream::app::register_view(app, registry);
+  cncstream::app::register_shop(app, registry);
   // The bare form `cncstream FILE PORT ...` is `cncstream stream FILE PORT ...`:
   // anything first that is neither a subcommand nor an option is a file.
   std::vector<std::string> args(argv + 1, argv + argc);
