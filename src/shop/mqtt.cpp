@@ -4,6 +4,8 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 namespace cncstream::shop {
 
 namespace detail_mqtt {
@@ -53,7 +55,8 @@ MqttMachine::MqttMachine(const MqttSettings& settings, std::string machine, Outb
   mosquitto_reconnect_delay_set(m_, 1, 2, false);
   published_up_to_ = outbox_.cursor(detail_mqtt::kConsumer, machine_);
   // A broker that is not there yet is tried again by the network thread.
-  const int rc = mosquitto_connect_async(m_, settings_.host.c_str(), settings_.port, settings_.keepalive_s);
+  // libmosquitto refuses a keepalive under 5 s.
+  const int rc = mosquitto_connect_async(m_, settings_.host.c_str(), settings_.port, std::max(5, settings_.keepalive_s));
   if (rc != MOSQ_ERR_SUCCESS && rc != MOSQ_ERR_ERRNO) fail("connect", rc);
   if (int r = mosquitto_loop_start(m_); r != MOSQ_ERR_SUCCESS) fail("network thread", r);
 }

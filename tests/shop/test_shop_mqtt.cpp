@@ -22,13 +22,17 @@ TEST(ShopMqtt, TheLastWillMarksAVanishedDaemonsMachineUnavailable) {
   // The daemon's side in a child process (forked before this process has threads).
   const pid_t child = ::fork();
   if (child == 0) {
-    shop::Outbox outbox(dir / "journal.sqlite");
-    shop::MqttSettings s;
-    s.port = broker.port();
-    s.shop = "acme";
-    s.keepalive_s = 1;
-    shop::MqttMachine m(s, "router1", outbox);
-    ::sleep(60);
+    try {
+      shop::Outbox outbox(dir / "journal.sqlite");
+      shop::MqttSettings s;
+      s.port = broker.port();
+      s.shop = "acme";
+      s.keepalive_s = 5;  // libmosquitto's least
+      shop::MqttMachine m(s, "router1", outbox);
+      ::sleep(60);
+    } catch (...) {
+      ::_exit(1);
+    }
     ::_exit(0);
   }
   shoptest::Subscriber sub(broker.port(), "cncstream/acme/#");
@@ -36,7 +40,7 @@ TEST(ShopMqtt, TheLastWillMarksAVanishedDaemonsMachineUnavailable) {
   EXPECT_TRUE(dtest::wait_for([&] { return sub.last(topic) == "AVAILABLE"; }, 10));
   ::kill(child, SIGKILL);
   ::waitpid(child, nullptr, 0);
-  EXPECT_TRUE(dtest::wait_for([&] { return sub.last(topic) == "UNAVAILABLE"; }, 10)) << "the last will did not fire";
+  EXPECT_TRUE(dtest::wait_for([&] { return sub.last(topic) == "UNAVAILABLE"; }, 15)) << "the last will did not fire";
   shoptest::Subscriber later(broker.port(), "cncstream/acme/+/availability");
   EXPECT_TRUE(dtest::wait_for([&] { return later.last(topic) == "UNAVAILABLE"; }, 5)) << "the will was not retained";
   std::error_code ec;
@@ -64,7 +68,7 @@ TEST(ShopMqtt, StateAndEventsArriveAndABrokerRestartBringsTheRetainedStateBack) 
   c.shop.name = "acme";
   c.shop.mqtt_host = "127.0.0.1";
   c.shop.mqtt_port = broker.port();
-  c.shop.mqtt_keepalive_s = 2;
+  c.shop.mqtt_keepalive_s = 5;
   dtest::RunningDaemon d(c);
   shoptest::Subscriber sub(broker.port(), "cncstream/acme/#");
   const std::string base = "cncstream/acme/router1/";

@@ -30,7 +30,7 @@ struct MqttSettings {
   std::string username, password;  // "" : none
   std::string ca_file;             // TLS when set (the broker's CA)
   std::string shop = "shop";
-  int keepalive_s = 10;            // the will fires about 1.5 x this after the daemon vanished
+  int keepalive_s = 10;            // at least 5; the will fires about 1.5 x this after the daemon vanished
 };
 
 // The topic for a machine's item ("availability", "state", "events").
