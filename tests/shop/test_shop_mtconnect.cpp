@@ -91,7 +91,8 @@ TEST(ShopMtconnect, AnAgentSeesPongExecutionActiveThenReadyAndTheLineAdvancing) 
   const std::string url = pg.create_database("shdr");
   shop::PgConnection admin(url);
   shop::migrate(admin);
-  // Twenty 4 mm moves at 3000 mm/min at real speed: about 2 s of cutting.
+  // Twenty 4 mm moves at 3000 mm/min, the simulator at 5 x real time (GRBL's 10 mm/s² default
+  // acceleration): about 2 s.
   std::string program = "G21\nG90\nG0 X0 Y0\n";
   for (int i = 1; i <= 20; ++i) program += "G1 X" + std::to_string(4 * i) + " F3000\n";
   shop::Submission s;
@@ -100,7 +101,7 @@ TEST(ShopMtconnect, AnAgentSeesPongExecutionActiveThenReadyAndTheLineAdvancing) 
   s.content = program;
   shop::Hub(admin).submit_job(s);
   const fs::path dir = dtest::temp_dir("shop-shdr");
-  auto m = dtest::sim_machine("mill", "1");
+  auto m = dtest::sim_machine("mill", "5");
   auto c = shoptest::shop_daemon_config(dir / "pc", url, {m});
   c.shop.mtconnect_port = 0;
   dtest::RunningDaemon d(c);
