@@ -14,6 +14,7 @@ packages=(
   chromium chromium-driver python3-selenium libjs-three
   clang libclang-rt-14-dev clang-tidy  # libFuzzer targets (tools/fuzz.sh) and tools/tidy.sh
   gcovr  # tools/coverage.sh
+  postgresql libpq-dev mosquitto libmosquitto-dev  # the shop's hub and broker (src/shop/, docs/shop.md; tests start their own)
   linuxcnc-uspace  # its rs274 interpreter checks our programs (arc fitting, the complete job)
 )
 missing=()

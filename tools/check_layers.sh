@@ -23,7 +23,8 @@ declare -A may_include=(
   [transport]="geometry image cam gcode protocol"
   [session]="geometry image cam gcode protocol transport"
   [pendant]="geometry image cam gcode protocol transport session"
-  [daemon]="geometry image cam gcode jobs protocol transport session pendant tooling"
+  [shop]="geometry image cam gcode jobs protocol transport session"
+  [daemon]="geometry image cam gcode jobs protocol transport session pendant tooling shop"
   [gl]="geometry image cam"
   [viewer]="geometry image cam gcode gl"
 )
@@ -67,4 +68,4 @@ while IFS= read -r -d '' f; do check "$f" sim "$sim_may_include" yes; done \
   < <(find sim -type f \( -name '*.cpp' -o -name '*.hpp' \) -print0)
 
 if (( bad )); then echo "layer order broken (see above)"; exit 1; fi
-echo "layers: every include follows the table (geometry < image < cam < gcode < jobs; cam, protocol < tooling < jobs; gcode < protocol < transport < session < pendant; daemon above jobs, session and pendant; apps above all); sim/ stays below protocol"
+echo "layers: every include follows the table (geometry < image < cam < gcode < jobs; cam, protocol < tooling < jobs; gcode < protocol < transport < session < pendant; shop above session; daemon above jobs, session, pendant, tooling and shop; apps above all); sim/ stays below protocol"

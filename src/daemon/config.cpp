@@ -242,7 +242,7 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
   }
   DaemonConfig c;
   Reader top{source, root, ""};
-  top.known({"listen", "data_dir", "journal", "machine", "pendant", "limits", "security", "web"});
+  top.known({"listen", "data_dir", "journal", "machine", "pendant", "limits", "security", "web", "shop"});
   if (const auto* n = root.get("listen")) {
     if (!n->is_string()) fail(source, *n, "listen: expected \"ADDR:PORT\"");
     try {
@@ -263,7 +263,7 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       Reader r{source, *t, "machine."};
       r.known({"name", "port", "baud", "profile", "reconnect_s", "sim_speed", "sim_verify", "sim_vanish_after",
                "sim_settings", "sim_resolution", "sim_tolerance", "sim_tool_table", "sim_tool_sensor",
-               "sim_probe_surface_z", "tool_change"});
+               "sim_probe_surface_z", "tool_change", "capabilities", "shop_claim"});
       MachineConfig m;
       r.str("name", m.name);
       r.str("port", m.port);
@@ -280,6 +280,8 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       r.str("sim_tool_sensor", m.sim_tool_sensor);
       if (r.get("sim_probe_surface_z")) m.sim_probe_surface_z = r.number("sim_probe_surface_z", 0, -1e4, 1e4);
       if (const auto* tc = r.get("tool_change")) read_tool_change(source, *tc, m.tool_change);
+      r.strings("capabilities", m.capabilities);
+      r.boolean("shop_claim", m.shop_claim);
       c.machines.push_back(m);
     }
   }
@@ -324,6 +326,30 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
     r.boolean("require_token", c.security.require_token);
     r.strings("allowed_origins", c.security.allowed_origins);
     r.strings("allowed_hosts", c.security.allowed_hosts);
+  }
+  if (const auto* n = root.get("shop")) {
+    const auto* t = n->as_table();
+    if (!t) fail(source, *n, "shop: expected a table");
+    Reader r{source, *t, "shop."};
+    r.known({"url", "name", "pc", "lease_s", "heartbeat_s", "mtconnect_port", "mtconnect_address", "mqtt_host",
+             "mqtt_port", "mqtt_username", "mqtt_password", "mqtt_ca_file", "mqtt_keepalive_s"});
+    r.str("url", c.shop.url);
+    r.str("name", c.shop.name);
+    r.str("pc", c.shop.pc);
+    c.shop.lease_s = r.number("lease_s", c.shop.lease_s, 0.5, 86400);
+    c.shop.heartbeat_s = r.number("heartbeat_s", c.shop.heartbeat_s, 0.1, 3600);
+    if (r.get("mtconnect_port"))
+      c.shop.mtconnect_port = static_cast<unsigned short>(r.number("mtconnect_port", 7878, 0, 65535));
+    r.str("mtconnect_address", c.shop.mtconnect_address);
+    r.str("mqtt_host", c.shop.mqtt_host);
+    c.shop.mqtt_port = static_cast<unsigned short>(r.number("mqtt_port", c.shop.mqtt_port, 1, 65535));
+    r.str("mqtt_username", c.shop.mqtt_username);
+    r.str("mqtt_password", c.shop.mqtt_password);
+    r.str("mqtt_ca_file", c.shop.mqtt_ca_file);
+    c.shop.mqtt_keepalive_s = r.number("mqtt_keepalive_s", c.shop.mqtt_keepalive_s, 1, 3600);
+    if (c.shop.url.empty()) fail(source, *n, "shop.url: the hub's postgresql:// URL is required in [shop]");
+    if (c.shop.heartbeat_s >= c.shop.lease_s)
+      fail(source, *n, "shop.heartbeat_s must be shorter than shop.lease_s (a heartbeat renews the lease)");
   }
   if (const auto* n = root.get("web")) {
     const auto* t = n->as_table();

@@ -19,6 +19,7 @@
 #include "cncstream/daemon/http_server.hpp"
 #include "cncstream/daemon/job_manager.hpp"
 #include "cncstream/daemon/machines.hpp"
+#include "cncstream/daemon/shop_link.hpp"
 #include "cncstream/daemon/ws_hub.hpp"
 #include "cncstream/pendant/pendant_controller.hpp"
 #include "cncstream/pendant/pendant_usb.hpp"
@@ -166,6 +167,8 @@ Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_c
   jobs_ = std::make_unique<JobManager>(io_, pool_, config_, *files_, *machines_, *hub_, journal,
                                        config_.data_dir / "programs");
   jobs_->recover();
+  // A shop's member: its events go to the hub through the journal's outbox.
+  if (!config_.shop.url.empty()) shop_ = std::make_unique<ShopLink>(io_, config_, *files_, *machines_, *jobs_);
   const fs::path web = find_web_root(config_);
   if (web.empty()) spdlog::warn("no web page folder found (set web.root): GET / answers 404");
   api_ = std::make_unique<Api>(io_, pool_, config_, *auth_, *files_, *machines_, *jobs_, *hub_, web);
@@ -193,6 +196,7 @@ Daemon::~Daemon() {
   // pool is joined before the objects its tasks use go away.
   jobs_->stop_generations();
   pool_.join();
+  shop_.reset();  // before the jobs and machines it reports
   jobs_.reset();
   server_.reset();
   api_.reset();

@@ -300,6 +300,13 @@ void JobManager::set_state(DaemonJob& j, const std::string& state, const std::st
   persist(j);
   publish_job(j);
   if (changed) publish_queue(j.row.machine);
+  if (changed && on_state_change) on_state_change(j);
+}
+
+bool JobManager::has_unfinished(const std::string& machine) const {
+  for (const auto& [id, j] : jobs_)
+    if (j->row.machine == machine && !is_final(j->row.state)) return true;
+  return false;
 }
 
 // ---- create, list ---------------------------------------------------------

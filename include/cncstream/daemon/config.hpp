@@ -34,6 +34,28 @@ struct MachineConfig {
   std::optional<double> sim_probe_surface_z;
   // [machine.tool_change]: the routine a program's tool change runs.
   ToolChangeSettings tool_change;
+  // In a shop ([shop] url): tags a shop job's needs must be among, and
+  // whether the machine takes jobs from the shop's queue when it is free.
+  std::vector<std::string> capabilities;
+  bool shop_claim = true;
+};
+
+// Joining a shop (docs/shop.md): "" url leaves the daemon on its own.
+struct ShopSection {
+  std::string url;            // postgresql://PC_ROLE@HUB/DB
+  std::string name = "shop";  // the shop's name (MQTT topics)
+  std::string pc;             // this PC's name ("" : the host name)
+  double lease_s = 30;        // a shop job's lease, renewed by heartbeats
+  double heartbeat_s = 5;
+  // MTConnect SHDR adapters: machine i listens on mtconnect_port + i (0: any
+  // free port, tests); none without it.
+  std::optional<unsigned short> mtconnect_port;
+  std::string mtconnect_address = "127.0.0.1";
+  // MQTT (Mosquitto): none without mqtt_host.
+  std::string mqtt_host;
+  unsigned short mqtt_port = 1883;
+  std::string mqtt_username, mqtt_password, mqtt_ca_file;
+  double mqtt_keepalive_s = 10;
 };
 
 // A WHB04B pendant driving one machine ([[pendant]] in the file). The daemon
@@ -73,6 +95,7 @@ struct DaemonConfig {
   std::vector<PendantSection> pendants;
   Limits limits;
   SecurityConfig security;
+  ShopSection shop;
 
   bool listen_is_loopback() const;
   bool token_required() const { return security.require_token || !listen_is_loopback(); }

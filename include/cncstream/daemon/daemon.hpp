@@ -21,6 +21,7 @@ class JobManager;
 class Api;
 class HttpServer;
 struct DaemonPendant;
+class ShopLink;
 
 class Daemon {
  public:
@@ -42,6 +43,7 @@ class Daemon {
   Machines& machines() { return *machines_; }
   Api& api() { return *api_; }
   std::size_t pendant_count() const { return pendants_.size(); }
+  ShopLink* shop() { return shop_.get(); }  // nullptr: not in a shop
 
  private:
   std::unique_ptr<DaemonPendant> start_pendant(const PendantSection& p);
@@ -56,6 +58,7 @@ class Daemon {
   // After the machines: destroyed before them (a pendant drives a session).
   std::vector<std::unique_ptr<DaemonPendant>> pendants_;
   std::unique_ptr<JobManager> jobs_;
+  std::unique_ptr<ShopLink> shop_;
   std::unique_ptr<Api> api_;
   std::unique_ptr<HttpServer> server_;
 };

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <list>
 #include <map>
 #include <memory>
@@ -113,6 +114,11 @@ class JobManager {
   }
   bool file_in_use(const std::string& file_id) const;
   nlohmann::json current_job(const std::string& machine) const;
+
+  // Whether the machine has a job that has not ended (queued ... held).
+  bool has_unfinished(const std::string& machine) const;
+  // Told of every job's state change (the shop's outbox, src/daemon/shop_link.cpp).
+  std::function<void(const DaemonJob&)> on_state_change;
 
   // Cache statistics (tests, benchmarks).
   std::size_t cache_size() const { return cache_.size(); }

@@ -42,5 +42,6 @@ void register_view(CLI::App& app, CommandRegistry& registry);
 void register_probe(CLI::App& app, CommandRegistry& registry);
 void register_outline(CLI::App& app, CommandRegistry& registry);
 void register_tools(CLI::App& app, CommandRegistry& registry);
+void register_shop(CLI::App& app, CommandRegistry& registry);
 
 }  // namespace cncstream::app

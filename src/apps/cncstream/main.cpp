@@ -33,6 +33,7 @@ int run_cncstream(int argc, char** argv) {
   cncstream::app::register_probe(app, registry);
   cncstream::app::register_outline(app, registry);
   cncstream::app::register_tools(app, registry);
+  cncstream::app::register_shop(app, registry);
   // The bare form `cncstream FILE PORT ...` is `cncstream stream FILE PORT ...`:
   // anything first that is neither a subcommand nor an option is a file.
   std::vector<std::string> args(argv + 1, argv + argc);

@@ -18,13 +18,14 @@ namespace {
 int run_daemon(int argc, char** argv) {
   using namespace cncstream::daemon;
   CLI::App app{"cncstreamd: serves CNC machines over HTTP and WebSocket (API: docs/api-v1.md)"};
-  std::string config_file, listen, data;
+  std::string config_file, listen, data, shop;
   std::vector<std::string> machines;
   bool verbose = false;
   app.add_option("--config", config_file, "TOML configuration file");
   app.add_option("--listen", listen, "ADDR:PORT (default 127.0.0.1:8420; anything but loopback requires the token)");
   app.add_option("--data", data, "Data folder (uploads, programs, token)");
   app.add_option("--machine", machines, "NAME=PORT[,profile=P,baud=B,sim_speed=S] (replaces the file's machines)");
+  app.add_option("--shop", shop, "Join a shop: the hub's postgresql:// URL (docs/shop.md)");
   app.add_flag("-v,--verbose", verbose, "Log requests that fail on the wire (debug level)");
   CLI11_PARSE(app, argc, argv);
   setup_journald_logging();
@@ -36,6 +37,7 @@ int run_daemon(int argc, char** argv) {
     if (!config_file.empty()) c = load_config(config_file);
     if (!listen.empty()) apply_listen(c, listen);
     if (!data.empty()) c.data_dir = data;
+    if (!shop.empty()) c.shop.url = shop;
     if (!machines.empty()) {
       c.machines.clear();
       for (const auto& m : machines) c.machines.push_back(parse_machine_option(m));

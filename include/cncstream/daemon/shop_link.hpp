@@ -1,0 +1,40 @@
+#pragma once
+// The daemon's side of the shop (docs/shop.md): what the shop client may ask
+// of this daemon (is a machine free, add a claimed job to its local queue,
+// never started by itself), and the client itself. Built only when the
+// configuration names a hub ([shop] url, --shop).
+#include <boost/asio/io_context.hpp>
+
+#include <memory>
+#include <vector>
+
+#include "cncstream/daemon/config.hpp"
+#include "cncstream/shop/shdr_adapter.hpp"
+#include "cncstream/shop/shop_client.hpp"
+
+namespace cncstream::daemon {
+
+class FileStore;
+class Machines;
+class JobManager;
+
+class ShopLink final : public shop::LocalJobs {
+ public:
+  ShopLink(boost::asio::io_context& io, const DaemonConfig& config, FileStore& files, Machines& machines,
+           JobManager& jobs);
+  ~ShopLink() override;
+  bool free_for_shop_job(const std::string& machine) override;
+  std::int64_t add_shop_job(const std::string& machine, const shop::ClaimedJob& job) override;
+  shop::ShopClient& client() { return *client_; }
+  // The machine's MTConnect adapter's port (0: none).
+  unsigned short mtconnect_port(const std::string& machine) const;
+
+ private:
+  FileStore& files_;
+  Machines& machines_;
+  JobManager& jobs_;
+  std::vector<std::unique_ptr<shop::ShdrAdapter>> adapters_;
+  std::unique_ptr<shop::ShopClient> client_;
+};
+
+}  // namespace cncstream::daemon

@@ -1,0 +1,70 @@
+#pragma once
+// A PostgreSQL connection through libpq, blocking, for one thread at a time
+// (the shop client's own thread, or a command-line tool). Parameters go as
+// text ($1, $2 ...); errors name the hub (its URL without the password) and
+// the server's message.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+struct pg_conn;
+struct pg_result;
+
+namespace cncstream::shop {
+
+class ShopError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The URL with any password replaced by "***" (for messages and logs).
+std::string redact_url(const std::string& url);
+
+class PgResult {
+ public:
+  PgResult() = default;
+  explicit PgResult(pg_result* r);
+  int rows() const;
+  int columns() const;
+  bool is_null(int row, int col) const;
+  std::string text(int row, int col) const;  // "" for NULL
+  std::optional<std::string> opt(int row, int col) const;
+  std::int64_t i64(int row, int col) const;  // 0 for NULL
+  double f64(int row, int col) const;        // 0 for NULL
+
+ private:
+  std::shared_ptr<pg_result> r_;
+};
+
+using PgParams = std::vector<std::optional<std::string>>;
+
+class PgConnection {
+ public:
+  // Connects (3 s time-out unless the URL sets connect_timeout); throws ShopError.
+  explicit PgConnection(const std::string& url);
+  ~PgConnection();
+  PgConnection(const PgConnection&) = delete;
+  PgConnection& operator=(const PgConnection&) = delete;
+
+  // Runs one statement (or, without parameters, several); throws ShopError
+  // with the server's message and SQLSTATE.
+  PgResult exec(const std::string& sql, const PgParams& params = {});
+  bool ok() const;
+  const std::string& url() const { return url_; }
+  // The SQLSTATE of the last failed exec ("" : none).
+  const std::string& last_sqlstate() const { return sqlstate_; }
+
+ private:
+  pg_conn* c_ = nullptr;
+  std::string url_;
+  std::string sqlstate_;
+};
+
+// bytea: PostgreSQL's hex form ("\x...") to bytes and back.
+std::string bytea_hex(const std::string& bytes);
+std::string bytes_from_bytea_hex(const std::string& hex);
+
+}  // namespace cncstream::shop

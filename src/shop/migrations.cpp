@@ -1,0 +1,305 @@
+// The hub's schema and functions, as versioned migrations (docs/shop.md).
+// Each runs once, in order, in one transaction with the version row it adds;
+// a shipped migration is never edited (a change is a new one).
+#include "cncstream/shop/schema.hpp"
+
+namespace cncstream::shop {
+
+namespace {
+
+// 1: tables, the three roles and the PC's functions.
+constexpr const char* kMigration1 = R"SQL(
+DO $$ BEGIN
+  IF NOT EXISTS (SELECT 1 FROM pg_roles WHERE rolname = 'cncstream_pc') THEN CREATE ROLE cncstream_pc NOLOGIN; END IF;
+  IF NOT EXISTS (SELECT 1 FROM pg_roles WHERE rolname = 'cncstream_operator') THEN CREATE ROLE cncstream_operator NOLOGIN; END IF;
+  IF NOT EXISTS (SELECT 1 FROM pg_roles WHERE rolname = 'cncstream_reader') THEN CREATE ROLE cncstream_reader NOLOGIN; END IF;
+END $$;
+
+CREATE SCHEMA shop;
+REVOKE ALL ON SCHEMA shop FROM PUBLIC;
+
+CREATE TABLE shop.machines (
+  id bigserial PRIMARY KEY,
+  name text NOT NULL UNIQUE CHECK (name ~ '^[A-Za-z0-9_-]{1,32}$'),
+  pc text NOT NULL DEFAULT '',
+  profile text NOT NULL DEFAULT '',
+  travel_mm double precision[],                 -- x, y, z
+  capabilities text[] NOT NULL DEFAULT '{}',    -- free tags a job's needs must be among
+  registered_at timestamptz NOT NULL DEFAULT now(),
+  last_seen timestamptz
+);
+
+-- A row per machine, in MTConnect's words.
+CREATE TABLE shop.machine_state (
+  machine_id bigint PRIMARY KEY REFERENCES shop.machines(id),
+  availability text NOT NULL DEFAULT 'UNAVAILABLE',
+  execution text NOT NULL DEFAULT 'READY',
+  controller_mode text NOT NULL DEFAULT 'MANUAL',
+  program text NOT NULL DEFAULT '',
+  line bigint NOT NULL DEFAULT 0,
+  path_position double precision[],
+  path_feedrate double precision,
+  feed_override double precision,
+  alarm text NOT NULL DEFAULT '',
+  updated_at timestamptz NOT NULL DEFAULT now()
+);
+
+CREATE TABLE shop.jobs (
+  id bigserial PRIMARY KEY,
+  file_name text NOT NULL,
+  kind text NOT NULL CHECK (kind IN ('stl', 'gcode')),
+  content bytea NOT NULL,
+  params jsonb,                                 -- an STL's tool path parameters (the daemon's API's)
+  needs text[] NOT NULL DEFAULT '{}',           -- capabilities the machine must have
+  machine text,                                 -- only this machine (NULL: any that can)
+  status text NOT NULL DEFAULT 'pending' CHECK (status IN
+    ('pending', 'assigned', 'awaiting_operator', 'running', 'completed', 'failed', 'interrupted', 'cancelled')),
+  machine_id bigint REFERENCES shop.machines(id),
+  lease_until timestamptz,
+  last_line bigint NOT NULL DEFAULT 0,
+  message text NOT NULL DEFAULT '',
+  submitted_by text NOT NULL DEFAULT session_user,
+  created_at timestamptz NOT NULL DEFAULT now(),
+  claimed_at timestamptz,
+  started_at timestamptz,
+  ended_at timestamptz
+);
+CREATE INDEX jobs_pending ON shop.jobs (id) WHERE status = 'pending';
+CREATE INDEX jobs_leased ON shop.jobs (lease_until) WHERE status IN ('assigned', 'awaiting_operator', 'running');
+
+-- Every PC's journal events, once each: (machine, sequence) is the journal's own numbering.
+CREATE TABLE shop.job_events (
+  id bigserial PRIMARY KEY,
+  machine_id bigint NOT NULL REFERENCES shop.machines(id),
+  seq bigint NOT NULL,
+  at timestamptz NOT NULL,
+  kind text NOT NULL,
+  job_id bigint REFERENCES shop.jobs(id),
+  body jsonb NOT NULL DEFAULT '{}',
+  received_at timestamptz NOT NULL DEFAULT now(),
+  UNIQUE (machine_id, seq)
+);
+CREATE INDEX job_events_job ON shop.job_events (job_id, id);
+
+-- A JSON array as an SQL array (NULL for anything else: null, missing).
+CREATE FUNCTION shop.json_numbers(j jsonb) RETURNS double precision[] LANGUAGE sql IMMUTABLE AS $f$
+  SELECT CASE WHEN jsonb_typeof(j) = 'array'
+    THEN (SELECT array_agg(v::double precision) FROM jsonb_array_elements_text(j) v) END
+$f$;
+CREATE FUNCTION shop.json_texts(j jsonb) RETURNS text[] LANGUAGE sql IMMUTABLE AS $f$
+  SELECT CASE WHEN jsonb_typeof(j) = 'array' THEN (SELECT array_agg(v) FROM jsonb_array_elements_text(j) v) END
+$f$;
+
+-- Leases that lapsed (a PC that stopped reporting): the job is interrupted
+-- with its last reported line and never goes back to the queue by itself.
+CREATE FUNCTION shop.expire_leases() RETURNS integer
+LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE n integer;
+BEGIN
+  UPDATE shop.jobs SET status = 'interrupted', ended_at = now(), lease_until = NULL,
+    message = format('the lease lapsed at %s while %s (the PC stopped reporting); last reported line %s; '
+                     'not restarted: an operator requeues it', to_char(now(), 'YYYY-MM-DD HH24:MI:SS'),
+                     replace(status, '_', ' '), last_line)
+  WHERE status IN ('assigned', 'awaiting_operator', 'running') AND lease_until < now();
+  GET DIAGNOSTICS n = ROW_COUNT;
+  RETURN n;
+END $f$;
+
+-- A PC's machine says it is alive: registers it (or updates what it is),
+-- stores its state, renews the leases of its jobs and sweeps lapsed ones.
+CREATE FUNCTION shop.heartbeat(p_machine text, p_pc text, p_info jsonb, p_state jsonb, p_lease_s double precision)
+RETURNS jsonb LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE mid bigint; jobs jsonb;
+BEGIN
+  IF p_lease_s IS NULL OR p_lease_s <= 0 OR p_lease_s > 86400 THEN
+    RAISE EXCEPTION 'heartbeat: lease_s % is out of range (0, 86400]', p_lease_s;
+  END IF;
+  INSERT INTO shop.machines AS m (name, pc, profile, travel_mm, capabilities, last_seen)
+  VALUES (p_machine, coalesce(p_pc, ''), coalesce(p_info->>'profile', ''),
+          shop.json_numbers(p_info->'travel_mm'),
+          coalesce(shop.json_texts(p_info->'capabilities'), '{}'), now())
+  ON CONFLICT (name) DO UPDATE SET pc = excluded.pc, profile = excluded.profile, travel_mm = excluded.travel_mm,
+    capabilities = excluded.capabilities, last_seen = now()
+  RETURNING id INTO mid;
+  INSERT INTO shop.machine_state AS s (machine_id, availability, execution, controller_mode, program, line,
+                                       path_position, path_feedrate, feed_override, alarm, updated_at)
+  VALUES (mid, coalesce(p_state->>'availability', 'UNAVAILABLE'), coalesce(p_state->>'execution', 'READY'),
+          coalesce(p_state->>'controller_mode', 'MANUAL'), coalesce(p_state->>'program', ''),
+          coalesce((p_state->>'line')::bigint, 0),
+          shop.json_numbers(p_state->'path_position'),
+          (p_state->>'path_feedrate')::double precision, (p_state->>'feed_override')::double precision,
+          coalesce(p_state->>'alarm', ''), now())
+  ON CONFLICT (machine_id) DO UPDATE SET availability = excluded.availability, execution = excluded.execution,
+    controller_mode = excluded.controller_mode, program = excluded.program, line = excluded.line,
+    path_position = excluded.path_position, path_feedrate = excluded.path_feedrate,
+    feed_override = excluded.feed_override, alarm = excluded.alarm, updated_at = now();
+  UPDATE shop.jobs SET lease_until = now() + make_interval(secs => p_lease_s)
+  WHERE machine_id = mid AND status IN ('assigned', 'awaiting_operator', 'running');
+  PERFORM shop.expire_leases();
+  SELECT coalesce(jsonb_agg(jsonb_build_object('id', id, 'status', status) ORDER BY id), '[]') INTO jobs
+  FROM shop.jobs WHERE machine_id = mid AND status IN ('assigned', 'awaiting_operator', 'running', 'cancelled')
+    AND (ended_at IS NULL OR ended_at > now() - interval '1 hour');
+  RETURN jsonb_build_object('machine_id', mid, 'jobs', jobs);
+END $f$;
+
+-- The oldest pending job this machine can do, claimed once however many ask
+-- at the same moment (SKIP LOCKED). It then waits for the operator there.
+CREATE FUNCTION shop.claim_job(p_machine text, p_lease_s double precision)
+RETURNS TABLE (id bigint, file_name text, kind text, content bytea, params jsonb)
+LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE m shop.machines;
+BEGIN
+  IF p_lease_s IS NULL OR p_lease_s <= 0 OR p_lease_s > 86400 THEN
+    RAISE EXCEPTION 'claim_job: lease_s % is out of range (0, 86400]', p_lease_s;
+  END IF;
+  SELECT * INTO m FROM shop.machines WHERE name = p_machine;
+  IF NOT FOUND THEN
+    RAISE EXCEPTION 'claim_job: no machine named % (a heartbeat registers it)', p_machine;
+  END IF;
+  PERFORM shop.expire_leases();
+  RETURN QUERY
+  UPDATE shop.jobs j SET status = 'assigned', machine_id = m.id, claimed_at = now(),
+    lease_until = now() + make_interval(secs => p_lease_s), message = ''
+  WHERE j.id = (SELECT c.id FROM shop.jobs c
+                WHERE c.status = 'pending' AND (c.machine IS NULL OR c.machine = m.name)
+                  AND c.needs <@ m.capabilities
+                ORDER BY c.id FOR UPDATE SKIP LOCKED LIMIT 1)
+  RETURNING j.id, j.file_name, j.kind, j.content, j.params;
+END $f$;
+
+-- What one event does to the job and the machine's state (only the first
+-- time it arrives: report_events calls it for rows it inserted).
+CREATE FUNCTION shop.apply_event(p_machine_id bigint, p_job bigint, p_kind text, p_body jsonb)
+RETURNS void LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE local_state text; st text; v_line bigint;
+BEGIN
+  IF p_kind = 'job' AND p_job IS NOT NULL THEN
+    local_state := p_body->>'state';
+    v_line := coalesce((p_body->>'last_line')::bigint, 0);
+    st := CASE local_state
+      WHEN 'ready' THEN 'awaiting_operator' WHEN 'running' THEN 'running' WHEN 'held' THEN 'running'
+      WHEN 'done' THEN 'completed' WHEN 'failed' THEN 'failed' WHEN 'interrupted' THEN 'interrupted'
+      WHEN 'stopped' THEN 'cancelled' WHEN 'cancelled' THEN 'cancelled' ELSE NULL END;
+    IF st IS NULL THEN
+      RETURN;  -- queued, generating: still assigned
+    END IF;
+    -- A job the machine runs, or one whose lease lapsed while it ran on this
+    -- machine (the truth arriving late); never one requeued elsewhere.
+    UPDATE shop.jobs SET
+      status = CASE WHEN st = 'awaiting_operator' AND status <> 'assigned' THEN status ELSE st END,
+      last_line = greatest(last_line, v_line),
+      message = coalesce(p_body->>'message', message),
+      started_at = CASE WHEN st = 'running' THEN coalesce(started_at, now()) ELSE started_at END,
+      ended_at = CASE WHEN st IN ('completed', 'failed', 'interrupted', 'cancelled') THEN now() ELSE NULL END,
+      lease_until = CASE WHEN st IN ('completed', 'failed', 'interrupted', 'cancelled') THEN NULL ELSE lease_until END
+    WHERE id = p_job AND machine_id = p_machine_id
+      AND (status IN ('assigned', 'awaiting_operator', 'running') OR (status = 'interrupted' AND ended_at IS NOT NULL
+           AND st IN ('completed', 'failed', 'interrupted', 'cancelled')));
+  ELSIF p_kind = 'progress' AND p_job IS NOT NULL THEN
+    UPDATE shop.jobs SET last_line = greatest(last_line, coalesce((p_body->>'line')::bigint, 0))
+    WHERE id = p_job AND machine_id = p_machine_id;
+  ELSIF p_kind = 'state' THEN
+    UPDATE shop.machine_state SET
+      availability = coalesce(p_body->>'availability', availability),
+      execution = coalesce(p_body->>'execution', execution),
+      controller_mode = coalesce(p_body->>'controller_mode', controller_mode),
+      program = coalesce(p_body->>'program', program),
+      line = coalesce((p_body->>'line')::bigint, line),
+      alarm = coalesce(p_body->>'alarm', alarm), updated_at = now()
+    WHERE machine_id = p_machine_id;
+  END IF;
+END $f$;
+
+-- A PC ships its journal's events: stored once each (replays are ignored),
+-- in order; returns the highest sequence now stored for the machine.
+CREATE FUNCTION shop.report_events(p_machine text, p_events jsonb)
+RETURNS bigint LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE mid bigint; e record; inserted bigint; job bigint;
+BEGIN
+  SELECT m.id INTO mid FROM shop.machines m WHERE m.name = p_machine;
+  IF NOT FOUND THEN
+    RAISE EXCEPTION 'report_events: no machine named % (a heartbeat registers it)', p_machine;
+  END IF;
+  FOR e IN SELECT * FROM jsonb_to_recordset(p_events) AS x(seq bigint, at timestamptz, kind text, job bigint, body jsonb)
+           ORDER BY x.seq LOOP
+    IF e.seq IS NULL OR e.kind IS NULL THEN
+      RAISE EXCEPTION 'report_events: an event without seq or kind';
+    END IF;
+    -- Only a job of this machine is linked (a wrong id must not block the outbox).
+    SELECT j.id INTO job FROM shop.jobs j WHERE j.id = e.job AND j.machine_id = mid;
+    inserted := NULL;
+    INSERT INTO shop.job_events (machine_id, seq, at, kind, job_id, body)
+    VALUES (mid, e.seq, coalesce(e.at, now()), e.kind, job, coalesce(e.body, '{}'))
+    ON CONFLICT (machine_id, seq) DO NOTHING RETURNING job_events.id INTO inserted;
+    IF inserted IS NOT NULL THEN
+      PERFORM shop.apply_event(mid, job, e.kind, coalesce(e.body, '{}'));
+    END IF;
+  END LOOP;
+  RETURN (SELECT coalesce(max(seq), 0) FROM shop.job_events WHERE machine_id = mid);
+END $f$;
+
+-- The operator's side: submitting, cancelling and requeueing jobs.
+CREATE FUNCTION shop.submit_job(p_file_name text, p_kind text, p_content bytea, p_params jsonb, p_needs text[],
+                                p_machine text)
+RETURNS bigint LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE jid bigint;
+BEGIN
+  IF p_machine IS NOT NULL AND NOT EXISTS (SELECT 1 FROM shop.machines WHERE name = p_machine) THEN
+    RAISE EXCEPTION 'submit_job: no machine named % has joined the shop', p_machine;
+  END IF;
+  INSERT INTO shop.jobs (file_name, kind, content, params, needs, machine, submitted_by)
+  VALUES (p_file_name, p_kind, p_content, p_params, coalesce(p_needs, '{}'), p_machine, session_user)
+  RETURNING id INTO jid;
+  PERFORM pg_notify('cncstream_jobs', jid::text);  -- a wake-up for claimers; they read the table
+  RETURN jid;
+END $f$;
+
+CREATE FUNCTION shop.cancel_job(p_job bigint) RETURNS text
+LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE st text;
+BEGIN
+  UPDATE shop.jobs SET status = 'cancelled', ended_at = now(), lease_until = NULL,
+    message = 'cancelled by ' || session_user
+  WHERE id = p_job AND status IN ('pending', 'assigned', 'awaiting_operator') RETURNING status INTO st;
+  IF NOT FOUND THEN
+    SELECT status INTO st FROM shop.jobs WHERE id = p_job;
+    RAISE EXCEPTION 'cancel_job: job % is %; only a job that has not started is cancelled here', p_job, coalesce(st, 'unknown');
+  END IF;
+  RETURN st;
+END $f$;
+
+-- An interrupted or failed job back in the queue: on the same machine
+-- (p_same_machine, to resume there) or on any that can do it.
+CREATE FUNCTION shop.requeue_job(p_job bigint, p_same_machine boolean) RETURNS void
+LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+BEGIN
+  UPDATE shop.jobs j SET status = 'pending', lease_until = NULL, ended_at = NULL, claimed_at = NULL,
+    machine = CASE WHEN p_same_machine THEN (SELECT m.name FROM shop.machines m WHERE m.id = j.machine_id) ELSE j.machine END,
+    machine_id = NULL, message = 'requeued by ' || session_user || ' after: ' || j.message
+  WHERE j.id = p_job AND j.status IN ('interrupted', 'failed', 'cancelled');
+  IF NOT FOUND THEN
+    RAISE EXCEPTION 'requeue_job: job % is not interrupted, failed or cancelled', p_job;
+  END IF;
+  PERFORM pg_notify('cncstream_jobs', p_job::text);
+END $f$;
+
+REVOKE ALL ON ALL TABLES IN SCHEMA shop FROM PUBLIC;
+REVOKE ALL ON ALL FUNCTIONS IN SCHEMA shop FROM PUBLIC;
+GRANT USAGE ON SCHEMA shop TO cncstream_pc, cncstream_operator, cncstream_reader;
+GRANT EXECUTE ON FUNCTION shop.claim_job(text, double precision), shop.report_events(text, jsonb),
+  shop.heartbeat(text, text, jsonb, jsonb, double precision) TO cncstream_pc;
+GRANT EXECUTE ON FUNCTION shop.submit_job(text, text, bytea, jsonb, text[], text), shop.cancel_job(bigint),
+  shop.requeue_job(bigint, boolean) TO cncstream_operator;
+GRANT SELECT ON ALL TABLES IN SCHEMA shop TO cncstream_reader, cncstream_operator;
+)SQL";
+
+}  // namespace
+
+const std::vector<Migration>& migrations() {
+  static const std::vector<Migration> all = {
+      {1, "tables, roles, claim_job, report_events, heartbeat, submit/cancel/requeue", kMigration1},
+  };
+  return all;
+}
+
+}  // namespace cncstream::shop
