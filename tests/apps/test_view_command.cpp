@@ -206,9 +206,10 @@ TEST(ViewFollow, TheWindowFollowsADaemonJobThroughItsToolChangeToItsEnd) {
   EXPECT_TRUE(view.wait_output("stock 601 x 401 nodes at 0.050 mm", 10)) << view.log();
   ASSERT_EQ(h.post(job + "/start").status, 202);
   EXPECT_TRUE(view.wait_output("job " + id + " running", 30)) << view.log();
-  // The tool change's pause, on the daemon and in the viewer; resume goes on.
-  ASSERT_TRUE(view.wait_output("paused at line 16: TOOL CHANGE: mount T2", 30)) << view.log() << daemon.log();
-  ASSERT_EQ(h.post(job + "/resume").status, 202);
+  // The tool change, run by the machine's routine (manual: the operator
+  // mounts, zeroes and confirms), in the viewer; the confirm goes on.
+  ASSERT_TRUE(view.wait_output("tool change at line 16 (T1 -> T2, manual): mount T2", 30)) << view.log() << daemon.log();
+  ASSERT_EQ(h.post("/api/v1/machines/sim1/tool-change/confirm").status, 202) << daemon.log();
   ASSERT_EQ(view.wait_exit(60), 0) << view.log();
   const std::string out = view.log();
   EXPECT_NE(out.find("job " + id + " done, line 19 of 19"), std::string::npos) << out;

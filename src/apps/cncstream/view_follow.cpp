@@ -56,23 +56,36 @@ double segments_done(const viewer::Toolpath& path, const std::string& state, con
 }
 
 std::string job_status_text(long id, const std::string& state, const json& progress, double total_lines,
-                            const std::string& message) {
+                            const std::string& message, const std::string& tool_change = {}) {
   std::string t = fmt::format("job {} {}", id, state);
   const double line = num_or(progress, "executing_line", num_or(progress, "last_answered_line", 0));
   if (line > 0 && total_lines > 0) t += fmt::format(", line {:.0f} of {:.0f}", line, total_lines);
-  if (!message.empty()) t += ": " + message;  // a tool change's pause, why it failed or stopped
+  if (!message.empty()) t += ": " + message;  // a pause, why it failed or stopped
+  if (!tool_change.empty()) t += ": " + tool_change;
   return t;
+}
+
+// The machine's tool change as the daemon's "tool_change" frame tells it
+// (docs/api-v1.md): the line, the tools and the operator's prompt, or what
+// the routine does; "" when none is going on.
+std::string tool_change_text(const json& state) {
+  if (!state.is_object()) return {};
+  std::string t = fmt::format("tool change at line {} (T{} -> T{}, {})", num_or(state, "line", 0),
+                              num_or(state, "from_tool", 0), num_or(state, "tool", 0), str_or(state, "method"));
+  const json prompt = obj_or(state, "prompt");
+  if (prompt.is_object() && !str_or(prompt, "text").empty()) return t + ": " + str_or(prompt, "text");
+  return t + ": the machine moves";
 }
 
 // Everything the follower knows of the job and shows of it.
 struct Followed {
   long id = 0;
-  std::string state, file_name, message;
+  std::string state, file_name, message, tool_change;
   json progress;
   double total_lines = 0;
   std::unique_ptr<LiveScene> live;
 
-  std::string status() const { return job_status_text(id, state, progress, total_lines, message); }
+  std::string status() const { return job_status_text(id, state, progress, total_lines, message, tool_change); }
   std::string summary(double done, double removed) const {
     std::string s = fmt::format("job {} {}: {:.0f} of {} segments run", id, state, done, live->scene.program->size());
     if (live->cut) s += fmt::format(", {:.1f} mm3 removed", removed);
@@ -158,8 +171,8 @@ void follow_socket(const DaemonClient& api, Followed& f, const FollowOptions& o,
     std::string said;
     while (!stop) {
       const viewer::Toolpath& path = *f.live->scene.program;
-      if (f.state + f.message != said) {  // on the terminal: each new state or message
-        said = f.state + f.message;
+      if (f.state + f.message + f.tool_change != said) {  // on the terminal: each new state or message
+        said = f.state + f.message + f.tool_change;
         std::cout << f.status() << std::endl;
       }
       if (job_state_is_final(f.state)) {
@@ -176,10 +189,13 @@ void follow_socket(const DaemonClient& api, Followed& f, const FollowOptions& o,
       const std::string type = str_or(*m, "type");
       if (type == "status" && str_or(*m, "machine") == o.machine) {
         if (const auto wpos = vec3_of(*m, "wpos")) feed.position(*wpos);
+        if (m->contains("tool_change")) f.tool_change = tool_change_text((*m)["tool_change"]);
       } else if (type == "job" && m->contains("job") && (*m)["job"] == f.id) {
         f.state = str_or(*m, "state");
         f.progress = obj_or(*m, "progress");
         f.message = str_or(*m, "message");
+      } else if (type == "tool_change" && str_or(*m, "machine") == o.machine) {
+        f.tool_change = tool_change_text(m->contains("state") ? (*m)["state"] : json());
       }
     }
   } catch (const std::exception& e) {
