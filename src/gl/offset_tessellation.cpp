@@ -84,8 +84,9 @@ CutterCap::CutterCap(const Cutter& cutter, double tolerance) {
     if (scale <= tol) return 8;
     return std::ceil(M_PI / std::acos(1 - tol / scale));
   };
-  // A multiple of 4: spokes along +-x and +-y, so nodes straight beside a
-  // vertex at exactly R (the default grid bounds put rows there) are on P.
+  // A multiple of 4: spokes along +-x and +-y (nodes straight beside a
+  // vertex at exactly R, where the default grid bounds put rows, are on P's
+  // rim; the engine's reach test leaves them to what lies below).
   const double n = 4 * std::ceil(std::max({8.0, spokes_for(steep, tol_a), spokes_for(p.R, tolerance / 20)}) / 4);
   if (n > 16384) throw std::invalid_argument("GL CL engine: tessellation tolerance too fine for this cutter (over 16384 spokes)");
   spokes_ = static_cast<std::size_t>(n);
