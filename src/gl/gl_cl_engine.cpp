@@ -487,11 +487,6 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
                           GlClStats* stats_out) {
   check_spec(spec);
   if (opt.floor && !std::isfinite(*opt.floor)) throw std::invalid_argument("GL CL engine: floor must be finite");
-  // The offset tessellation knows the generalized APT profile only: a V-bit
-  // or tapered ball would be drawn as another cutter (fail closed).
-  if (!cutter.is_apt())
-    throw std::invalid_argument("GL CL engine: draws flat, ball and bull-nose cutters only, not " + cutter.spec() +
-                                " (use the exact engine)");
   const CutterCap cap(cutter, opt.tolerance);
   const Box3 box = mesh.bounds();
   ClGrid grid;
@@ -520,8 +515,10 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   // Depth range tight to what can be drawn: from the lowest vertex minus the
   // corner radius (a rim point) to the highest vertex, plus a margin so that
   // every drawn height has a depth above the cleared 0.
-  const double rk = cutter.type == CutterType::Flat ? 0.0 : cutter.type == CutterType::Ball ? cutter.radius
-                                                                                            : cutter.corner_radius;
+  const double rk = !cutter.is_apt()                   ? cutter.profile_top()
+                    : cutter.type == CutterType::Flat ? 0.0
+                    : cutter.type == CutterType::Ball ? cutter.radius
+                                                      : cutter.corner_radius;
   const double span0 = box.hi.z - (box.lo.z - rk);
   const double margin = 1e-3 * std::max(1.0, span0);
   const double zlo = box.lo.z - rk - margin, zhi = box.hi.z + margin;

@@ -4,7 +4,8 @@
 // the exact engine. A node out of reach must not be raised by the primitive
 // (the rasterizer's sub-pixel snapping once lit it from the rim of the
 // vertex's or edge's offset, up to the part's height above the exact value);
-// a node at exactly the reach may take either side's value.
+// a node at exactly the reach may take either side's value. Every cutter
+// kind: flat, ball, bull-nose and the tapered ball (a band profile).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -106,7 +107,9 @@ Layout lay_out(const Item& item, double R) {
 }
 
 void check_reach(const Item& item, const char* what) {
-  for (const char* spec : {"ball:3.175", "flat:6", "bull:6:1"}) {
+  // The tapered ball's rim is 12.9 mm above its tip: at exactly the reach
+  // the exact engine's touch is below the floor.
+  for (const char* spec : {"ball:3.175", "flat:6", "bull:6:1", "taper:1:5:3.175"}) {
     SCOPED_TRACE(std::string(what) + " " + spec);
     const Cutter c = parse_cutter_spec(spec);
     const Layout l = lay_out(item, c.radius);
@@ -121,17 +124,19 @@ void check_reach(const Item& item, const char* what) {
       const double e = exact.height_at(x, y), v = g.at(p.i, p.j);
       SCOPED_TRACE(testing::Message() << "node " << p.i << "," << p.j << " (" << p.beyond << " mm beyond the reach, "
                                       << "direction " << p.nx << "," << p.ny << "): exact " << e << ", GL " << v);
-      EXPECT_LE(v, e + kAbove);
       if (p.beyond > 0) {
+        EXPECT_LE(v, e + kAbove);
         // Out of reach: the exact engine's value (here the floor), not the
         // rim of the offset.
         EXPECT_GE(v, e - kTolerance - kAbove);
       } else {
-        // At the reach: the value of either side (the rim's touch, or what a
-        // node a micron farther out gets).
+        // At the reach (a tangency: the cutter cannot cut into the
+        // primitive there at any height): the value of either side, the
+        // rim's touch or what a node a micron farther out gets.
         const double out = exact.height_at(x + 1e-3 * p.nx, y + 1e-3 * p.ny);
+        EXPECT_LE(v, std::max(e, out) + kAbove);
         EXPECT_GE(v, std::min(e, out) - kTolerance - kAbove);
-        if (e > out + 1) ++touched_at_reach;
+        if (std::fabs(e - out) > 1) ++touched_at_reach;
       }
     }
     // The exact engine touches some of them there (others are a rounding
