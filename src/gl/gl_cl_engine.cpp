@@ -254,27 +254,23 @@ class Batch {
     glBindBuffer(GL_ARRAY_BUFFER, vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data_.size() * sizeof(float)), data_.data(), GL_STREAM_DRAW);
     const auto st = static_cast<GLsizei>(stride() * sizeof(float));
-    auto at = [](std::size_t floats) { return buffer_offset(floats); };
-    glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, st, at(0));
-    glEnableVertexAttribArray(5);
-    glVertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, st, at(3));
-    glEnableVertexAttribArray(6);
-    glVertexAttribPointer(6, 4, GL_FLOAT, GL_FALSE, st, at(5));
-    glEnableVertexAttribArray(7);
-    glVertexAttribPointer(7, 3, GL_FLOAT, GL_FALSE, st, at(9));
+    // Attribute `loc`: n floats at `floats` into each vertex.
+    auto attrib = [st](GLuint loc, GLint n, std::size_t floats) {
+      glEnableVertexAttribArray(loc);
+      glVertexAttribPointer(loc, n, GL_FLOAT, GL_FALSE, st, buffer_offset(floats));
+    };
+    attrib(0, 3, 0);    // pos
+    attrib(5, 2, 3);    // zrange
+    attrib(6, 4, 5);    // ref
+    attrib(7, 3, 9);    // plane
+    attrib(8, 2, 12);   // q0
+    attrib(9, 4, 14);   // src
+    attrib(10, 1, 18);  // reach2
     glDisableVertexAttribArray(1);
     glVertexAttrib3f(1, 0, 0, 0);
-    glEnableVertexAttribArray(8);
-    glVertexAttribPointer(8, 2, GL_FLOAT, GL_FALSE, st, at(12));
-    glEnableVertexAttribArray(9);
-    glVertexAttribPointer(9, 4, GL_FLOAT, GL_FALSE, st, at(14));
-    glEnableVertexAttribArray(10);
-    glVertexAttribPointer(10, 1, GL_FLOAT, GL_FALSE, st, at(18));
     for (GLuint k = 0; k < 3; ++k) {
       if (planes_) {
-        glEnableVertexAttribArray(2 + k);
-        glVertexAttribPointer(2 + k, 3, GL_FLOAT, GL_FALSE, st, at(19 + 3 * k));
+        attrib(2 + k, 3, 19 + 3 * k);
       } else {
         glDisableVertexAttribArray(2 + k);
         glVertexAttrib3f(2 + k, 0, 0, 1);
