@@ -40,6 +40,8 @@ layout(location = 5) in vec2 zrange;  // the triangle's lowest and highest z (be
 layout(location = 6) in vec4 ref;     // reference point in window pixels, as float hi + lo
 layout(location = 7) in vec3 plane;   // z at q0 (before offset), dz/dx, dz/dy (mm per mm)
 layout(location = 8) in vec2 q0;      // where plane.x holds, mm from ref
+layout(location = 9) in vec4 src;     // the source primitive's other corners s1, s2, mm from ref (see Source)
+layout(location = 10) in float reach2; // squared XY reach from the source, mm^2
 uniform vec4 xy_map;   // ndc.xy = p.xy * xy_map.xy + xy_map.zw
 uniform float z_map;   // ndc.z = p.z * z_map (p.z relative to the middle of the depth range)
 uniform vec2 pixel;    // grid step, mm
@@ -47,6 +49,8 @@ flat out vec2 depth_range;
 flat out vec4 f_ref;
 flat out vec3 f_plane;
 flat out vec2 f_q0;
+flat out vec4 f_src;
+flat out float f_reach2;
 void main() {
   vec3 p = pos + offset;
   gl_ClipDistance[0] = dot(plane0, vec3(p.xy, 1.0));
@@ -57,6 +61,8 @@ void main() {
   f_ref = ref;
   f_plane = vec3((plane.x + offset.z) * (0.5 * z_map), plane.y * pixel.x * (0.5 * z_map), plane.z * pixel.y * (0.5 * z_map));
   f_q0 = q0 / pixel;
+  f_src = src;
+  f_reach2 = reach2;
 }
 )";
 // The depth of a fragment is its triangle's plane evaluated at the pixel
@@ -65,13 +71,41 @@ void main() {
 // would move its interpolated depth by slope * snap. Clamped to the
 // triangle's own z range: a pixel lit just outside a steep, thin triangle
 // must not take its plane far beyond it.
+// A node farther in XY than the cutter's reach from the primitive whose
+// offset the triangle belongs to (a vertex, an edge, a facet: the source,
+// with ref its first corner) is out of that primitive's reach whatever the
+// rasterizer's snapping lit: discarded.
 const char* const kFragmentShader = R"(#version 330 core
 flat in vec2 depth_range;
 flat in vec4 f_ref;
 flat in vec3 f_plane;
 flat in vec2 f_q0;
+flat in vec4 f_src;
+flat in float f_reach2;
+uniform vec2 pixel;
+float segment_dist2(vec2 p, vec2 a, vec2 b) {
+  vec2 ab = b - a;
+  float l2 = dot(ab, ab);
+  float t = l2 > 0.0 ? clamp(dot(p - a, ab) / l2, 0.0, 1.0) : 0.0;
+  vec2 q = (p - a) - t * ab;
+  return dot(q, q);
+}
+float cross2(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
+// Squared distance from p to the triangle (0, s1, s2), which may be a
+// segment (s2 = s1) or a point (both 0).
+float source_dist2(vec2 p, vec2 s1, vec2 s2) {
+  if (s1 == vec2(0.0) && s2 == vec2(0.0)) return dot(p, p);
+  float area = cross2(s1, s2);
+  if (area != 0.0) {
+    float c1 = cross2(s1, p) * area, c2 = cross2(s2 - s1, p - s1) * area, c3 = cross2(-s2, p - s2) * area;
+    if (c1 >= 0.0 && c2 >= 0.0 && c3 >= 0.0) return 0.0;
+  }
+  return min(segment_dist2(p, vec2(0.0), s1), min(segment_dist2(p, s1, s2), segment_dist2(p, s2, vec2(0.0))));
+}
 void main() {
-  vec2 d = ((gl_FragCoord.xy - f_ref.xy) - f_ref.zw) - f_q0;
+  vec2 rel = (gl_FragCoord.xy - f_ref.xy) - f_ref.zw;  // pixels from the source's first corner
+  if (source_dist2(rel * pixel, f_src.xy, f_src.zw) > f_reach2) discard;
+  vec2 d = rel - f_q0;
   float depth = (f_plane.x + 0.5) + f_plane.y * d.x + f_plane.z * d.y;
   gl_FragDepth = clamp(depth, depth_range.x, depth_range.y);
 }
@@ -131,6 +165,35 @@ bool prism_planes(const Vec3& a, const Vec3& b, const Vec3& c, Planes& out) {
   return true;
 }
 
+// The mesh primitive a drawn triangle belongs to, in XY: a vertex, an edge
+// or a facet (ref and up to two more corners, relative), and the squared
+// reach within which a node may take its height from it: the cutter's
+// radius less a margin for float rounding in the shader (relative 2^-24 per
+// step, on offsets up to the primitive's size plus R), so that a node that
+// is just out of reach is never lit by it (the depth buffer's triangles are
+// inscribed in XY as well as in Z).
+struct Source {
+  Vec3 ref;
+  float s[4] = {0, 0, 0, 0};
+  float reach2 = 0;
+};
+
+Source make_source(const Vec3& p0, const Vec3* p1, const Vec3* p2, double R) {
+  Source s;
+  s.ref = p0;
+  double size = 0;
+  const Vec3* corners[2] = {p1 ? p1 : &p0, p2 ? p2 : (p1 ? p1 : &p0)};
+  for (int k = 0; k < 2; ++k) {
+    const double x = corners[k]->x - p0.x, y = corners[k]->y - p0.y;
+    s.s[2 * k] = static_cast<float>(x);
+    s.s[2 * k + 1] = static_cast<float>(y);
+    size = std::max(size, std::hypot(x, y));
+  }
+  const double reach = std::max(0.0, R - std::ldexp(R + size, -18));
+  s.reach2 = static_cast<float>(reach * reach);
+  return s;
+}
+
 struct Setup {
   const Mesh& mesh;
   Vec3 origin;  // relative coordinates: x - origin.x etc. (origin.z: middle of the depth range)
@@ -153,7 +216,8 @@ class Batch {
   Batch(const Batch&) = delete;
   Batch& operator=(const Batch&) = delete;
 
-  void triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& o, const TileMap& tm, const Planes* pl) {
+  void triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& o, const TileMap& tm, const Planes* pl,
+                const Source& src) {
     // A triangle with no area seen from above (a vertical one) adds nothing
     // to the top view, and its depth plane is meaningless in float: a
     // rasterizer may still light a pixel with it. Leave such ones out.
@@ -165,14 +229,17 @@ class Batch {
     if (data_.size() + 3 * stride() > kMaxVertices * stride()) flush();
     const float zlo = static_cast<float>(std::min({a.z, b.z, c.z}) - o.z);
     const float zhi = static_cast<float>(std::max({a.z, b.z, c.z}) - o.z);
+    // ref: the source's first corner; the plane holds at a (q0 from ref).
     float rx, rxl, ry, ryl;
-    split(tm.wx(a.x), rx, rxl);
-    split(tm.wy(a.y), ry, ryl);
+    split(tm.wx(src.ref.x), rx, rxl);
+    split(tm.wy(src.ref.y), ry, ryl);
     const float z0 = static_cast<float>(a.z - o.z);
+    const auto q0x = static_cast<float>(a.x - src.ref.x), q0y = static_cast<float>(a.y - src.ref.y);
     for (const Vec3* v : {&a, &b, &c}) {
       data_.insert(data_.end(), {static_cast<float>(v->x - o.x), static_cast<float>(v->y - o.y),
                                  static_cast<float>(v->z - o.z), zlo, zhi, rx, ry, rxl, ryl, z0,
-                                 static_cast<float>(gx), static_cast<float>(gy)});
+                                 static_cast<float>(gx), static_cast<float>(gy), q0x, q0y, src.s[0], src.s[1],
+                                 src.s[2], src.s[3], src.reach2});
       if (planes_) {
         const Planes def;
         const Planes& p = pl ? *pl : def;
@@ -187,23 +254,23 @@ class Batch {
     glBindBuffer(GL_ARRAY_BUFFER, vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data_.size() * sizeof(float)), data_.data(), GL_STREAM_DRAW);
     const auto st = static_cast<GLsizei>(stride() * sizeof(float));
-    auto at = [](std::size_t floats) { return buffer_offset(floats); };
-    glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, st, at(0));
-    glEnableVertexAttribArray(5);
-    glVertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, st, at(3));
-    glEnableVertexAttribArray(6);
-    glVertexAttribPointer(6, 4, GL_FLOAT, GL_FALSE, st, at(5));
-    glEnableVertexAttribArray(7);
-    glVertexAttribPointer(7, 3, GL_FLOAT, GL_FALSE, st, at(9));
+    // Attribute `loc`: n floats at `floats` into each vertex.
+    auto attrib = [st](GLuint loc, GLint n, std::size_t floats) {
+      glEnableVertexAttribArray(loc);
+      glVertexAttribPointer(loc, n, GL_FLOAT, GL_FALSE, st, buffer_offset(floats));
+    };
+    attrib(0, 3, 0);    // pos
+    attrib(5, 2, 3);    // zrange
+    attrib(6, 4, 5);    // ref
+    attrib(7, 3, 9);    // plane
+    attrib(8, 2, 12);   // q0
+    attrib(9, 4, 14);   // src
+    attrib(10, 1, 18);  // reach2
     glDisableVertexAttribArray(1);
     glVertexAttrib3f(1, 0, 0, 0);
-    glDisableVertexAttribArray(8);
-    glVertexAttrib2f(8, 0, 0);
     for (GLuint k = 0; k < 3; ++k) {
       if (planes_) {
-        glEnableVertexAttribArray(2 + k);
-        glVertexAttribPointer(2 + k, 3, GL_FLOAT, GL_FALSE, st, at(12 + 3 * k));
+        attrib(2 + k, 3, 19 + 3 * k);
       } else {
         glDisableVertexAttribArray(2 + k);
         glVertexAttrib3f(2 + k, 0, 0, 1);
@@ -216,7 +283,7 @@ class Batch {
 
  private:
   static constexpr std::size_t kMaxVertices = 3 << 16;
-  std::size_t stride() const { return planes_ ? 21 : 12; }
+  std::size_t stride() const { return planes_ ? 28 : 19; }
   bool planes_;
   GLuint vao_ = 0, vbo_ = 0;
   std::vector<float> data_;
@@ -227,7 +294,8 @@ class Batch {
 // the prism of the facet it is drawn for).
 class CapDraw {
  public:
-  CapDraw(const CutterCap& cap, bool with_planes) : planes_(with_planes) {
+  // reach2: the vertex's squared reach (make_source).
+  CapDraw(const CutterCap& cap, bool with_planes, float reach2) : planes_(with_planes), reach2_(reach2) {
     std::vector<float> tris;
     const auto& P = cap.points();
     for (const auto& t : cap.triangles()) {
@@ -285,6 +353,11 @@ class CapDraw {
     glBindVertexArray(vao_);
     glBindBuffer(GL_ARRAY_BUFFER, inst_vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(inst_.size() * sizeof(float)), inst_.data(), GL_STREAM_DRAW);
+    // The source is the vertex itself (ref): no other corners.
+    glDisableVertexAttribArray(9);
+    glVertexAttrib4f(9, 0, 0, 0, 0);
+    glDisableVertexAttribArray(10);
+    glVertexAttrib1f(10, reach2_);
     const auto st = static_cast<GLsizei>(stride() * sizeof(float));
     // Instances in chunks: llvmpipe bins a whole draw before rasterizing it.
     const std::size_t n = instances(), chunk = 4096;
@@ -315,6 +388,7 @@ class CapDraw {
  private:
   std::size_t stride() const { return planes_ ? 16 : 7; }
   bool planes_;
+  float reach2_;
   GLuint vao_ = 0, mesh_vbo_ = 0, inst_vbo_ = 0;
   GLsizei vertices_ = 0;
   std::vector<float> inst_;
@@ -409,11 +483,6 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
                           GlClStats* stats_out) {
   check_spec(spec);
   if (opt.floor && !std::isfinite(*opt.floor)) throw std::invalid_argument("GL CL engine: floor must be finite");
-  // The offset tessellation knows the generalized APT profile only: a V-bit
-  // or tapered ball would be drawn as another cutter (fail closed).
-  if (!cutter.is_apt())
-    throw std::invalid_argument("GL CL engine: draws flat, ball and bull-nose cutters only, not " + cutter.spec() +
-                                " (use the exact engine)");
   const CutterCap cap(cutter, opt.tolerance);
   const Box3 box = mesh.bounds();
   ClGrid grid;
@@ -442,8 +511,10 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   // Depth range tight to what can be drawn: from the lowest vertex minus the
   // corner radius (a rim point) to the highest vertex, plus a margin so that
   // every drawn height has a depth above the cleared 0.
-  const double rk = cutter.type == CutterType::Flat ? 0.0 : cutter.type == CutterType::Ball ? cutter.radius
-                                                                                            : cutter.corner_radius;
+  const double rk = !cutter.is_apt()                   ? cutter.profile_top()
+                    : cutter.type == CutterType::Flat ? 0.0
+                    : cutter.type == CutterType::Ball ? cutter.radius
+                                                      : cutter.corner_radius;
   const double span0 = box.hi.z - (box.lo.z - rk);
   const double margin = 1e-3 * std::max(1.0, span0);
   const double zlo = box.lo.z - rk - margin, zhi = box.hi.z + margin;
@@ -473,9 +544,14 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
 
   // What is drawn, decided once.
   std::vector<std::array<Vec3, 3>> faces;
+  std::vector<Source> face_sources;  // the facets themselves
   for (const auto& t : mesh.triangles) {
     std::array<Vec3, 3> f;
-    if (face_offset_triangle(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], cutter, f)) faces.push_back(f);
+    const Vec3 &p0 = mesh.vertices[t[0]], &p1 = mesh.vertices[t[1]], &p2 = mesh.vertices[t[2]];
+    if (face_offset_triangle(p0, p1, p2, cutter, f)) {
+      faces.push_back(f);
+      face_sources.push_back(make_source(p0, &p1, &p2, cutter.radius));
+    }
   }
   st.face_offsets = faces.size();
   struct EdgeDraw {
@@ -522,7 +598,7 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   }
 
   Batch batch(opt.trim);
-  CapDraw caps(cap, opt.trim);
+  CapDraw caps(cap, opt.trim, make_source(Vec3{}, nullptr, nullptr, cutter.radius).reach2);
   // The radius of the circle inside the cap's rim polygon (a hair less).
   const double r_in = cutter.radius * std::cos(M_PI / static_cast<double>(cap.spokes())) * (1 - 1e-7);
   std::vector<float> depth(tw * th);
@@ -549,10 +625,11 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
       const double y0 = spec.y(tj) - spec.dy, y1 = spec.y(tj + h - 1) + spec.dy;
       auto outside = [&](double lx, double ly, double hx, double hy) { return hx < x0 || lx > x1 || hy < y0 || ly > y1; };
 
-      for (const auto& f : faces) {
+      for (std::size_t k = 0; k < faces.size(); ++k) {
+        const auto& f = faces[k];
         const double lx = std::min({f[0].x, f[1].x, f[2].x}), hx = std::max({f[0].x, f[1].x, f[2].x});
         const double ly = std::min({f[0].y, f[1].y, f[2].y}), hy = std::max({f[0].y, f[1].y, f[2].y});
-        if (!outside(lx, ly, hx, hy)) batch.triangle(f[0], f[1], f[2], origin, tm, nullptr);
+        if (!outside(lx, ly, hx, hy)) batch.triangle(f[0], f[1], f[2], origin, tm, nullptr, face_sources[k]);
       }
       for (const VertexDraw& vd : verts) {
         const Vec3& v = mesh.vertices[vd.v];
@@ -565,6 +642,7 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
         const Vec3 a = mesh.vertices[e.a], b = mesh.vertices[e.b];
         if (outside(std::min(a.x, b.x) - R, std::min(a.y, b.y) - R, std::max(a.x, b.x) + R, std::max(a.y, b.y) + R)) continue;
         const Planes* pl = opt.trim ? &e.planes : nullptr;
+        const Source segment = make_source(a, &b, nullptr, R);
         // The uphill end's generators start on the exact rim of its vertex
         // offset, whose drawn polygon is inscribed: an apron, flat at the
         // lower of the two generators' heights, reaches back from them into
@@ -583,15 +661,16 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
         };
         for (std::size_t g = gen_first[k]; g + 1 < gen_first[k + 1]; ++g) {
           const Vec3 q1 = gens[g], q2 = gens[g + 1];
-          batch.triangle(a + q1, a + q2, b + q2, origin, tm, pl);
-          batch.triangle(a + q1, b + q2, b + q1, origin, tm, pl);
+          batch.triangle(a + q1, a + q2, b + q2, origin, tm, pl, segment);
+          batch.triangle(a + q1, b + q2, b + q1, origin, tm, pl, segment);
           double d1 = 0, d2 = 0;
           if (m != 0 && apron(q1, d1) && apron(q2, d2) && (d1 > 0 || d2 > 0)) {
             const double z = up.z + std::min(q1.z, q2.z);
             const Vec3 p1{up.x + q1.x, up.y + q1.y, z}, p2{up.x + q2.x, up.y + q2.y, z};
             const Vec3 p3 = p2 + dir * d2, p4 = p1 + dir * d1;
-            batch.triangle(p1, p2, p3, origin, tm, pl);
-            batch.triangle(p1, p3, p4, origin, tm, pl);
+            const Source vertex = make_source(up, nullptr, nullptr, R);
+            batch.triangle(p1, p2, p3, origin, tm, pl, vertex);
+            batch.triangle(p1, p3, p4, origin, tm, pl, vertex);
           }
         }
       }

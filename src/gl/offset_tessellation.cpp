@@ -8,16 +8,31 @@ namespace cncstream::gl {
 
 namespace {
 
+// The cutter's profile: the generalized APT one in closed form (flat, ball,
+// bull-nose), any other (V-bit, tapered ball, grown ones) as its bands
+// (cutter.hpp). rc: the flat core's radius (the tip's flat for a V-bit).
 struct Profile {
   double R = 0, rk = 0, rc = 0;
+  bool general = false;
+  CutterProfile bands;
   explicit Profile(const Cutter& c)
       : R(c.radius),
         rk(c.type == CutterType::Flat ? 0.0
            : c.type == CutterType::Ball ? c.radius
                                          : std::clamp(c.corner_radius, 0.0, c.radius)),
-        rc(R - rk) {}
+        rc(R - rk),
+        general(!c.is_apt()) {
+    if (general) {
+      bands = c.profile();
+      R = bands.R;
+      rk = 0;
+      const ProfileBand& b0 = bands.band[0];
+      rc = b0.kind == ProfileBand::Kind::Cone && b0.slope == 0 && b0.h0 == 0 ? b0.rho1 : 0.0;
+    }
+  }
   // Top of the inverted cutter at radius rho: -h(rho), concave, decreasing.
   double g(double rho) const {
+    if (general) return -bands.h(rho);
     if (rho <= rc) return 0.0;
     const double u = std::min(rho - rc, rk);
     return -(rk - std::sqrt(std::max(0.0, (rk - u) * (rk + u))));
@@ -63,9 +78,17 @@ CutterCap::CutterCap(const Cutter& cutter, double tolerance) {
   if (!(p.R > 0)) throw std::invalid_argument("GL CL engine: cutter radius must be positive");
   R_ = p.R;
   const double tol_r = tolerance / 2, tol_a = tolerance / 2;
-  // Rings: the flat core's edge (exact, z = 0), then chords of the corner arc.
+  // Rings: the flat core's edge (exact, z = 0), then chords of the corner
+  // arc (a general profile: of each band, so its kinks are rings).
   if (p.rc > 0) rho_.push_back(p.rc);
-  if (p.rk > 0) subdivide(p, p.rc, p.R, tol_r, 0, rho_);
+  if (p.general) {
+    for (std::size_t k = 0; k < p.bands.count; ++k) {
+      const ProfileBand& b = p.bands.band[k];
+      if (b.rho1 > p.rc) subdivide(p, std::max(b.rho0, p.rc), b.rho1, tol_r, 0, rho_);
+    }
+  } else if (p.rk > 0) {
+    subdivide(p, p.rc, p.R, tol_r, 0, rho_);
+  }
   double radial_gap = 0;
   for (std::size_t k = 0; k < rho_.size(); ++k) {
     const double a = k ? rho_[k - 1] : 0.0;
@@ -84,8 +107,9 @@ CutterCap::CutterCap(const Cutter& cutter, double tolerance) {
     if (scale <= tol) return 8;
     return std::ceil(M_PI / std::acos(1 - tol / scale));
   };
-  // A multiple of 4: spokes along +-x and +-y, so nodes straight beside a
-  // vertex at exactly R (the default grid bounds put rows there) are on P.
+  // A multiple of 4: spokes along +-x and +-y (nodes straight beside a
+  // vertex at exactly R, where the default grid bounds put rows, are on P's
+  // rim; the engine's reach test leaves them to what lies below).
   const double n = 4 * std::ceil(std::max({8.0, spokes_for(steep, tol_a), spokes_for(p.R, tolerance / 20)}) / 4);
   if (n > 16384) throw std::invalid_argument("GL CL engine: tessellation tolerance too fine for this cutter (over 16384 spokes)");
   spokes_ = static_cast<std::size_t>(n);
@@ -151,9 +175,9 @@ double best_u(const Profile& p, double m, double d, double& gbest) {
   const double w = std::sqrt(std::max(0.0, p.R * p.R - d * d));
   auto g = [&](double u) { return -m * u + p.g(std::sqrt(d * d + u * u)); };
   double u = 0;
-  if (p.rk == 0) {
+  if (!p.general && p.rk == 0) {
     u = m > 0 ? -w : m < 0 ? w : 0.0;  // flat: the rim, uphill
-  } else if (p.rc == 0) {
+  } else if (!p.general && p.rc == 0) {
     u = -m * w / std::sqrt(1 + m * m);  // ball: the great circle across the segment
   } else {
     double lo = -w, hi = w;
@@ -223,9 +247,28 @@ bool face_offset_triangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, const 
   const Profile p(cutter);
   const Vec3 n = upward_unit_normal(p0, p1, p2);
   if (!(n.z >= 1e-8)) return false;
-  Vec3 shift = n * p.rk - Vec3{0, 0, p.rk};
   const double nxy = std::hypot(n.x, n.y);
-  if (nxy >= 1e-9) shift += Vec3{n.x / nxy, n.y / nxy, 0} * p.rc;
+  Vec3 shift;
+  if (p.general) {
+    // The contact radius rho maximises t rho - h(rho) (t the plane's slope;
+    // concave): the node sits rho downhill of the contact, h(rho) below it.
+    double rho = 0;
+    if (nxy >= 1e-9) {
+      const double t = nxy / n.z;
+      double lo = 0, hi = p.R;
+      for (int it = 0; it < 200 && hi - lo > 1e-13 * p.R; ++it) {
+        const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+        if (t * m1 + p.g(m1) < t * m2 + p.g(m2)) lo = m1;
+        else hi = m2;
+      }
+      rho = 0.5 * (lo + hi);
+      shift = Vec3{n.x / nxy, n.y / nxy, 0} * rho;
+    }
+    shift.z = p.g(rho);
+  } else {
+    shift = n * p.rk - Vec3{0, 0, p.rk};
+    if (nxy >= 1e-9) shift += Vec3{n.x / nxy, n.y / nxy, 0} * p.rc;
+  }
   out = {p0 + shift, p1 + shift, p2 + shift};
   return true;
 }

@@ -10,8 +10,13 @@
 // rounding: measured <= 0.002 mm, see docs/PERFORMANCE.md) and >= it minus
 // the tolerance, except at nodes right beside a vertical part of the exact
 // surface (a vertex offset's rim, a wall): within the rasterizer's sub-pixel
-// snap (1/256 pixel) a node may be lit from the top of the wall, and within
-// CutterCap::sliver_width() of a rim it may miss it. With `trim` (the
+// snap (1/256 pixel) a node inside the reach may be lit from a steeper
+// triangle next to it, and within CutterCap::sliver_width() of a rim it may
+// miss it. A node out of a vertex's, an edge's or a facet's XY reach (the
+// cutter's radius) is never lit by it: each fragment checks its distance
+// from the primitive (a margin of about 4e-6 of the primitive's size plus R
+// inside the radius, for float rounding), so a node at exactly the radius
+// gets what lies below, as a node just beyond it does. With `trim` (the
 // thesis's bounding spaces, 3.4) each facet's edge and vertex offsets are
 // clipped to the facet's vertical prism, which drops parts of the envelope:
 // nodes can fall far below.

@@ -1,6 +1,8 @@
 #pragma once
 // The thesis's offset surfaces (chapter 3) as triangles, for the depth-buffer
-// CL engine. Pure geometry, no GL.
+// CL engine. Pure geometry, no GL. Every cutter (cutter.hpp): the generalized
+// APT ones in closed form, V-bits and tapered balls from their bands (the
+// cap's rings then include each band's ends, so a kink is a ring).
 //
 // Every primitive's offset is the top of a convex solid: the primitive (a
 // point, a segment, a facet) Minkowski-summed with the inverted cutter -C,
@@ -92,6 +94,9 @@ void edge_generators(const Cutter& cutter, const Vec3& a, const Vec3& b, double 
 
 // The thesis's face offset (eq. 3.3) of a facet for the tool tip: the facet
 // moved by rk * n + rc * n_xy / |n_xy| - rk * z, n its upward unit normal.
+// For a band profile (V-bit, tapered ball, grown ones) the same idea: moved
+// rho along n_xy / |n_xy| and h(rho) down, rho where the profile's tilt
+// matches the facet's (the maximum of t rho - h(rho), t its slope).
 // false for a (near-)vertical facet (n_z < 1e-8), whose offset is seen only
 // through its edges and vertices.
 bool face_offset_triangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cutter& cutter,
