@@ -461,6 +461,7 @@ const char* prompt_step(protocol::PromptKind k) {
     case protocol::PromptKind::MountTool: return "mount_tool";
     case protocol::PromptKind::ZeroManually: return "zero_manually";
     case protocol::PromptKind::Question: return "question";
+    case protocol::PromptKind::Confirm: return "confirm";
   }
   return "question";
 }

@@ -389,23 +389,9 @@ void MachineSession::start_tool_change() {
 }
 
 void MachineSession::tool_change_event(const protocol::Event& ev) {
-  switch (ev.kind) {
-    case EventKind::CommandAnswered:
-      if (!routine_line_.empty() && ev.line_text == routine_line_) {
-        routine_line_.clear();
-        routine_->on_answer(!ev.info.has_value(), ev.code);
-      }
-      break;
-    case EventKind::Info: routine_->on_message(ev.text); break;
-    case EventKind::Status:
-      if (ev.status) routine_->on_status(*ev.status);
-      break;
-    case EventKind::JobFinished:
-      // An alarm, a reset, a lost link or a stop ended the job mid-routine.
-      end_tool_change(ev.text);
-      break;
-    default: break;
-  }
+  feed_routine(*routine_, routine_line_, ev);
+  // An alarm, a reset, a lost link or a stop ended the job mid-routine.
+  if (ev.kind == EventKind::JobFinished) end_tool_change(ev.text);
 }
 
 void MachineSession::pump_tool_change() {
@@ -418,19 +404,7 @@ void MachineSession::pump_tool_change() {
     emit(e);
     if (!routine_ || !engine_) return;
   }
-  if (routine_line_.empty() && !routine_->finished()) {
-    if (auto line = routine_->take_line()) {
-      std::string err;
-      const auto cleaned = protocol::clean_gcode_line(*line, {}, &err);
-      try {
-        if (!cleaned) throw std::invalid_argument(err);
-        routine_line_ = *cleaned;
-        engine_->send_command(*line);
-      } catch (const std::exception& ex) {
-        routine_->abort(std::string("cannot send '") + *line + "': " + ex.what());
-      }
-    }
-  }
+  send_routine_line(*routine_, routine_line_);
   if (routine_->finished()) end_tool_change("");
 }
 
