@@ -9,26 +9,12 @@
 #include "cncsim/machine.hpp"
 #include "cncstream/protocol/status_report.hpp"
 #include "cncstream/protocol/tool_change.hpp"
+#include "support/routine_bench.hpp"
 
 using namespace cncstream;
 using namespace cncstream::protocol;
 
 namespace {
-
-std::vector<std::string> split_lines(const std::string& out) {
-  std::vector<std::string> v;
-  std::string cur;
-  for (char c : out) {
-    if (c == '\n') {
-      if (!cur.empty() && cur.back() == '\r') cur.pop_back();
-      if (!cur.empty()) v.push_back(cur);
-      cur.clear();
-    } else {
-      cur.push_back(c);
-    }
-  }
-  return v;
-}
 
 constexpr double kSafeZ = 40;
 
@@ -119,7 +105,7 @@ struct Bench {
       }
       if (each) each(t);
       m.advance(0.05);
-      for (const auto& l : split_lines(m.take_output())) {
+      for (const auto& l : cncstream::test::controller_lines(m.take_output())) {
         if (l == "ok") r.on_answer(true, 0);
         else if (l.rfind("error:", 0) == 0) r.on_answer(false, std::stoi(l.substr(6)));
         else if (l.rfind("ALARM:", 0) == 0) {
