@@ -17,6 +17,14 @@ Response accepted(const session::CommandResult& r) {
   return Response::json(202, {{"accepted", true}});
 }
 
+// An operator's answer in a path: true for confirm, false for decline, else 400.
+bool confirms(const std::string& answer, const char* what) {
+  if (answer != "confirm" && answer != "decline")
+    throw ApiError{400, "bad_request",
+                   cat({"unknown ", what, " answer '", answer.substr(0, 40), "' (confirm or decline)"})};
+  return answer == "confirm";
+}
+
 }  // namespace
 
 void Api::machine_routes() {
@@ -113,11 +121,9 @@ void Api::machine_routes() {
   // decline stops the job. Probing at the prompt is actions/probe_z.
   router_.add("POST", "/api/v1/machines/{m}/tool-change/{answer}", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
-    const std::string& a = r.params.at(1);
-    if (a != "confirm" && a != "decline")
-      throw ApiError{400, "bad_request", "unknown tool-change answer '" + a.substr(0, 40) + "' (confirm or decline)"};
+    const bool yes = confirms(r.params.at(1), "tool-change");
     machines_.require_control(m, r.client_id);
-    res(accepted(a == "confirm" ? m.session->tool_change_confirm() : m.session->tool_change_decline()));
+    res(accepted(yes ? m.session->tool_change_confirm() : m.session->tool_change_decline()));
   });
   router_.add("POST", "/api/v1/machines/{m}/realtime", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
@@ -180,11 +186,9 @@ void Api::routine_routes() {
   // The operator's answer at a routine's prompt (the tool mounted, the result right).
   router_.add("POST", "/api/v1/machines/{m}/routine/{answer}", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
-    const std::string& a = r.params.at(1);
-    if (a != "confirm" && a != "decline")
-      throw ApiError{400, "bad_request", "unknown routine answer '" + a.substr(0, 40) + "' (confirm or decline)"};
+    const bool yes = confirms(r.params.at(1), "routine");
     machines_.require_control(m, r.client_id);
-    res(accepted(a == "confirm" ? m.session->routine_confirm() : m.session->routine_decline()));
+    res(accepted(yes ? m.session->routine_confirm() : m.session->routine_decline()));
   });
 }
 
