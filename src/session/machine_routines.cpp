@@ -16,6 +16,10 @@ CommandResult MachineSession::refuse_during_routine(const char* what) const {
   return CommandResult::refused(fmt::format("{}: the {} is running; stop it first", what, machine_routine_->name()));
 }
 
+bool MachineSession::routine_operator_turn() const {
+  return tool_routine_ && tool_routine_->pending_prompt();
+}
+
 CommandResult MachineSession::run_routine(std::shared_ptr<MachineRoutine> routine) {
   const std::string what = routine ? std::string("run the ") + routine->name() : std::string("run a routine");
   if (!routine) return CommandResult::refused(what + ": none given");
@@ -152,6 +156,9 @@ CommandResult MachineSession::set_tool_in_spindle(int tool) {
 CommandResult MachineSession::routine_confirm() {
   if (!machine_routine_ || !machine_routine_->pending_prompt())
     return CommandResult::refused("confirm: no routine is waiting for the operator");
+  // The routine's next move (safe Z, the probe) must not meet a jog still running.
+  if (engine_ && engine_->jogging())
+    return CommandResult::refused("confirm: a jog is running; wait until the machine is still");
   machine_routine_->confirm();
   drain();
   arm_timer();

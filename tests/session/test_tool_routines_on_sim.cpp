@@ -36,6 +36,7 @@ struct ToolRig {
   std::optional<bool> ended_ok;
   std::string end_text;
   std::optional<protocol::ToolChangeRecord> record;
+  bool auto_confirm = true;
 
   explicit ToolRig(bool sensor = true) {
     SimulatorOptions so;
@@ -53,7 +54,7 @@ struct ToolRig {
         prompts.push_back(*e.routine_prompt);
         // The simulated operator mounts what is asked, then confirms.
         if (e.routine_prompt->kind == protocol::PromptKind::MountTool) sim->operator_mount(e.routine_prompt->tool);
-        boost::asio::post(io, [this] { session->routine_confirm(); });
+        if (auto_confirm) boost::asio::post(io, [this] { session->routine_confirm(); });
       } else if (e.routine_succeeded) {
         ended_ok = *e.routine_succeeded;
         end_text = e.text;
@@ -181,4 +182,36 @@ TEST(ToolRoutinesOnSim, ASensorThatNeverTriggersStopsWithinItsTravel) {
   }, 20)) << rig.end_text;
   EXPECT_NEAR((*rig.session->status()->mpos)[2], kSafeZ - kTravel, 0.01) << rig.end_text;
   EXPECT_FALSE(rig.session->in_alarm());
+}
+
+TEST(ToolRoutinesOnSim, AManualChangeGivesTheMachineToTheOperatorAtItsPromptButNoHomingOrSpindle) {
+  ToolRig rig;
+  rig.auto_confirm = false;
+  ASSERT_TRUE(rig.session->set_tool_in_spindle(1));
+  auto cfg = ToolRig::sensor_config();
+  cfg.method = protocol::ToolChangeMethod::Manual;
+  // Manual measures nothing: measure and check are refused before anything moves.
+  EXPECT_FALSE(rig.session->run_tool_routine(cfg, protocol::ToolRoutineKind::MeasureReference).result);
+  const auto started = rig.session->run_tool_routine(cfg, protocol::ToolRoutineKind::Change, 2);
+  ASSERT_TRUE(started.result) << started.result.reason;
+  ASSERT_TRUE(run_until(rig.io, [&] { return !rig.prompts.empty(); }, 60));
+  EXPECT_EQ(rig.prompts[0].kind, protocol::PromptKind::ZeroManually);
+  // The operator's turn: a jog down, zero Z there; no homing, no spindle, no job, no other routine.
+  ASSERT_TRUE(rig.session->jog_step({0, 0, -1}, 5, 500)) << "jogging works at the prompt";
+  EXPECT_FALSE(rig.session->routine_confirm()) << "not while the jog runs";
+  ASSERT_TRUE(run_until(rig.io, [&] { return !rig.session->snapshot().jogging && rig.idle(); }, 30));
+  EXPECT_NEAR((*rig.session->status()->mpos)[2], kSafeZ - 5, 0.01);
+  ASSERT_TRUE(rig.session->zero_axes("Z"));
+  EXPECT_FALSE(rig.session->console("$H"));
+  EXPECT_FALSE(rig.session->home());
+  EXPECT_FALSE(rig.session->spindle(true));
+  EXPECT_FALSE(rig.session->run_tool_routine(ToolRig::sensor_config(), protocol::ToolRoutineKind::CheckLength).result);
+  ASSERT_TRUE(run_until(rig.io, [&] { return rig.idle(); }, 30));
+  ASSERT_TRUE(rig.session->routine_confirm());
+  ASSERT_TRUE(run_until(rig.io, [&] { return rig.ended_ok.has_value(); }, 60));
+  EXPECT_TRUE(*rig.ended_ok) << rig.end_text;
+  EXPECT_EQ(rig.session->snapshot().tool_in_spindle, 2);
+  EXPECT_FALSE(rig.session->tool_reference()) << "a manual zero: no reference";
+  // After it the machine is the operator's again, with the routine's rules gone.
+  EXPECT_FALSE(rig.session->jog_step({0, 0, 1}, 1, 500).reason.find("running") != std::string::npos);
 }

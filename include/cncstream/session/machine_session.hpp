@@ -139,7 +139,9 @@ class MachineSession {
   // the reference), Change to `tool`, CheckLength (the broken-bit check: the
   // tool in the spindle against its measured length, `tolerance_mm`). A
   // failed check keeps the reference, so the next change is measured against
-  // it and never against the broken bit. Returns the routine (its result is
+  // it and never against the broken bit. At its prompt the machine is the
+  // operator's (jogs, actions, console lines; no homing), as at a job's
+  // change; confirm waits for a jog to end. Returns the routine (its result is
   // read after the Routine event that ends it) or the refusal (also when it
   // failed at its start, before anything moved: nothing recorded to check).
   struct ToolRoutineStart {
@@ -198,6 +200,9 @@ class MachineSession {
   void end_tool_change(const std::string& why);
   void forget_tool_reference(const char* why);
   bool operator_turn() const;
+  // A tool routine outside a job waits for the operator: jogs, the machine
+  // actions (zero Z) and console lines are accepted, as at a job's change.
+  bool routine_operator_turn() const;
   CommandResult refuse_during_routine(const char* what) const;
   void machine_routine_event(const protocol::Event& ev);
   // Shared by the tool change in a job and the routines outside one: the
