@@ -282,10 +282,12 @@ TEST(DaemonToolChange, RoutinesOutsideAJobMeasureChangeAndCheckWithTheMachinesRe
   }, 60)) << machine(h, "rt").dump();
   EXPECT_EQ(machine(h, "rt")["routine"]["name"], "tool change");
   EXPECT_EQ(machine(h, "rt")["routine"]["prompt"]["tool"], 2);
-  // Another routine, a jog, a job meanwhile: refused.
+  // Another routine meanwhile: refused; at the prompt the operator may jog (confirm waits for it to end).
   EXPECT_EQ(h.post(base + "routines/tool_check").status, 409);
-  EXPECT_EQ(h.post(base + "jog", {{"dir", {0, 0, 1}}, {"distance", 1}, {"feed", 100}}).status, 409);
-  ASSERT_EQ(h.post(base + "routine/confirm").status, 202);
+  EXPECT_EQ(h.post(base + "actions/home").status, 409);
+  ASSERT_EQ(h.post(base + "jog", {{"dir", {0, 0, 1}}, {"distance", 1}, {"feed", 100}}).status, 202);
+  ASSERT_TRUE(wait_for([&] { return !machine(h, "rt")["jogging"].get<bool>(); }, 20));
+  ASSERT_TRUE(wait_for([&] { return h.post(base + "routine/confirm").status == 202; }, 20));
   end = ended();
   ASSERT_TRUE(end);
   ASSERT_TRUE((*end)["succeeded"].get<bool>()) << end->dump();
