@@ -71,6 +71,7 @@ void Api::add_routes() {
     res(Response::error(400, "bad_request", "/api/v1/ws is a WebSocket: send an Upgrade request"));
   });
   machine_routes();
+  routine_routes();
   file_routes();
   job_routes();
   tool_routes();

@@ -1,6 +1,10 @@
-// Machines: list, state, settings, control, console, jogs, actions, overrides, hold, stop.
+// Machines: list, state, settings, control, console, jogs, actions, overrides,
+// hold, stop, and the routines outside a job.
 #include "cncstream/daemon/api.hpp"
 #include "cncstream/daemon/body_fields.hpp"
+#include "cncstream/daemon/tool_change_settings.hpp"
+
+#include <cmath>
 
 namespace cncstream::daemon {
 
@@ -11,6 +15,14 @@ namespace {
 Response accepted(const session::CommandResult& r) {
   if (!r) throw ApiError{409, "refused", r.reason};
   return Response::json(202, {{"accepted", true}});
+}
+
+// An operator's answer in a path: true for confirm, false for decline, else 400.
+bool confirms(const std::string& answer, const char* what) {
+  if (answer != "confirm" && answer != "decline")
+    throw ApiError{400, "bad_request",
+                   cat({"unknown ", what, " answer '", answer.substr(0, 40), "' (confirm or decline)"})};
+  return answer == "confirm";
 }
 
 }  // namespace
@@ -109,11 +121,9 @@ void Api::machine_routes() {
   // decline stops the job. Probing at the prompt is actions/probe_z.
   router_.add("POST", "/api/v1/machines/{m}/tool-change/{answer}", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
-    const std::string& a = r.params.at(1);
-    if (a != "confirm" && a != "decline")
-      throw ApiError{400, "bad_request", "unknown tool-change answer '" + a.substr(0, 40) + "' (confirm or decline)"};
+    const bool yes = confirms(r.params.at(1), "tool-change");
     machines_.require_control(m, r.client_id);
-    res(accepted(a == "confirm" ? m.session->tool_change_confirm() : m.session->tool_change_decline()));
+    res(accepted(yes ? m.session->tool_change_confirm() : m.session->tool_change_decline()));
   });
   router_.add("POST", "/api/v1/machines/{m}/realtime", [this](Request& r, const Respond& res) {
     Machine& m = machine(r);
@@ -128,6 +138,57 @@ void Api::machine_routes() {
   });
   router_.add("POST", "/api/v1/machines/{m}/stop", [this](Request& r, const Respond& res) {
     res(accepted(machine(r).session->stop()));
+  });
+}
+
+// The tool routines outside a job (docs/tool-change.md): measure the
+// reference, change a tool, check the tool in the spindle (a broken-bit
+// check), with the machine's [machine.tool_change] settings or the body's
+// `tool_change` overrides. The session refuses them during a job, a jog, an
+// alarm or another routine; the machine's state and the WebSocket's
+// `routine` frames carry the prompt and the end.
+void Api::routine_routes() {
+  router_.add("POST", "/api/v1/machines/{m}/routines/{routine}", [this](Request& r, const Respond& res) {
+    Machine& m = machine(r);
+    const json b = parse_body(r);
+    const std::string& name = r.params.at(1);
+    protocol::ToolRoutineKind kind;
+    if (name == "tool_measure") kind = protocol::ToolRoutineKind::MeasureReference;
+    else if (name == "tool_change") kind = protocol::ToolRoutineKind::Change;
+    else if (name == "tool_check") kind = protocol::ToolRoutineKind::CheckLength;
+    else throw ApiError{400, "bad_request",
+                        "unknown routine '" + name.substr(0, 40) + "' (tool_measure, tool_change, tool_check)"};
+    if (!b.is_null() && !b.is_object()) throw ApiError{400, "bad_request", "expected a JSON object"};
+    const auto tool_number = [&b](const char* key, double lo) {
+      const double v = number_field(b, key, lo, 9999);
+      if (v != std::floor(v)) throw ApiError{400, "bad_request", cat({key, ": a tool number (an integer)"})};
+      return static_cast<int>(v);
+    };
+    const int tool = kind == protocol::ToolRoutineKind::Change ? tool_number("tool", 0) : 0;
+    double tolerance = 0.1;
+    if (kind == protocol::ToolRoutineKind::CheckLength && b.is_object() && b.contains("tolerance"))
+      tolerance = number_field(b, "tolerance", 0, 10);
+    ToolChangeSettings settings = m.config.tool_change;
+    if (b.is_object() && b.contains("tool_change")) apply_tool_change_json(settings, b.at("tool_change"), "tool_change.");
+    std::optional<protocol::ToolChangeConfig> cfg;
+    try {
+      cfg = routine_config(settings, true);
+    } catch (const std::invalid_argument& e) {
+      throw ApiError{409, "refused", e.what()};
+    }
+    if (!cfg) throw ApiError{409, "refused", "tool_change.method is pause: give plate, sensor or manual"};
+    machines_.require_control(m, r.client_id);
+    if (b.is_object() && b.contains("in_spindle"))
+      if (auto set = m.session->set_tool_in_spindle(tool_number("in_spindle", -1)); !set)
+        throw ApiError{409, "refused", set.reason};
+    res(accepted(m.session->run_tool_routine(*cfg, kind, tool, tolerance).result));
+  });
+  // The operator's answer at a routine's prompt (the tool mounted, the result right).
+  router_.add("POST", "/api/v1/machines/{m}/routine/{answer}", [this](Request& r, const Respond& res) {
+    Machine& m = machine(r);
+    const bool yes = confirms(r.params.at(1), "routine");
+    machines_.require_control(m, r.client_id);
+    res(accepted(yes ? m.session->routine_confirm() : m.session->routine_decline()));
   });
 }
 

@@ -329,10 +329,24 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
       publish(m, std::move(f));
       return;
     }
-    case SessionEventKind::Routine:  // corner probing, the outline (machine_session.hpp)
+    case SessionEventKind::Routine: {  // outside a job: corner probing, the outline, the tool routines
       spdlog::info("machine {}: {}", name, e.text);
+      // The simulated operator mounts what a tool routine asks for (as at a job's change).
+      if (m.sim && e.routine_prompt && e.routine_prompt->tool > 0 &&
+          (e.routine_prompt->kind == protocol::PromptKind::MountTool ||
+           e.routine_prompt->kind == protocol::PromptKind::ZeroManually))
+        m.sim->operator_mount(e.routine_prompt->tool);
       publish(m, {{"type", "event"}, {"kind", "routine"}, {"code", 0}, {"line", 0}, {"text", e.text}, {"info", nullptr}});
+      json f = {{"type", "routine"}, {"state", routine(m)}, {"text", e.text},
+                {"succeeded", e.routine_succeeded ? json(*e.routine_succeeded) : json(nullptr)},
+                {"record", nullptr}, {"tool_reference", tool_reference(m)}};
+      if (const auto& r = e.tool_record)
+        f["record"] = {{"tool", r->tool}, {"method", r->skipped ? "skipped" : protocol::to_string(r->method)},
+                       {"offset_z", r->offset_z ? json(*r->offset_z) : json(nullptr)},
+                       {"length_known", r->length_known}, {"note", r->note}};
+      publish(m, std::move(f));
       return;
+    }
     case SessionEventKind::Controller: break;
   }
   const auto& ev = e.controller;
@@ -461,6 +475,7 @@ const char* prompt_step(protocol::PromptKind k) {
     case protocol::PromptKind::MountTool: return "mount_tool";
     case protocol::PromptKind::ZeroManually: return "zero_manually";
     case protocol::PromptKind::Question: return "question";
+    case protocol::PromptKind::Confirm: return "confirm";
   }
   return "question";
 }
@@ -485,6 +500,26 @@ json Machines::tool_change(const Machine& m) const {
                             : json(nullptr)},
           // Jogs, probe_z and console lines are accepted now (and refused while the routine moves).
           {"operator_turn", prompt.has_value()}};
+}
+
+json Machines::routine(const Machine& m) const {
+  const auto* r = m.session->routine();
+  if (!r) return nullptr;
+  const auto& p = r->pending_prompt();
+  return {{"name", r->name()},
+          {"prompt", p ? json{{"kind", detail_machines::prompt_step(p->kind)}, {"tool", p->tool}, {"text", p->text}}
+                       : json(nullptr)}};
+}
+
+json Machines::tool_reference(const Machine& m) const {
+  const auto& ref = m.session->tool_reference();
+  if (!ref) return nullptr;
+  return {{"tool", ref->tool},
+          {"trigger_z", ref->trigger_z},
+          {"offset_z", ref->offset_z},
+          {"method", protocol::to_string(ref->method)},
+          {"measured_tool", ref->measured_tool},
+          {"measured_trigger_z", ref->measured_trigger_z ? json(*ref->measured_trigger_z) : json(nullptr)}};
 }
 
 json Machines::summary(const Machine& m) const {
@@ -528,6 +563,8 @@ json Machines::state(const Machine& m) const {
   j["alarm_info"] = snap.alarm ? code_info_json(m.last_alarm) : json(nullptr);
   j["tool_change"] = tool_change(m);
   j["tool_in_spindle"] = snap.tool_in_spindle;
+  j["routine"] = routine(m);
+  j["tool_reference"] = tool_reference(m);
   j["tool_change_settings"] = tool_change_json(m.config.tool_change);
   return j;
 }

@@ -83,15 +83,15 @@ void MachineRoutine::wait_idle() {
   idle_reports_ = 0;
 }
 
-void MachineRoutine::prompt(std::string text) {
-  prompt_ = text;
-  prompt_out_ = std::move(text);
+void MachineRoutine::prompt(std::string text, PromptKind kind, int tool) {
+  prompt_ = RoutinePrompt{kind, tool, std::move(text)};
+  prompt_out_ = prompt_;
   wait_ = Wait::Confirm;
 }
 
 void MachineRoutine::fail(const std::string& why) {
   if (!failure_.empty() || done_) return;
-  failure_ = std::string(name()) + ": " + why;
+  failure_ = context() + ": " + why;
   wait_ = Wait::None;
   prompt_.reset();
   line_out_.reset();
@@ -154,7 +154,7 @@ void MachineRoutine::on_status(const StatusReport& r) {
     fail("the machine is in alarm");
     return;
   }
-  if (r.state == MachineState::Hold || r.state == MachineState::Door) {
+  if (hold_ends_it_ && (r.state == MachineState::Hold || r.state == MachineState::Door)) {
     fail("the machine was held (" + r.state_text + "): stopped; nothing more is sent");
     return;
   }
@@ -176,7 +176,8 @@ void MachineRoutine::confirm() {
 
 void MachineRoutine::decline() {
   if (finished() || wait_ != Wait::Confirm) return;
-  fail("the operator declined");
+  fail(prompt_ && prompt_->kind == PromptKind::Question ? "the operator did not accept the measured length"
+                                                         : "the operator declined");
 }
 
 }  // namespace cncstream::protocol

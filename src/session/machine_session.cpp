@@ -389,23 +389,9 @@ void MachineSession::start_tool_change() {
 }
 
 void MachineSession::tool_change_event(const protocol::Event& ev) {
-  switch (ev.kind) {
-    case EventKind::CommandAnswered:
-      if (!routine_line_.empty() && ev.line_text == routine_line_) {
-        routine_line_.clear();
-        routine_->on_answer(!ev.info.has_value(), ev.code);
-      }
-      break;
-    case EventKind::Info: routine_->on_message(ev.text); break;
-    case EventKind::Status:
-      if (ev.status) routine_->on_status(*ev.status);
-      break;
-    case EventKind::JobFinished:
-      // An alarm, a reset, a lost link or a stop ended the job mid-routine.
-      end_tool_change(ev.text);
-      break;
-    default: break;
-  }
+  feed_routine(*routine_, routine_line_, ev);
+  // An alarm, a reset, a lost link or a stop ended the job mid-routine.
+  if (ev.kind == EventKind::JobFinished) end_tool_change(ev.text);
 }
 
 void MachineSession::pump_tool_change() {
@@ -418,19 +404,7 @@ void MachineSession::pump_tool_change() {
     emit(e);
     if (!routine_ || !engine_) return;
   }
-  if (routine_line_.empty() && !routine_->finished()) {
-    if (auto line = routine_->take_line()) {
-      std::string err;
-      const auto cleaned = protocol::clean_gcode_line(*line, {}, &err);
-      try {
-        if (!cleaned) throw std::invalid_argument(err);
-        routine_line_ = *cleaned;
-        engine_->send_command(*line);
-      } catch (const std::exception& ex) {
-        routine_->abort(std::string("cannot send '") + *line + "': " + ex.what());
-      }
-    }
-  }
+  send_routine_line(*routine_, routine_line_);
   if (routine_->finished()) end_tool_change("");
 }
 
@@ -651,7 +625,8 @@ CommandResult MachineSession::refuse_jog() const {
   if (auto r = needs_engine("jog"); !r) return r;
   // At a tool change's prompt the machine is idle and the operator's.
   if (job_active() && !operator_turn()) return CommandResult::refused("jog: a job is running");
-  if (auto r = refuse_during_routine("jog"); !r) return r;
+  if (!routine_operator_turn())
+    if (auto r = refuse_during_routine("jog"); !r) return r;
   if (auto r = refuse_in_alarm("jog"); !r) return r;
   if (probe_pending_) return CommandResult::refused("jog: probing Z; wait for it to finish");
   return CommandResult::ok();
@@ -698,7 +673,8 @@ double MachineSession::max_jog_feed() const {
 CommandResult MachineSession::action(const char* what, const std::function<std::vector<std::string>()>& lines) {
   if (auto r = needs_engine(what); !r) return r;
   if (job_active() && !operator_turn()) return CommandResult::refused(std::string(what) + ": a job is running");
-  if (auto r = refuse_during_routine(what); !r) return r;
+  if (!routine_operator_turn())
+    if (auto r = refuse_during_routine(what); !r) return r;
   if (engine_->jogging()) return CommandResult::refused(std::string(what) + ": a jog is running");
   if (auto r = refuse_in_alarm(what); !r) return r;
   if (probe_pending_) return CommandResult::refused(std::string(what) + ": probing Z; wait for it to finish");
@@ -739,6 +715,9 @@ CommandResult MachineSession::spindle(bool on) {
     drain();
     return CommandResult::ok();
   }
+  // Never a spinning bit while the operator mounts, zeroes or the routine probes.
+  if (on && (operator_turn() || routine_operator_turn()))
+    return CommandResult::refused("spindle on: a tool change is waiting for the operator");
   return action(on ? "spindle on" : "spindle off", [&] { return protocol::spindle_lines(on, opt_.actions); });
 }
 
@@ -770,7 +749,8 @@ CommandResult MachineSession::console(const std::string& line) {
   if (auto r = needs_engine("console"); !r) return r;
   if (job_active() && !operator_turn())
     return CommandResult::refused("console: a job is running; lines are refused until it ends");
-  if (auto r = refuse_during_routine("console"); !r) return r;
+  if (!routine_operator_turn())
+    if (auto r = refuse_during_routine("console"); !r) return r;
   if (engine_->jogging()) return CommandResult::refused("console: a jog is running");
   if (alarm_ && line != "$X" && line != "$H")
     return refuse_in_alarm("console");
@@ -780,6 +760,9 @@ CommandResult MachineSession::console(const std::string& line) {
       for (char c : line) u.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
       return u;
     }();
+    // A homing moves the machine's frame under a tool change's measurements: not at its prompt.
+    if (upper.rfind("$H", 0) == 0 && (routine_ || machine_routine_))
+      return CommandResult::refused("console: no homing during a tool change or routine; decline it first");
     if (upper.find("G10") != std::string::npos || upper.find("G92") != std::string::npos ||
         upper.rfind("$H", 0) == 0)
       forget_tool_reference("a change of the work offset or a homing");

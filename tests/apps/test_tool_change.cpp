@@ -149,3 +149,30 @@ TEST(ToolChange, ALostLinkMidRoutineEndsTheJobDisconnectedWithTheLengthUnknown) 
   EXPECT_EQ(changes[0].tool, 2) << "the operator had been asked to mount T2";
   EXPECT_FALSE(changes[0].length_known);
 }
+
+// `cncstream toolchange` on the simulator's bench (T1 30 mm, T2 7.3 mm
+// longer, a sensor): measure, change to T2 with the offset written, check
+// against the printed trigger; a bit shorter than its trigger fails the
+// check (exit 1); a sensor that is not there stops at the end of the travel.
+TEST(ToolChange, TheToolchangeCommandMeasuresChangesAndChecksOutsideAJob) {
+  auto r = run_cncstream({"toolchange", "measure", "sim", "--yes"});
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("T1 is the reference: it triggered the sensor at machine Z0.000")) << r.out;
+  r = run_cncstream({"toolchange", "change", "T2", "sim", "--yes"});
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("T2 measured +7.300 mm from T1 (sensor); work Z offset now 7.300")) << r.out;
+  EXPECT_TRUE(r.has("check it later with --trigger 7.300")) << r.out;
+  r = run_cncstream({"toolchange", "check", "sim", "--trigger", "0"});
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("T1 is within 0.100 mm")) << r.out;
+  // Recorded 1.2 mm higher than it triggers now: a broken bit.
+  r = run_cncstream({"toolchange", "check", "sim", "--trigger", "1.2"});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.has("T1 is 1.200 mm shorter than when it was measured")) << r.out;
+  r = run_cncstream({"toolchange", "check", "sim"});
+  EXPECT_NE(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("--trigger")) << r.out;
+  r = run_cncstream({"toolchange", "measure", "sim", "--sim-tool-sensor", "200,200,0", "--probe-travel", "20"});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.has("the probe never triggered within 20.000 mm")) << r.out;
+}

@@ -229,3 +229,96 @@ TEST(DaemonToolChange, TheMachinesToolChangeTableIsReadAndABadFieldNamesTheFileA
   EXPECT_TRUE(cncstream::daemon::routine_config(s, false));
   EXPECT_THROW(cncstream::daemon::routine_config(s, true), std::invalid_argument);
 }
+
+// The tool routines outside a job (POST /machines/{m}/routines/tool_*): the
+// reference kept by the daemon per machine, a change to a 7.3 mm longer tool
+// written and read back, the check; refused while a job runs.
+TEST(DaemonToolChange, RoutinesOutsideAJobMeasureChangeAndCheckWithTheMachinesReference) {
+  const auto dir = temp_dir("toolroutines");
+  auto cfg = test_config(dir);
+  auto tm = tool_machine("rt", "20", true);
+  tm.tool_change.safe_z = 30;
+  cfg.machines = {tm};
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return ready(h, "rt"); }, 30));
+  const std::string base = "/api/v1/machines/rt/";
+  EXPECT_EQ(h.post(base + "routines/tool_measure").status, 409);  // control first
+  ASSERT_EQ(h.post(base + "control").status, 200);
+  EXPECT_TRUE(machine(h, "rt")["tool_reference"].is_null());
+  EXPECT_TRUE(machine(h, "rt")["routine"].is_null());
+  EXPECT_EQ(h.post(base + "routines/sideways").status, 400);
+  auto r = h.post(base + "routines/tool_change", json::object());
+  EXPECT_EQ(r.status, 400);
+  EXPECT_NE(r.body.find("tool"), std::string::npos) << r.body;
+  EXPECT_EQ(h.post(base + "routines/tool_change", {{"tool", 2.5}}).status, 400);
+  EXPECT_EQ(h.post(base + "routines/tool_measure", {{"tool_change", {{"method", "laser"}}}}).status, 400);
+  EXPECT_EQ(h.post(base + "routine/confirm").status, 409);  // nothing asked
+  // Nothing measured: the check is refused, naming why.
+  r = h.post(base + "routines/tool_check", {{"in_spindle", 1}});
+  EXPECT_EQ(r.status, 409);
+  EXPECT_NE(r.body.find("no measured length of T1"), std::string::npos) << r.body;
+
+  WsClient ws;
+  ASSERT_EQ(ws.connect(d.port(), "/api/v1/ws?client_id=" + kClient), 101);
+  ws.send(json{{"type", "subscribe"}, {"machines", {"rt"}}});
+  const auto ended = [&ws] {
+    return ws.wait_message([](const json& j) { return j["type"] == "routine" && !j["succeeded"].is_null(); }, 60);
+  };
+  ASSERT_EQ(h.post(base + "routines/tool_measure", {{"in_spindle", 1}}).status, 202);
+  auto end = ended();
+  ASSERT_TRUE(end);
+  ASSERT_TRUE((*end)["succeeded"].get<bool>()) << end->dump();
+  json ref = machine(h, "rt")["tool_reference"];
+  ASSERT_FALSE(ref.is_null());
+  EXPECT_EQ(ref["tool"], 1);
+  EXPECT_EQ(ref["method"], "sensor");
+
+  // Change to T2: the prompt in the machine's state, confirm, measured and written.
+  ASSERT_EQ(h.post(base + "routines/tool_change", {{"tool", 2}}).status, 202);
+  ASSERT_TRUE(wait_for([&] {
+    const json rt = machine(h, "rt")["routine"];
+    return !rt.is_null() && !rt["prompt"].is_null() && rt["prompt"]["kind"] == "mount_tool";
+  }, 60)) << machine(h, "rt").dump();
+  EXPECT_EQ(machine(h, "rt")["routine"]["name"], "tool change");
+  EXPECT_EQ(machine(h, "rt")["routine"]["prompt"]["tool"], 2);
+  // Another routine meanwhile: refused; at the prompt the operator may jog (confirm waits for it to end).
+  EXPECT_EQ(h.post(base + "routines/tool_check").status, 409);
+  EXPECT_EQ(h.post(base + "actions/home").status, 409);
+  ASSERT_EQ(h.post(base + "jog", {{"dir", {0, 0, 1}}, {"distance", 1}, {"feed", 100}}).status, 202);
+  ASSERT_TRUE(wait_for([&] { return !machine(h, "rt")["jogging"].get<bool>(); }, 20));
+  ASSERT_TRUE(wait_for([&] { return h.post(base + "routine/confirm").status == 202; }, 20));
+  end = ended();
+  ASSERT_TRUE(end);
+  ASSERT_TRUE((*end)["succeeded"].get<bool>()) << end->dump();
+  EXPECT_TRUE((*end)["record"]["length_known"].get<bool>());
+  EXPECT_NEAR((*end)["record"]["offset_z"].get<double>(), 7.3, 0.002);
+  const json st = machine(h, "rt");
+  EXPECT_EQ(st["tool_in_spindle"], 2);
+  EXPECT_NEAR(st["status"]["wco"][2].get<double>(), 7.3, 0.01) << st.dump();
+  ref = st["tool_reference"];
+  EXPECT_EQ(ref["measured_tool"], 2);
+  EXPECT_NEAR(ref["measured_trigger_z"].get<double>() - ref["trigger_z"].get<double>(), 7.3, 0.002);
+
+  // The broken-bit check: T2 is as measured.
+  ASSERT_EQ(h.post(base + "routines/tool_check", {{"tolerance", 0.05}}).status, 202);
+  end = ended();
+  ASSERT_TRUE(end);
+  EXPECT_TRUE((*end)["succeeded"].get<bool>()) << end->dump();
+  EXPECT_NE((*end)["text"].get<std::string>().find("T2 is within 0.050 mm"), std::string::npos) << end->dump();
+
+  // While a job runs, no routine starts.
+  const auto file = upload_text(h, "G21 G90\nG1 X50 F100\nG1 X0\nM2\n", "slow.nc");
+  const auto id = create(h, "rt", file);
+  ASSERT_EQ(h.post("/api/v1/jobs/" + std::to_string(id) + "/start").status, 202);
+  ASSERT_TRUE(wait_for([&] { return machine(h, "rt")["job_active"].get<bool>(); }, 10));
+  r = h.post(base + "routines/tool_check");
+  EXPECT_EQ(r.status, 409);
+  EXPECT_NE(r.body.find("a job is running"), std::string::npos) << r.body;
+  ASSERT_EQ(h.post(base + "stop").status, 202);
+  ASSERT_TRUE(wait_for([&] { return !machine(h, "rt")["job_active"].get<bool>(); }, 30));
+  // The stop reset the controller: the reference is forgotten.
+  ASSERT_TRUE(wait_for([&] { return machine(h, "rt")["tool_reference"].is_null(); }, 10)) << machine(h, "rt").dump();
+  d.shutdown();
+  std::filesystem::remove_all(dir);
+}

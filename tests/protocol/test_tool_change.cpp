@@ -9,26 +9,12 @@
 #include "cncsim/machine.hpp"
 #include "cncstream/protocol/status_report.hpp"
 #include "cncstream/protocol/tool_change.hpp"
+#include "support/routine_bench.hpp"
 
 using namespace cncstream;
 using namespace cncstream::protocol;
 
 namespace {
-
-std::vector<std::string> split_lines(const std::string& out) {
-  std::vector<std::string> v;
-  std::string cur;
-  for (char c : out) {
-    if (c == '\n') {
-      if (!cur.empty() && cur.back() == '\r') cur.pop_back();
-      if (!cur.empty()) v.push_back(cur);
-      cur.clear();
-    } else {
-      cur.push_back(c);
-    }
-  }
-  return v;
-}
 
 constexpr double kSafeZ = 40;
 
@@ -119,7 +105,7 @@ struct Bench {
       }
       if (each) each(t);
       m.advance(0.05);
-      for (const auto& l : split_lines(m.take_output())) {
+      for (const auto& l : cncstream::test::controller_lines(m.take_output())) {
         if (l == "ok") r.on_answer(true, 0);
         else if (l.rfind("error:", 0) == 0) r.on_answer(false, std::stoi(l.substr(6)));
         else if (l.rfind("ALARM:", 0) == 0) {
@@ -342,4 +328,66 @@ TEST(ToolChangeLines, M6AndATWordBeforeM0AreChangesAPlainM0IsNot) {
   EXPECT_EQ(c[3].index, 12u);
   EXPECT_EQ(c[3].tool, 4);
   EXPECT_EQ(cncstream::gcode::first_tool(lines), 1);
+}
+
+// Outside a job (ToolRoutineKind): the active work offset read with $G, no
+// return to a program; the broken-bit check compares with the recorded
+// trigger; a hold ends it (inside a job it waits through the job's hold).
+TEST(ToolChangeRoutine, OutsideAJobMeasureThenTheCheckFindsAShorterBitAndAHoldEndsIt) {
+  Bench b(bench_machine(30 - 1.2));  // T2: T1 broken 1.2 mm shorter
+  ToolChangeRequest q = b.request(1, 1);
+  q.in_job = false;
+  q.kind = ToolRoutineKind::MeasureReference;
+  ToolChangeRoutine measure(sensor_config(), q, std::nullopt);
+  b.run(measure);
+  ASSERT_TRUE(measure.succeeded()) << measure.failure();
+  ASSERT_FALSE(b.sent.empty());
+  EXPECT_EQ(b.sent[0], "$G");
+  EXPECT_FALSE(b.sent_any("G10"));
+  EXPECT_FALSE(b.sent_any("M3"));  // stays off: no program to go back to
+  EXPECT_NEAR(b.m.machine_position().z, kSafeZ, 1e-6);
+  ASSERT_TRUE(measure.reference() && measure.reference()->measured_trigger_z);
+  EXPECT_NEAR(measure.reference()->offset_z, -2, 1e-9);
+  EXPECT_EQ(measure.reference()->measured_tool, 1);
+
+  q.kind = ToolRoutineKind::CheckLength;
+  ToolChangeRoutine same(sensor_config(), q, measure.reference());
+  b.run(same);
+  ASSERT_TRUE(same.succeeded()) << same.failure();
+  ASSERT_TRUE(same.length_difference());
+  EXPECT_NEAR(*same.length_difference(), 0, 0.002);
+
+  b.m.request_mount(2);  // the bit broke: 1.2 mm shorter, the routine still thinks T1
+  ToolChangeRoutine broken(sensor_config(), q, measure.reference());
+  b.run(broken);
+  EXPECT_FALSE(broken.succeeded());
+  EXPECT_NE(broken.failure().find("T1 is 1.200 mm shorter"), std::string::npos) << broken.failure();
+  EXPECT_FALSE(broken.record().length_known);
+  EXPECT_NEAR(b.g54_z(), -2, 1e-12) << "nothing written";
+
+  // Another method than the measurement's, or nothing recorded: fails before anything is sent.
+  const std::size_t sent = b.sent.size();
+  ToolChangeConfig plate = plate_config();
+  ToolChangeRoutine other(plate, q, measure.reference());
+  other.start();
+  EXPECT_TRUE(other.finished() && !other.succeeded());
+  EXPECT_NE(other.failure().find("measured with the sensor"), std::string::npos) << other.failure();
+  ToolChangeRoutine none(sensor_config(), q, std::nullopt);
+  none.start();
+  EXPECT_NE(none.failure().find("no measured length of T1"), std::string::npos) << none.failure();
+  EXPECT_FALSE(none.take_line());
+  EXPECT_EQ(b.sent.size(), sent);
+
+  // A feed hold during its first move ends it: nothing more is sent.
+  ToolChangeRoutine held(sensor_config(), q, measure.reference());
+  bool hold_sent = false;
+  b.run(held, 600, [&](double) {
+    if (!hold_sent && b.m.state() == cncsim::MachineState::Run) {
+      b.m.receive("!");
+      hold_sent = true;
+    }
+  });
+  EXPECT_TRUE(hold_sent);
+  EXPECT_FALSE(held.succeeded());
+  EXPECT_NE(held.failure().find("held"), std::string::npos) << held.failure();
 }

@@ -48,7 +48,7 @@ struct CornerRig {
     watch = session->subscribe([this](const SessionEvent& e) {
       if (e.kind != SessionEventKind::Routine) return;
       if (e.routine_prompt) {
-        prompts.push_back(*e.routine_prompt);
+        prompts.push_back(e.routine_prompt->text);
         boost::asio::post(io, [this] { confirm ? session->routine_confirm() : session->routine_decline(); });
       } else if (e.routine_succeeded) {
         ended_ok = *e.routine_succeeded;

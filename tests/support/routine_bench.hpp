@@ -49,7 +49,7 @@ struct RoutineBench {
         m.receive(*l + "\n");
       }
       if (auto p = r.take_prompt()) {
-        prompts.push_back(*p);
+        prompts.push_back(p->text);
         if (answer_yes) r.confirm();
         else r.decline();
       }

@@ -49,6 +49,7 @@ class Api {
  private:
   void add_routes();
   void machine_routes();
+  void routine_routes();
   void file_routes();
   void job_routes();
   void tool_routes();

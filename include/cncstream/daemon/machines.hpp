@@ -129,6 +129,11 @@ class Machines {
   // The tool change in progress: its line, tools, the step and what the
   // operator is asked (null when none).
   nlohmann::json tool_change(const Machine& m) const;
+  // The routine running outside a job (its name and what the operator is
+  // asked; null when none) and the machine's tool-length reference (null
+  // when none: forgotten on a reset, an alarm, a homing or a re-zero).
+  nlohmann::json routine(const Machine& m) const;
+  nlohmann::json tool_reference(const Machine& m) const;
 
   std::function<nlohmann::json(const std::string& machine)> current_job;  // the job manager's view
 

@@ -1,14 +1,15 @@
 #pragma once
-// A routine the machine session runs outside a job (corner probing, the
-// outline trace): a pure state machine like the tool change's. What the
-// controller answered and reported and what the operator said go in; lines
-// to send (one at a time, each after the previous one's `ok`) and prompts
-// come out. A subclass lists its steps in build(); each step queues a line, a
-// wait for the machine to be idle, a prompt, or fails.
+// A routine the machine session runs (the tool change, corner probing, the
+// outline trace): a pure state machine. What the controller answered and
+// reported and what the operator said go in; lines to send (one at a time,
+// each after the previous one's `ok`) and prompts come out. A subclass lists
+// its steps in build(); each step queues a line, a wait for the machine to be
+// idle, a prompt, or fails.
 //
 // Fail closed: an error answer, a probe answered without its [PRB], the
 // machine in alarm or held (a feed hold or a door mid-routine: the operator
-// stopped it), or an abort from the session (a lost link, a stop) end it; the
+// stopped it; only a tool change inside a job waits through its job's hold
+// instead), or an abort from the session (a lost link, a stop) end it; the
 // session then sends nothing more of it.
 #include <array>
 #include <functional>
@@ -33,11 +34,25 @@ std::optional<int> parse_active_coordinate_system(std::string_view line);
 // Millimetres on the wire: three decimals, no "-0.000".
 std::string routine_mm(double v);
 
+// What the operator is asked: to confirm a result, to mount a tool, to zero Z
+// by hand, or whether a surprising measurement is right.
+enum class PromptKind { Confirm, MountTool, ZeroManually, Question };
+struct RoutinePrompt {
+  PromptKind kind = PromptKind::Confirm;
+  int tool = 0;  // MountTool, ZeroManually, Question: the tool it is about (0: unknown)
+  std::string text;
+};
+
 class MachineRoutine {
  public:
   virtual ~MachineRoutine() = default;
-  // "corner probe", "outline": for the operator's messages.
+  // "corner probe", "outline", "tool change": for the operator's messages.
   virtual const char* name() const = 0;
+
+  // Whether a hold (Hold/Door in the status) ends it (the default). A tool
+  // change inside a job waits through its job's hold and goes on at cycle
+  // start; the session sets it for every routine it runs outside a job.
+  void set_hold_ends_it(bool yes) { hold_ends_it_ = yes; }
 
   // Starts it: the first line or prompt is ready to take.
   void start();
@@ -55,8 +70,8 @@ class MachineRoutine {
 
   // Out: the next line to send (at most one is outstanding) and a prompt.
   std::optional<std::string> take_line() { return std::exchange(line_out_, std::nullopt); }
-  std::optional<std::string> take_prompt() { return std::exchange(prompt_out_, std::nullopt); }
-  const std::optional<std::string>& pending_prompt() const { return prompt_; }
+  std::optional<RoutinePrompt> take_prompt() { return std::exchange(prompt_out_, std::nullopt); }
+  const std::optional<RoutinePrompt>& pending_prompt() const { return prompt_; }
 
   bool finished() const { return done_ || !failure_.empty(); }
   bool succeeded() const { return done_ && failure_.empty(); }
@@ -66,12 +81,14 @@ class MachineRoutine {
 
  protected:
   virtual void build() = 0;
+  // What a failure names first ("corner probe", "tool change at line 42").
+  virtual std::string context() const { return name(); }
   void add(std::function<void()> fn) { ops_.push_back(std::move(fn)); }
   // Queues a line; `probe`: a G38.x whose [PRB] must arrive before its ok;
   // `reports`: $# or $G, whose report lines are collected into offsets_/wcs_.
   void send(std::string line, bool probe = false, bool reports = false);
   void wait_idle();
-  void prompt(std::string text);
+  void prompt(std::string text, PromptKind kind = PromptKind::Confirm, int tool = 0);
   void fail(const std::string& why);
   void set_summary(std::string s) { summary_ = std::move(s); }
 
@@ -92,7 +109,9 @@ class MachineRoutine {
   Wait wait_ = Wait::None;
   bool expect_probe_ = false, probe_seen_ = false, expect_reports_ = false;
   int idle_reports_ = 0;
-  std::optional<std::string> line_out_, prompt_out_, prompt_;
+  std::optional<std::string> line_out_;
+  std::optional<RoutinePrompt> prompt_out_, prompt_;
+  bool hold_ends_it_ = true;
   bool done_ = false;
   std::string failure_, summary_;
 };

@@ -1,9 +1,11 @@
 #pragma once
-// The tool-change routine as a pure state machine: what the controller
-// answered, reported and what the operator said go in; lines to send (one at
-// a time, each after the previous one's `ok`) and prompts come out. The
-// machine session runs it when a job reaches a tool change (its lines are
-// never forwarded) and the machine is idle with every line answered.
+// The tool-change routine, a pure MachineRoutine (protocol/machine_routine.hpp):
+// what the controller answered, reported and what the operator said go in;
+// lines to send (one at a time, each after the previous one's `ok`) and
+// prompts come out. The machine session runs it when a job reaches a tool
+// change (its lines are never forwarded) and the machine is idle with every
+// line answered, and outside a job to measure the reference, change a tool or
+// check the length of the tool in the spindle (ToolRoutineKind).
 //
 // Methods: a touch plate on the work or a fixed tool-length sensor (the
 // tool in the spindle measured first as the reference unless the reference
@@ -26,6 +28,7 @@
 #include <vector>
 
 #include "cncstream/gcode/interpreter.hpp"
+#include "cncstream/protocol/machine_routine.hpp"
 #include "cncstream/protocol/status_report.hpp"
 
 namespace cncstream::protocol {
@@ -56,22 +59,34 @@ struct ToolLengthReference {
   double trigger_z = 0;  // machine mm
   double offset_z = 0;   // the active G5x's Z then
   ToolChangeMethod method = ToolChangeMethod::Plate;
+  // The tool last measured against it (the one in the spindle) and its
+  // trigger: what the broken-bit check compares a new measurement with.
+  int measured_tool = 0;
+  std::optional<double> measured_trigger_z = std::nullopt;
 };
 
+// What a tool routine does. Change: at a program's change inside a job, or
+// outside one. Outside a job only: MeasureReference (the tool in the spindle,
+// zeroed by the operator with the active work offset, becomes the reference)
+// and CheckLength (the tool in the spindle measured again and compared with
+// its recorded trigger: a broken-bit check after roughing).
+enum class ToolRoutineKind { Change, MeasureReference, CheckLength };
+
 struct ToolChangeRequest {
-  long line = 0;       // file line of the change
+  long line = 0;       // file line of the change (0: outside a job)
   int from_tool = 0;   // in the spindle now (0: unknown)
   int to_tool = 0;     // to mount (0: the program does not say)
   std::string note;    // the program's words for the operator
   gcode::ParserState modal;  // after the last answered line: where and how the program goes on
+  ToolRoutineKind kind = ToolRoutineKind::Change;
+  // Inside a job the work offset is the modal state's and the routine returns
+  // to the program (XY, spindle, Z, modal state). Outside one it reads the
+  // active work offset with $G first and ends at the safe Z.
+  bool in_job = true;
+  double check_tolerance = 0.1;  // CheckLength: the largest difference from the recorded trigger, mm
 };
 
-enum class PromptKind { MountTool, ZeroManually, Question };
-struct ToolChangePrompt {
-  PromptKind kind = PromptKind::MountTool;
-  int tool = 0;
-  std::string text;
-};
+using ToolChangePrompt = RoutinePrompt;
 
 // What the journal keeps of one change.
 struct ToolChangeRecord {
@@ -84,78 +99,45 @@ struct ToolChangeRecord {
   std::string note;           // what happened, for the operator
 };
 
-class ToolChangeRoutine {
+class ToolChangeRoutine final : public MachineRoutine {
  public:
   ToolChangeRoutine(ToolChangeConfig config, ToolChangeRequest request, std::optional<ToolLengthReference> reference);
+  // "tool change", "tool-length measurement", "tool-length check".
+  const char* name() const override;
 
-  // Starts it: the first line or prompt is ready to take.
-  void start();
-  // The controller answered the last line sent (ok or error:N).
-  void on_answer(bool ok, int code);
-  // A pushed line: [PRB:...], [G54:...]...[TLO:...] (units: mm).
-  void on_message(std::string_view line);
-  // A status report (positions in mm).
-  void on_status(const StatusReport& r);
-  // The operator's answer to the current prompt.
-  void confirm();
-  void decline();
-
-  // Out: the next line to send (at most one is outstanding) and a prompt.
-  std::optional<std::string> take_line() { return std::exchange(line_out_, std::nullopt); }
-  std::optional<ToolChangePrompt> take_prompt() { return std::exchange(prompt_out_, std::nullopt); }
-  const std::optional<ToolChangePrompt>& pending_prompt() const { return prompt_; }
-
-  bool finished() const { return done_ || !failure_.empty(); }
-  bool succeeded() const { return done_ && failure_.empty(); }
-  const std::string& failure() const { return failure_; }
-  // Ends it from outside (alarm, lost link, a stop): the record says the
-  // length is unknown when a tool may have been changed.
-  void abort(const std::string& why);
+  // The record says the length is unknown when a tool may have been changed
+  // and was not measured.
   ToolChangeRecord record() const;
-  // The reference after this change (measured or kept); nullopt when none.
+  // The reference after this routine (measured or kept); nullopt when none.
   const std::optional<ToolLengthReference>& reference() const { return reference_; }
   // The tool in the spindle as far as the routine knows.
   int mounted_tool() const { return mounted_; }
+  const ToolChangeRequest& request() const { return req_; }
+  // CheckLength: the new trigger minus the recorded one, once measured.
+  const std::optional<double>& length_difference() const { return check_diff_; }
 
  private:
-  enum class Wait { None, Answer, Idle, Confirm };
-  struct Op {
-    std::function<void()> run;  // queues a line, a prompt or a wait, or fails
-  };
-  void add(std::function<void()> fn) { ops_.push_back({std::move(fn)}); }
-  void send(std::string line, bool probe = false, bool offsets = false);
-  void wait_idle();
-  void prompt(PromptKind kind, std::string text);
-  void fail(std::string why);
-  void step();
+  void build() override;
+  std::string context() const override;
+  void add_prelude();
   void add_measure(double* trigger_out);
+  void add_reference_measure();
+  void add_change(const std::string& what);
+  void add_check();
   void add_return();
-  std::string wcs_p() const;
+  int wcs_index() const;
+  std::optional<double> active_offset_z() const;
 
   ToolChangeConfig cfg_;
   ToolChangeRequest req_;
   std::optional<ToolLengthReference> reference_;
-  std::vector<Op> ops_;
-  std::size_t pc_ = 0;
-  Wait wait_ = Wait::None;
-  bool expect_probe_ = false, probe_seen_ = false, expect_offsets_ = false;
-  int idle_reports_ = 0;
-  bool pin_active_ = false;
-  bool status_seen_ = false;
-  std::optional<double> probe_z_;
-  bool probe_touched_ = false;
-  std::optional<double> offset_read_z_;
-  std::optional<std::string> line_out_;
-  std::optional<ToolChangePrompt> prompt_out_, prompt_;
-  bool done_ = false;
-  std::string failure_;
   int mounted_ = 0;
   bool mount_asked_ = false;
   bool length_known_ = false;
   bool skipped_ = false;
   std::optional<double> offset_written_;
+  std::optional<double> check_diff_;
   double old_trigger_ = 0, new_trigger_ = 0;
-  std::string summary_;
 };
 
 }  // namespace cncstream::protocol

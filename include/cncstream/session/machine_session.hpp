@@ -131,6 +131,28 @@ class MachineSession {
   CommandResult routine_confirm();
   CommandResult routine_decline();
   bool routine_active() const { return machine_routine_ != nullptr; }
+  // The routine running outside a job (nullptr: none).
+  const protocol::MachineRoutine* routine() const { return machine_routine_.get(); }
+  // The tool routines outside a job (protocol/tool_change.hpp), run as above
+  // with this machine's reference and tool in the spindle, which they update
+  // as a job's change does: MeasureReference (the tool in the spindle becomes
+  // the reference), Change to `tool`, CheckLength (the broken-bit check: the
+  // tool in the spindle against its measured length, `tolerance_mm`). A
+  // failed check keeps the reference, so the next change is measured against
+  // it and never against the broken bit. At its prompt the machine is the
+  // operator's (jogs, actions, console lines; no homing), as at a job's
+  // change; confirm waits for a jog to end. Returns the routine (its result is
+  // read after the Routine event that ends it) or the refusal (also when it
+  // failed at its start, before anything moved: nothing recorded to check).
+  struct ToolRoutineStart {
+    CommandResult result;
+    std::shared_ptr<protocol::ToolChangeRoutine> routine;
+  };
+  ToolRoutineStart run_tool_routine(const protocol::ToolChangeConfig& config, protocol::ToolRoutineKind kind,
+                                    int tool = 0, double tolerance_mm = 0.1);
+  // The operator says which tool is in the spindle (0: unknown); another one
+  // than the session thought forgets the reference. Refused during a job or routine.
+  CommandResult set_tool_in_spindle(int tool);
 
   // ---- state -------------------------------------------------------------
   LinkState link() const { return link_; }
@@ -178,8 +200,15 @@ class MachineSession {
   void end_tool_change(const std::string& why);
   void forget_tool_reference(const char* why);
   bool operator_turn() const;
+  // A tool routine outside a job waits for the operator: jogs, the machine
+  // actions (zero Z) and console lines are accepted, as at a job's change.
+  bool routine_operator_turn() const;
   CommandResult refuse_during_routine(const char* what) const;
   void machine_routine_event(const protocol::Event& ev);
+  // Shared by the tool change in a job and the routines outside one: the
+  // controller's answers, reports and status in, its next line out.
+  static void feed_routine(protocol::MachineRoutine& r, std::string& line_in_flight, const protocol::Event& ev);
+  void send_routine_line(protocol::MachineRoutine& r, std::string& line_in_flight);
   void pump_machine_routine();
   void end_machine_routine(const std::string& why);
 
@@ -213,6 +242,7 @@ class MachineSession {
   int tool_in_spindle_ = 0;
 
   std::shared_ptr<protocol::MachineRoutine> machine_routine_;  // outside a job
+  std::shared_ptr<protocol::ToolChangeRoutine> tool_routine_;  // machine_routine_, when it is a tool routine
   std::string machine_routine_line_;  // cleaned text of its line in flight ("" none)
 
   boost::asio::steady_timer timer_;

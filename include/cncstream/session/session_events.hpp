@@ -42,8 +42,9 @@ enum class SessionEventKind {
   // A tool change: the routine asks the operator (`tool_prompt`), or it
   // ended (`tool_record`: done, skipped or failed); `text` says what.
   ToolChange,
-  // A routine outside a job (corner probing, the outline): it asks the
-  // operator (`routine_prompt`), or it ended (`routine_succeeded`); `text` says what.
+  // A routine outside a job (corner probing, the outline, a tool routine): it
+  // asks the operator (`routine_prompt`), or it ended (`routine_succeeded`; a
+  // tool routine's `tool_record` too); `text` says what.
   Routine,
 };
 
@@ -59,7 +60,7 @@ struct SessionEvent {
   std::size_t lines_answered = 0;                             // JobEnded
   std::optional<protocol::ToolChangePrompt> tool_prompt;      // ToolChange
   std::optional<protocol::ToolChangeRecord> tool_record;      // ToolChange
-  std::optional<std::string> routine_prompt;                  // Routine: the operator is asked
+  std::optional<protocol::RoutinePrompt> routine_prompt;      // Routine: the operator is asked
   std::optional<bool> routine_succeeded;                      // Routine: it ended
 };
 

@@ -41,6 +41,7 @@ void register_status(CLI::App& app, CommandRegistry& registry);
 void register_view(CLI::App& app, CommandRegistry& registry);
 void register_probe(CLI::App& app, CommandRegistry& registry);
 void register_outline(CLI::App& app, CommandRegistry& registry);
+void register_toolchange(CLI::App& app, CommandRegistry& registry);
 void register_tools(CLI::App& app, CommandRegistry& registry);
 void register_shop(CLI::App& app, CommandRegistry& registry);
 

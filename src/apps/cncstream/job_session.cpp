@@ -48,10 +48,9 @@ std::array<double, 2> xy_option(const std::string& text, const char* flag) {
   return {*x, *y};
 }
 
-// The tool-change routine's settings from the options; on the simulator
-// (`so`, with its stock in machine = work coordinates) also where its plate
-// or sensor is, when not given. nullopt: the M0 goes to the controller.
-std::optional<protocol::ToolChangeConfig> tool_change_config(const ConnectionOptions& c, const session::JobInput& job,
+}  // namespace
+
+std::optional<protocol::ToolChangeConfig> tool_change_config(const ConnectionOptions& c, bool changes,
                                                              session::SimulatorOptions* so, std::optional<Box3> stock) {
   std::string method = c.tool_change_method;
   if (method.empty()) method = so ? (stock ? "plate" : "pause") : "manual";
@@ -60,7 +59,6 @@ std::optional<protocol::ToolChangeConfig> tool_change_config(const ConnectionOpt
   cfg.method = protocol::parse_tool_change_method(method);
   cfg.probe_travel = c.probe_travel;
   cfg.max_length_change = c.max_length_change;
-  const bool changes = !gcode::find_tool_changes(job.lines).empty();
   if (c.tool_change_safe_z) {
     cfg.safe_z = *c.tool_change_safe_z;
   } else if (so && stock) {
@@ -106,8 +104,6 @@ std::optional<protocol::ToolChangeConfig> tool_change_config(const ConnectionOpt
   return cfg;
 }
 
-}  // namespace
-
 void add_link_options(CLI::App* sub, ConnectionOptions& o) {
   sub->add_option("--serial", o.serial, "Baud and frame, e.g. 115200 or 115200,8N1");
   sub->add_option("--profile", o.profile, "Force a firmware profile (grbl-1.1, grblhal, fluidnc, marlin)");
@@ -125,6 +121,13 @@ void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
   sub->add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines without a terminal")
       ->check(CLI::PositiveNumber);
   sub->add_option("--timeout", o.timeout_s, "Give up after this many seconds (0: never)")->check(CLI::NonNegativeNumber);
+  add_tool_change_options(sub, o);
+  sub->add_flag("--view", o.view,
+                "Show the job in the 3-D viewer as it runs: the cutter where the machine is, the material its moves "
+                "remove (a window; closing it does not stop the job)");
+}
+
+void add_tool_change_options(CLI::App* sub, ConnectionOptions& o) {
   const char* tc = "Tool change";
   sub->add_option("--tool-change-method", o.tool_change_method,
                   "plate (touch plate on the work), sensor (fixed tool-length sensor), manual (the operator zeroes Z), "
@@ -143,9 +146,6 @@ void add_connection_options(CLI::App* sub, ConnectionOptions& o) {
                   "A tool measured this much longer or shorter than the reference is questioned, mm")
       ->check(CLI::PositiveNumber)
       ->group(tc);
-  sub->add_flag("--view", o.view,
-                "Show the job in the 3-D viewer as it runs: the cutter where the machine is, the material its moves "
-                "remove (a window; closing it does not stop the job)");
 }
 
 void add_sim_machine_options(CLI::App* sub, SimCliOptions& o) {
@@ -275,6 +275,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
                 std::optional<VerifyTarget> verify, std::optional<EtaEstimator> precomputed) {
   std::shared_ptr<session::SimulatorPort> sim;
   session::RunnerOptions ro;
+  const bool changes_tools = !gcode::find_tool_changes(job.lines).empty();
   if (c.port == "sim") {
     session::SimulatorOptions so = simulator_options(s);
     if (!s.design.empty()) {
@@ -302,7 +303,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     }
     std::optional<Box3> stock = so.stock;
     if (!stock && so.design) stock = so.design->bounds();
-    ro.tool_change = tool_change_config(c, job, &so, stock);
+    ro.tool_change = tool_change_config(c, changes_tools, &so, stock);
     sim = std::make_shared<session::SimulatorPort>(so);
     ro.machine_port = sim;
     std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << s.speed << ", "
@@ -311,7 +312,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     const auto device = device_path(c.port);
     if (!device) return 2;
     ro.port = *device;
-    ro.tool_change = tool_change_config(c, job, nullptr, std::nullopt);
+    ro.tool_change = tool_change_config(c, changes_tools, nullptr, std::nullopt);
   }
   ro.serial = transport::parse_serial_settings(c.serial);
   ro.profiles_dir = protocol::default_profiles_dir();

@@ -63,6 +63,9 @@ void add_sim_options(CLI::App* sub, SimCliOptions& o);
 // (--serial, --profile, --verbose) and the simulated machine (speed, RX
 // buffer, settings, faults).
 void add_link_options(CLI::App* sub, ConnectionOptions& o);
+// The tool-change group (--tool-change-method, --tool-change-safe-z,
+// --touch-plate-at, --tool-sensor-at, --probe-travel, --max-length-change).
+void add_tool_change_options(CLI::App* sub, ConnectionOptions& o);
 void add_sim_machine_options(CLI::App* sub, SimCliOptions& o);
 
 std::filesystem::path journal_path(const ConnectionOptions& o);
@@ -75,6 +78,14 @@ session::SimulatorOptions simulator_options(const SimCliOptions& s);
 // controller board (saying which on stderr); nullopt, after saying why on
 // stderr, when there is not exactly one.
 std::optional<std::string> device_path(const std::string& port);
+
+// The tool-change routine's settings from the options; `changes`: they are
+// needed (the program changes tools, or a tool routine runs), so what is
+// missing is refused naming the option. On the simulator (`so`, with its
+// stock in machine = work coordinates, if any) also where its plate or sensor
+// is, when not given. nullopt: the M0 goes to the controller (pause).
+std::optional<protocol::ToolChangeConfig> tool_change_config(const ConnectionOptions& c, bool changes,
+                                                             session::SimulatorOptions* so, std::optional<Box3> stock);
 
 // What the simulator should verify the cut against (from an STL job).
 struct VerifyTarget {

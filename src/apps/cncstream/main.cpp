@@ -32,6 +32,7 @@ int run_cncstream(int argc, char** argv) {
   cncstream::app::register_view(app, registry);
   cncstream::app::register_probe(app, registry);
   cncstream::app::register_outline(app, registry);
+  cncstream::app::register_toolchange(app, registry);
   cncstream::app::register_tools(app, registry);
   cncstream::app::register_shop(app, registry);
   // The bare form `cncstream FILE PORT ...` is `cncstream stream FILE PORT ...`:

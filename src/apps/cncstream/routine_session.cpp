@@ -19,10 +19,11 @@ int run_machine_routine(const ConnectionOptions& conn, const session::SimulatorO
                         const std::shared_ptr<protocol::MachineRoutine>& routine) {
   session::MachineOptions mo;
   mo.name = conn.port;
+  std::shared_ptr<session::SimulatorPort> sim_port;
   if (conn.port == "sim") {
-    auto port = std::make_shared<session::SimulatorPort>(sim);
-    std::cerr << "simulator: GRBL 1.1h on " << port->path() << " (speed " << sim.speed << ")\n";
-    mo.port = port;
+    sim_port = std::make_shared<session::SimulatorPort>(sim);
+    std::cerr << "simulator: GRBL 1.1h on " << sim_port->path() << " (speed " << sim.speed << ")\n";
+    mo.port = sim_port;
   } else {
     const auto device = device_path(conn.port);
     if (!device) return 2;
@@ -85,7 +86,12 @@ int run_machine_routine(const ConnectionOptions& conn, const session::SimulatorO
     }
     if (e.kind == SessionEventKind::Routine) {
       if (e.routine_prompt) {
-        std::cout << *e.routine_prompt << "\n";
+        std::cout << e.routine_prompt->text << "\n";
+        // The simulator has no hands: with --yes its operator mounts what is asked.
+        if (sim_port && conn.yes && e.routine_prompt->tool > 0 &&
+            (e.routine_prompt->kind == protocol::PromptKind::MountTool ||
+             e.routine_prompt->kind == protocol::PromptKind::ZeroManually))
+          sim_port->operator_mount(e.routine_prompt->tool);
         // Asked outside the session's call: the answer may come from a person.
         boost::asio::post(io, [&] {
           bool yes = conn.yes;

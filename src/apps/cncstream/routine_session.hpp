@@ -1,5 +1,5 @@
 #pragma once
-// Runs one routine outside a job (corner probing, the outline) on one
+// Runs one routine outside a job (corner probing, the outline, a tool routine) on one
 // machine session: open the port (or the simulator), wait until the
 // controller is ready, run it, put its prompts to the operator (or answer
 // yes with --yes), and close. The CLI's probe and outline commands share it.
