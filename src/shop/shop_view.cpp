@@ -117,6 +117,8 @@ ViewAnswer ShopViewReader::answer(const Read& read) {
       // A connection the server dropped (a restart): once more on a fresh one.
       if (!db_->ok() && attempt == 0) continue;
       return {Kind::hub_unavailable, {}, e.what()};
+    } catch (const std::exception& e) {  // never lets the reader's thread end
+      return {Kind::hub_unavailable, {}, "shop hub " + redact_url(url_) + ": " + e.what()};
     }
   }
   return {Kind::hub_unavailable, {}, "shop hub " + redact_url(url_) + ": the connection was lost"};

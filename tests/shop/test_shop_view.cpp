@@ -4,10 +4,12 @@
 // daemon answers on.
 #include <gtest/gtest.h>
 
+#include <future>
 #include <set>
 
 #include "cncstream/shop/hub.hpp"
 #include "cncstream/shop/schema.hpp"
+#include "cncstream/shop/shop_view.hpp"
 #include "shop_daemon_util.hpp"
 #include "shop_test_util.hpp"
 
@@ -177,4 +179,23 @@ TEST(ShopView, ADaemonOutsideAShopSaysSo) {
   d.shutdown();
   std::error_code ec;
   fs::remove_all(dir, ec);
+}
+
+// A hub migrated by an older program (no shop.view_*): the view says what to
+// run, instead of PostgreSQL's "function does not exist".
+TEST(ShopView, AHubWithoutTheViewFunctionsAsksForShopInit) {
+  SHOP_REQUIRE_POSTGRES();
+  shoptest::TempPostgres pg;
+  const std::string url = pg.create_database("old");
+  {
+    PgConnection admin(url);
+    admin.exec(shop::migrations().front().sql);  // version 1 only
+  }
+  shop::ShopViewReader reader(url);
+  std::promise<shop::ViewAnswer> answer;
+  reader.submit([](PgConnection& db) -> std::optional<json> { return shop::view_machines(db); },
+                [&](shop::ViewAnswer a) { answer.set_value(std::move(a)); });
+  const auto a = answer.get_future().get();
+  EXPECT_EQ(a.kind, shop::ViewAnswer::Kind::hub_unavailable);
+  EXPECT_NE(a.message.find("cncstream shop init"), std::string::npos) << a.message;
 }
