@@ -1,6 +1,7 @@
 #pragma once
-// The fields of the machine routes' JSON bodies and of the WebSocket jog,
-// each checked with an ApiError 400 naming the field (docs/api-v1.md). Pure:
+// The fields of the machine routes' JSON bodies, of the WebSocket jog and the
+// routes' whole-number query parameters, each checked with an ApiError 400
+// naming the field (docs/api-v1.md). Pure:
 // the handlers call them before touching a machine, and the fuzz targets
 // call them on whatever a client may send.
 #include <nlohmann/json.hpp>
