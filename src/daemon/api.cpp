@@ -11,7 +11,8 @@ namespace cncstream::daemon {
 using nlohmann::json;
 
 Api::Api(boost::asio::io_context& io, boost::asio::thread_pool& pool, const DaemonConfig& config, Auth& auth,
-         FileStore& files, Machines& machines, JobManager& jobs, WsHub& hub, std::filesystem::path web_root)
+         FileStore& files, Machines& machines, JobManager& jobs, WsHub& hub, std::filesystem::path web_root,
+         ShopLink* shop)
     : io_(io),
       pool_(pool),
       config_(config),
@@ -20,7 +21,8 @@ Api::Api(boost::asio::io_context& io, boost::asio::thread_pool& pool, const Daem
       machines_(machines),
       jobs_(jobs),
       hub_(hub),
-      web_root_(std::move(web_root)) {
+      web_root_(std::move(web_root)),
+      shop_(shop) {
   add_routes();
 }
 
@@ -75,6 +77,7 @@ void Api::add_routes() {
   file_routes();
   job_routes();
   tool_routes();
+  shop_routes();
   static_routes();
 }
 

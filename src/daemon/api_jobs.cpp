@@ -2,28 +2,11 @@
 // path), start, generate, hold, resume, stop, cancel, move, resume-plan and
 // resume-confirm.
 #include "cncstream/daemon/api.hpp"
+#include "cncstream/daemon/body_fields.hpp"
 
 namespace cncstream::daemon {
 
 using nlohmann::json;
-
-namespace {
-
-// An optional whole-number query parameter within [lo, hi]; 400 otherwise.
-long long bounded_query(const Request& r, const std::string& name, long long fallback, long long lo, long long hi) {
-  const auto v = r.query_value(name);
-  if (!v) return fallback;
-  const auto bad = [&] {
-    return ApiError{400, "bad_request", cat({name, ": a whole number from ", std::to_string(lo), " to ", std::to_string(hi),
-                                             " (got '", v->substr(0, 24), "')"})};
-  };
-  if (v->empty() || v->size() > 12 || v->find_first_not_of("0123456789") != std::string::npos) throw bad();
-  const long long n = std::stoll(*v);
-  if (n < lo || n > hi) throw bad();
-  return n;
-}
-
-}  // namespace
 
 void Api::job_routes() {
   router_.add("POST", "/api/v1/jobs", [this](Request& r, const Respond& res) {

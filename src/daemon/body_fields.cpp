@@ -88,4 +88,17 @@ std::int64_t job_id_param(const std::string& s) {
   return std::stoll(s);
 }
 
+long long bounded_query(const Request& r, const std::string& name, long long fallback, long long lo, long long hi) {
+  const auto v = r.query_value(name);
+  if (!v) return fallback;
+  const auto bad = [&] {
+    return ApiError{400, "bad_request", cat({name, ": a whole number from ", std::to_string(lo), " to ", std::to_string(hi),
+                                             " (got '", v->substr(0, 24), "')"})};
+  };
+  if (v->empty() || v->size() > 12 || v->find_first_not_of("0123456789") != std::string::npos) throw bad();
+  const long long n = std::stoll(*v);
+  if (n < lo || n > hi) throw bad();
+  return n;
+}
+
 }  // namespace cncstream::daemon

@@ -171,7 +171,7 @@ Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_c
   if (!config_.shop.url.empty()) shop_ = std::make_unique<ShopLink>(io_, config_, *files_, *machines_, *jobs_);
   const fs::path web = find_web_root(config_);
   if (web.empty()) spdlog::warn("no web page folder found (set web.root): GET / answers 404");
-  api_ = std::make_unique<Api>(io_, pool_, config_, *auth_, *files_, *machines_, *jobs_, *hub_, web);
+  api_ = std::make_unique<Api>(io_, pool_, config_, *auth_, *files_, *machines_, *jobs_, *hub_, web, shop_.get());
   server_ = std::make_unique<HttpServer>(io_, config_, *api_, *files_);
   server_->start();
   spdlog::info("listening on {}:{} ({}), data in {}, journal {}, {} machine(s)", config_.listen_address, port(),

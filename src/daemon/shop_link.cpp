@@ -48,6 +48,7 @@ ShopLink::ShopLink(boost::asio::io_context& io, const DaemonConfig& config, File
     }
   }
   client_ = std::make_unique<shop::ShopClient>(io, s, std::move(ms), journal_path(config), *this);
+  view_ = std::make_unique<shop::ShopViewReader>(config.shop.url);
   for (auto& a : adapters_)
     client_->on_state([a = a.get()](const std::string& machine, const shop::MachineState& st) {
       if (machine == a->machine()) a->update(st);
@@ -60,6 +61,7 @@ ShopLink::ShopLink(boost::asio::io_context& io, const DaemonConfig& config, File
 
 ShopLink::~ShopLink() {
   jobs_.on_state_change = nullptr;
+  view_.reset();
   client_.reset();
   adapters_.clear();
 }

@@ -293,11 +293,82 @@ GRANT EXECUTE ON FUNCTION shop.submit_job(text, text, bytea, jsonb, text[], text
 GRANT SELECT ON ALL TABLES IN SCHEMA shop TO cncstream_reader, cncstream_operator;
 )SQL";
 
+// 2: the shop view's reads (docs/shop.md): every machine with its state, the
+// queue and history with filters, a job's events. Read-only and SECURITY
+// DEFINER, so a PC's login (which reads no table) can serve the view from
+// any daemon; a job's file (content) is never returned.
+constexpr const char* kMigration2 = R"SQL(
+CREATE FUNCTION shop.view_machines() RETURNS jsonb
+LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+  SELECT jsonb_build_object('now', now(), 'machines', coalesce(jsonb_agg(jsonb_build_object(
+    'name', m.name, 'pc', m.pc, 'profile', m.profile, 'travel_mm', to_jsonb(m.travel_mm),
+    'capabilities', to_jsonb(m.capabilities), 'registered_at', m.registered_at, 'last_seen', m.last_seen,
+    'heartbeat_age_s', round(extract(epoch FROM now() - m.last_seen)::numeric, 3),
+    'state', CASE WHEN s.machine_id IS NULL THEN NULL ELSE jsonb_build_object(
+      'availability', s.availability, 'execution', s.execution, 'controller_mode', s.controller_mode,
+      'program', s.program, 'line', s.line, 'path_position', to_jsonb(s.path_position),
+      'path_feedrate', s.path_feedrate, 'feed_override', s.feed_override, 'alarm', s.alarm,
+      'updated_at', s.updated_at) END,
+    'job', (SELECT jsonb_build_object('id', j.id, 'file_name', j.file_name, 'status', j.status, 'last_line', j.last_line)
+            FROM shop.jobs j WHERE j.machine_id = m.id AND j.status IN ('assigned', 'awaiting_operator', 'running')
+            ORDER BY j.id DESC LIMIT 1)
+  ) ORDER BY m.pc, m.name), '[]'::jsonb))
+  FROM shop.machines m LEFT JOIN shop.machine_state s ON s.machine_id = m.id
+$f$;
+
+CREATE FUNCTION shop.job_json(j shop.jobs) RETURNS jsonb
+LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+  SELECT jsonb_build_object('id', j.id, 'file_name', j.file_name, 'kind', j.kind, 'bytes', octet_length(j.content),
+    'params', j.params, 'needs', to_jsonb(j.needs), 'requested_machine', j.machine,
+    'machine', (SELECT m.name FROM shop.machines m WHERE m.id = j.machine_id), 'status', j.status,
+    'last_line', j.last_line, 'message', j.message, 'submitted_by', j.submitted_by, 'created_at', j.created_at,
+    'claimed_at', j.claimed_at, 'started_at', j.started_at, 'ended_at', j.ended_at, 'lease_until', j.lease_until)
+$f$;
+
+-- Newest first. p_statuses NULL: any; p_machine: the machine it went to or
+-- the one it asks for; p_before: ids below it (the next page).
+CREATE FUNCTION shop.view_jobs(p_statuses text[], p_machine text, p_limit integer, p_before bigint) RETURNS jsonb
+LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+  WITH f AS (
+    SELECT j.id, j.status FROM shop.jobs j
+    WHERE (p_statuses IS NULL OR j.status = ANY (p_statuses))
+      AND (p_machine IS NULL OR j.machine = p_machine
+           OR j.machine_id = (SELECT m.id FROM shop.machines m WHERE m.name = p_machine))
+  ), page AS (
+    SELECT f.id FROM f WHERE p_before IS NULL OR f.id < p_before
+    ORDER BY f.id DESC LIMIT greatest(1, least(coalesce(p_limit, 100), 500))
+  )
+  SELECT jsonb_build_object('now', now(),
+    'jobs', coalesce((SELECT jsonb_agg(shop.job_json(j) ORDER BY j.id DESC)
+                      FROM shop.jobs j JOIN page ON page.id = j.id), '[]'::jsonb),
+    'counts', coalesce((SELECT jsonb_object_agg(c.status, c.n) FROM
+                          (SELECT f.status, count(*) AS n FROM f GROUP BY f.status) c), '{}'::jsonb))
+$f$;
+
+-- NULL when there is no such job.
+CREATE FUNCTION shop.view_job_events(p_job bigint, p_limit integer) RETURNS jsonb
+LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+  SELECT jsonb_build_object('job', shop.job_json(j),
+    'events', coalesce((SELECT jsonb_agg(jsonb_build_object('machine', m.name, 'seq', e.seq, 'at', e.at,
+                                          'kind', e.kind, 'body', e.body, 'received_at', e.received_at) ORDER BY e.id)
+                        FROM (SELECT * FROM shop.job_events WHERE job_id = j.id ORDER BY id
+                              LIMIT greatest(1, least(coalesce(p_limit, 1000), 5000))) e
+                        JOIN shop.machines m ON m.id = e.machine_id), '[]'::jsonb))
+  FROM shop.jobs j WHERE j.id = p_job
+$f$;
+
+REVOKE ALL ON FUNCTION shop.view_machines(), shop.job_json(shop.jobs),
+  shop.view_jobs(text[], text, integer, bigint), shop.view_job_events(bigint, integer) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION shop.view_machines(), shop.view_jobs(text[], text, integer, bigint),
+  shop.view_job_events(bigint, integer) TO cncstream_pc, cncstream_operator, cncstream_reader;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
   static const std::vector<Migration> all = {
       {1, "tables, roles, claim_job, report_events, heartbeat, submit/cancel/requeue", kMigration1},
+      {2, "the shop view's reads: view_machines, view_jobs, view_job_events", kMigration2},
   };
   return all;
 }

@@ -61,7 +61,9 @@ TEST(ShopSchema, InitCreatesThenMigratesNothingTheSecondTime) {
   }
 }
 
-TEST(ShopSecurity, APcRoleWorksOnlyThroughItsThreeFunctions) {
+// A PC's login calls its three functions and the shop view's read-only ones;
+// nothing else.
+TEST(ShopSecurity, APcRoleWorksOnlyThroughItsFunctions) {
   SHOP_REQUIRE_POSTGRES();
   shoptest::TempPostgres pg;
   const std::string admin_url = pg.create_database("sec");
@@ -80,6 +82,12 @@ TEST(ShopSecurity, APcRoleWorksOnlyThroughItsThreeFunctions) {
   EXPECT_EQ(claimed->id, id);
   EXPECT_EQ(claimed->content, "G21\nG90\nG0 X1\n");
   EXPECT_EQ(pc_hub.report_events("router1", {{1, "2026-01-01T00:00:00Z", "job", id, R"({"state":"ready"})"}}), 1);
+  // The shop view's reads, which never return a job's file.
+  const auto view = pc.exec("SELECT shop.view_jobs(NULL, NULL, 10, NULL)").text(0, 0);
+  EXPECT_NE(view.find("\"a.nc\""), std::string::npos) << view;
+  EXPECT_EQ(view.find("content"), std::string::npos) << view;
+  EXPECT_NE(pc.exec("SELECT shop.view_machines()").text(0, 0).find("router1"), std::string::npos);
+  EXPECT_NE(pc.exec("SELECT shop.view_job_events($1, 10)", {std::to_string(id)}).text(0, 0).find("\"ready\""), std::string::npos);
   // Nothing else: no table read or written, no other function.
   const std::vector<std::string> refused = {
       "SELECT * FROM shop.jobs",
@@ -92,6 +100,7 @@ TEST(ShopSecurity, APcRoleWorksOnlyThroughItsThreeFunctions) {
       "SELECT shop.requeue_job(1, false)",
       "SELECT shop.expire_leases()",
       "SELECT shop.apply_event(1, 1, 'job', '{\"state\":\"done\"}')",
+      "SELECT shop.job_json(NULL::shop.jobs)",
       "CREATE TABLE shop.mine (x int)",
   };
   for (const auto& sql : refused) {

@@ -27,10 +27,14 @@ namespace cncstream::daemon {
 // The embedded OpenAPI document (src/daemon/openapi.json).
 const std::string& openapi_json();
 
+class ShopLink;
+
 class Api {
  public:
+  // `shop`: nullptr when the daemon has not joined a shop.
   Api(boost::asio::io_context& io, boost::asio::thread_pool& pool, const DaemonConfig& config, Auth& auth,
-      FileStore& files, Machines& machines, JobManager& jobs, WsHub& hub, std::filesystem::path web_root);
+      FileStore& files, Machines& machines, JobManager& jobs, WsHub& hub, std::filesystem::path web_root,
+      ShopLink* shop = nullptr);
 
   // Before the body is read: route exists, token, Origin/Host, client id,
   // and for an upload its declared size. nullopt: go on.
@@ -53,6 +57,7 @@ class Api {
   void file_routes();
   void job_routes();
   void tool_routes();
+  void shop_routes();
   void static_routes();
   Machine& machine(const Request& r, std::size_t param = 0);
   std::int64_t job_id(const Request& r) const;
@@ -66,6 +71,7 @@ class Api {
   JobManager& jobs_;
   WsHub& hub_;
   std::filesystem::path web_root_;
+  ShopLink* shop_;
   Router router_;
 };
 

@@ -1,6 +1,7 @@
 #pragma once
-// The fields of the machine routes' JSON bodies and of the WebSocket jog,
-// each checked with an ApiError 400 naming the field (docs/api-v1.md). Pure:
+// The fields of the machine routes' JSON bodies, of the WebSocket jog and the
+// routes' whole-number query parameters, each checked with an ApiError 400
+// naming the field (docs/api-v1.md). Pure:
 // the handlers call them before touching a machine, and the fuzz targets
 // call them on whatever a client may send.
 #include <nlohmann/json.hpp>
@@ -8,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "cncstream/daemon/http_types.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/protocol/jog.hpp"
 
@@ -30,5 +32,8 @@ bool force_field(const nlohmann::json& b);
 bool on_field(const nlohmann::json& b);
 // A job's id in a path: 1 to 18 digits; ApiError 404 otherwise.
 std::int64_t job_id_param(const std::string& s);
+// An optional whole-number query parameter within [lo, hi] (`fallback` when
+// absent); ApiError 400 naming it otherwise.
+long long bounded_query(const Request& r, const std::string& name, long long fallback, long long lo, long long hi);
 
 }  // namespace cncstream::daemon

@@ -11,6 +11,7 @@
 #include "cncstream/daemon/config.hpp"
 #include "cncstream/shop/shdr_adapter.hpp"
 #include "cncstream/shop/shop_client.hpp"
+#include "cncstream/shop/shop_view.hpp"
 
 namespace cncstream::daemon {
 
@@ -26,6 +27,8 @@ class ShopLink final : public shop::LocalJobs {
   bool free_for_shop_job(const std::string& machine) override;
   std::int64_t add_shop_job(const std::string& machine, const shop::ClaimedJob& job) override;
   shop::ShopClient& client() { return *client_; }
+  // The shop view's reads of the hub (a connection and a thread of their own).
+  shop::ShopViewReader& view() { return *view_; }
   // The machine's MTConnect adapter's port (0: none).
   unsigned short mtconnect_port(const std::string& machine) const;
 
@@ -35,6 +38,7 @@ class ShopLink final : public shop::LocalJobs {
   JobManager& jobs_;
   std::vector<std::unique_ptr<shop::ShdrAdapter>> adapters_;
   std::unique_ptr<shop::ShopClient> client_;
+  std::unique_ptr<shop::ShopViewReader> view_;
 };
 
 }  // namespace cncstream::daemon
