@@ -561,6 +561,7 @@ def token_flow(args, out, d):
             pass
         raise
     finally:
+        d.get("about:blank")  # leave before the daemon goes, or the page's reconnects are logged as errors
         daemon.stop()
 
 
@@ -579,7 +580,8 @@ def tool_change_flow(args, out, d):
     continue resumes the job (against the real daemon's simulated machine)."""
     daemon = Daemon(args, out, "daemon-toolchange", machines=TOOL_CHANGE_MACHINE)
     p = Page(d, out)
-    p.console_errors()
+    d.get("about:blank")  # no page of an earlier flow still reconnecting to its stopped daemon
+    p.console_errors()  # reading the log empties it: what follows belongs to this flow
     try:
         d.get(daemon.url)
         p.wait("the page to connect to the tool-change machine", p.connected, 30)
