@@ -1,6 +1,9 @@
-// cncstream web page: one ES module, no framework, no build step. It speaks the
+// cncstream web page: ES modules (this one and shop.js), no framework, no build step. It speaks the
 // daemon's API v1 (docs/api-v1.md): REST for commands and files, one WebSocket
 // for status, job progress, events and the continuous-jog dead man.
+
+// The shop view: its own module (pollShop/pollShopSoon also for a push that says the shop changed).
+import { setupShop, pollShop, pollShopSoon } from './shop.js';
 
 const API = '/api/v1';
 const JOG_RENEW_MS = 150;  // the daemon's lease is 0.3 s; renew well inside it (the API asks <= 250 ms)
@@ -1165,134 +1168,6 @@ function setupJog() {
   }));
 }
 
-// ---------------------------------------------------------------- shop
-// The shop view (docs/shop.md): the hub's machines, queue and history, read
-// through this daemon (GET /shop/…). The hub sends no notification of state
-// changes, so the page polls, about once a second while the tab is visible.
-const SHOP = { member: false, pollMs: 1000, timer: null, eventsJob: null, machinesSig: null, jobsSig: null, eventsSig: null };
-const when = (t) => (t ? new Date(t).toLocaleString([], { month: 'short', day: 'numeric', hour: '2-digit', minute: '2-digit', second: '2-digit' }) : '—');
-// MTConnect's execution as the page's state colours.
-const EXECUTION_CLASS = { READY: 'idle', ACTIVE: 'run', FEED_HOLD: 'hold', INTERRUPTED: 'door', STOPPED: 'alarm', PROGRAM_COMPLETED: 'idle' };
-
-async function setupShop() {
-  const r = await api('GET', '/shop');
-  SHOP.member = !!(r && r.member);
-  $('#panel-shop').hidden = !SHOP.member;
-  $('#shop-nav').hidden = !SHOP.member;
-  if (!SHOP.member) return;
-  SHOP.pollMs = r.poll_ms || 1000;
-  $('#shop-name').textContent = `“${r.name}” · this PC: ${r.pc}`;
-  $('#shop-status-filter').addEventListener('change', () => pollShopSoon(0));
-  $('#shop-machine-filter').addEventListener('change', () => pollShopSoon(0));
-  $('#shop-events-close').addEventListener('click', () => { SHOP.eventsJob = null; SHOP.eventsSig = null; $('#shop-events').hidden = true; });
-  document.addEventListener('visibilitychange', () => { if (!document.hidden) pollShopSoon(0); });
-  pollShopSoon(0);
-}
-
-function pollShopSoon(ms) {
-  clearTimeout(SHOP.timer);
-  SHOP.timer = setTimeout(pollShop, ms);
-}
-
-async function pollShop() {
-  if (document.hidden) return;  // visibilitychange starts it again
-  try {
-    const q = new URLSearchParams({ limit: '100' });
-    if ($('#shop-status-filter').value) q.set('status', $('#shop-status-filter').value);
-    if ($('#shop-machine-filter').value) q.set('machine', $('#shop-machine-filter').value);
-    const [m, j] = await Promise.all([api('GET', '/shop/machines'), api('GET', '/shop/jobs?' + q)]);
-    renderShopMachines(m.machines);
-    renderShopJobs(j);
-    if (SHOP.eventsJob) renderShopEvents(await api('GET', `/shop/jobs/${SHOP.eventsJob}/events`));
-    $('#shop-status').textContent = `Read from the hub at ${new Date().toLocaleTimeString()}`;
-    $('#shop-status').className = 'shop-status muted';
-    $('#panel-shop').classList.remove('shop-stale');
-  } catch (e) {
-    // The hub being down is the view's news, not an error of the page's.
-    $('#shop-status').textContent = e.code === 'hub_unavailable' ? `The hub cannot be read: ${e.message}` : `The shop view failed: ${e.message}`;
-    $('#shop-status').className = 'shop-status shop-down';
-    $('#panel-shop').classList.add('shop-stale');  // what is shown is the last that could be read
-  }
-  pollShopSoon(SHOP.pollMs);
-}
-
-function renderShopMachines(list) {
-  const sig = JSON.stringify(list.map((m) => [m.name, m.pc, m.state, m.job, Math.round(m.heartbeat_age_s)]));
-  if (sig === SHOP.machinesSig) return;
-  SHOP.machinesSig = sig;
-  $('#shop-machines tbody').replaceChildren(...(list.length ? list.map((m) => {
-    const st = m.state || {};
-    const avail = st.availability === 'AVAILABLE';
-    const label = avail ? (st.alarm ? `${st.execution}: ${st.alarm}` : `${st.execution || '—'} · ${(st.controller_mode || '').toLowerCase()}`) : 'UNAVAILABLE';
-    const age = m.heartbeat_age_s;
-    return el('tr', { dataset: { machine: m.name } },
-      el('td', { class: 'c-job' }, m.name),
-      el('td', {}, m.pc),
-      el('td', {}, el('span', { class: 'state shop-state state-' + (avail ? (EXECUTION_CLASS[st.execution] || 'unknown') : 'offline') }, label)),
-      el('td', { class: 'mono' }, st.program || '—'),
-      el('td', { class: 'mono' }, st.line ? st.line.toLocaleString() : '—'),
-      el('td', {}, m.job ? `#${m.job.id} ${m.job.file_name} (${m.job.status.replace('_', ' ')})` : '—'),
-      el('td', { class: age > 15 ? 'oc-error' : 'muted' }, age == null ? 'never' : `${duration(age)} ago`));
-  }) : [el('tr', {}, el('td', { colspan: 7, class: 'muted' }, 'No machine has joined the shop yet.'))]));
-  // The machine filter offers every machine of the shop.
-  const sel = $('#shop-machine-filter');
-  const names = list.map((m) => m.name);
-  const have = [...sel.options].slice(1).map((o) => o.value);
-  if (JSON.stringify(names) !== JSON.stringify(have)) {
-    const cur = sel.value;
-    sel.replaceChildren(el('option', { value: '' }, 'Any'), ...names.map((n) => el('option', { value: n, selected: n === cur }, n)));
-  }
-}
-
-function renderShopJobs(r) {
-  const sig = JSON.stringify([r.jobs.map((j) => [j.id, j.status, j.machine, j.last_line, j.message, j.ended_at]), r.counts]);
-  if (sig === SHOP.jobsSig) return;
-  SHOP.jobsSig = sig;
-  $('#shop-counts').textContent = Object.entries(r.counts || {}).map(([k, n]) => `${n} ${k.replace('_', ' ')}`).join(' · ');
-  $('#shop-jobs tbody').replaceChildren(...(r.jobs.length ? r.jobs.map((j) => el('tr', {
-    class: 'shop-job', tabindex: 0, dataset: { job: j.id, status: j.status }, 'aria-selected': String(SHOP.eventsJob === j.id),
-    title: 'Show this job\'s events', onclick: () => showShopEvents(j.id),
-    onkeydown: (e) => { if (e.key === 'Enter' || e.key === ' ') { e.preventDefault(); showShopEvents(j.id); } },
-  },
-  el('td', { class: 'mono' }, `#${j.id}`),
-  el('td', { class: 'c-job' }, j.file_name),
-  el('td', { class: 'oc-' + (j.status === 'failed' || j.status === 'interrupted' ? 'error' : j.status) }, j.status.replace('_', ' ')),
-  el('td', {}, j.machine || (j.requested_machine ? `(${j.requested_machine})` : j.needs.length ? `needs ${j.needs.join(', ')}` : 'any')),
-  el('td', { class: 'mono' }, j.last_line ? j.last_line.toLocaleString() : '—'),
-  el('td', { class: 'c-when' }, when(j.created_at)),
-  el('td', { class: 'c-when' }, when(j.ended_at)),
-  el('td', { class: 'muted' }, j.message || ''))) : [el('tr', {}, el('td', { colspan: 8, class: 'muted' }, 'No shop job matches.'))]));
-}
-
-async function showShopEvents(id) {
-  SHOP.eventsJob = id;
-  SHOP.eventsSig = null;
-  document.querySelectorAll('#shop-jobs tr.shop-job').forEach((tr) => tr.setAttribute('aria-selected', String(Number(tr.dataset.job) === id)));
-  await run('Loading the job\'s events', async () => {
-    renderShopEvents(await api('GET', `/shop/jobs/${id}/events`));
-    $('#shop-events').hidden = false;
-    $('#shop-events').scrollIntoView({ block: 'nearest' });
-  });
-}
-
-function eventText(e) {
-  const b = e.body || {};
-  if (e.kind === 'job') return [b.state, b.last_line ? `line ${b.last_line}` : '', b.message].filter(Boolean).join(' · ');
-  if (e.kind === 'progress') return `line ${b.line}`;
-  if (e.kind === 'state') return [b.availability, b.execution, b.alarm].filter(Boolean).join(' · ');
-  return JSON.stringify(b);
-}
-
-function renderShopEvents(r) {
-  const sig = JSON.stringify([r.job.id, r.job.status, r.events.length]);
-  if (sig === SHOP.eventsSig) return;
-  SHOP.eventsSig = sig;
-  $('#shop-events-job').textContent = `#${r.job.id} ${r.job.file_name} (${r.job.status.replace('_', ' ')})`;
-  $('#shop-events-table tbody').replaceChildren(...(r.events.length ? r.events.map((e) => el('tr', {},
-    el('td', {}, e.machine), el('td', { class: 'mono' }, String(e.seq)), el('td', { class: 'c-when' }, when(e.at)),
-    el('td', {}, e.kind), el('td', {}, eventText(e)))) : [el('tr', {}, el('td', { colspan: 5, class: 'muted' }, 'No event reported yet.'))]));
-}
-
 // ---------------------------------------------------------------- buttons
 function setupButtons() {
   const m = () => S.current;
@@ -1332,5 +1207,7 @@ renderMachine();
 renderHistory();
 connectWs();
 run('Loading the shop', setupShop);
+// The shop view (shop.js) uses the page's helpers.
+export { $, el, api, run, duration };
 // For the browser tests and for debugging from the console.
 window.cncstream = { state: S, showPreview };  // the browser test drives and reads these
