@@ -363,12 +363,30 @@ GRANT EXECUTE ON FUNCTION shop.view_machines(), shop.view_jobs(text[], text, int
   shop.view_job_events(bigint, integer) TO cncstream_pc, cncstream_operator, cncstream_reader;
 )SQL";
 
+// 4: a daemon's web page submits, cancels and requeues (issue 29: "the same
+// from any daemon's web page"). A daemon logs in with its PC's login
+// (cncstream_pc, which may only claim, report and heartbeat), so the three
+// operator functions get a role of their own that holds nothing else: a shop
+// grants it to the PCs whose pages may act (docs/shop.md, "Roles"). The
+// functions record the PC's login as who submitted or cancelled.
+constexpr const char* kMigration4 = R"SQL(
+DO $$ BEGIN
+  IF NOT EXISTS (SELECT 1 FROM pg_roles WHERE rolname = 'cncstream_web_operator') THEN
+    CREATE ROLE cncstream_web_operator NOLOGIN;
+  END IF;
+END $$;
+GRANT USAGE ON SCHEMA shop TO cncstream_web_operator;
+GRANT EXECUTE ON FUNCTION shop.submit_job(text, text, bytea, jsonb, text[], text), shop.cancel_job(bigint),
+  shop.requeue_job(bigint, boolean) TO cncstream_web_operator;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
   static const std::vector<Migration> all = {
       {1, "tables, roles, claim_job, report_events, heartbeat, submit/cancel/requeue", kMigration1},
       {2, "the shop view's reads: view_machines, view_jobs, view_job_events", kMigration2},
+      {4, "cncstream_web_operator: a daemon's web page submits, cancels and requeues", kMigration4},
   };
   return all;
 }

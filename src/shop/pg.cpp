@@ -67,6 +67,7 @@ bool PgConnection::ok() const { return c_ && PQstatus(c_) == CONNECTION_OK; }
 
 PgResult PgConnection::exec(const std::string& sql, const PgParams& params) {
   sqlstate_.clear();
+  error_.clear();
   if (!c_) throw ShopError("shop hub " + redact_url(url_) + ": not connected");
   pg_result* r = nullptr;
   if (params.empty()) {
@@ -82,8 +83,10 @@ PgResult PgConnection::exec(const std::string& sql, const PgParams& params) {
   if (st != PGRES_COMMAND_OK && st != PGRES_TUPLES_OK) {
     std::string msg = r ? PQresultErrorMessage(r) : PQerrorMessage(c_);
     while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
-    if (r)
+    if (r) {
       if (const char* s = PQresultErrorField(r, PG_DIAG_SQLSTATE)) sqlstate_ = s;
+      if (const char* s = PQresultErrorField(r, PG_DIAG_MESSAGE_PRIMARY)) error_ = s;
+    }
     // A connection the server dropped is reset at the next use.
     if (PQstatus(c_) != CONNECTION_OK) {
       PQfinish(c_);

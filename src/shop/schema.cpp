@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <set>
+
 #include "cncstream/shop/pg.hpp"
 
 namespace cncstream::shop {
@@ -31,8 +34,17 @@ MigrationResult migrate(PgConnection& db) {
       throw ShopError(fmt::format("shop hub {}: its schema is version {}, newer than this program's {}: upgrade cncstream",
                                   redact_url(db.url()), res.from, schema_version_known()));
     res.to = res.from;
+    // Each migration the hub lacks, in ascending order: one added between two
+    // that ran (branches merged) still runs.
+    std::set<int> applied;
+    const auto have = db.exec("SELECT version FROM public.cncstream_shop_schema");
+    for (int i = 0; i < have.rows(); ++i) applied.insert(static_cast<int>(have.i64(i, 0)));
+    int previous = 0;
     for (const auto& m : migrations()) {
-      if (m.version <= res.from) continue;
+      if (m.version <= previous)
+        throw ShopError(fmt::format("the shop's migrations are out of order: {} after {}", m.version, previous));
+      previous = m.version;
+      if (applied.count(m.version)) continue;
       db.exec("BEGIN");
       try {
         db.exec(m.sql);
@@ -43,7 +55,7 @@ MigrationResult migrate(PgConnection& db) {
         if (db.ok()) db.exec("ROLLBACK");
         throw ShopError(fmt::format("migration {} ({}): {}", m.version, m.note, e.what()));
       }
-      res.to = m.version;
+      res.to = std::max(res.to, m.version);
     }
   } catch (...) {
     if (db.ok()) db.exec(kMigrationUnlock);

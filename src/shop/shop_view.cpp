@@ -58,7 +58,7 @@ ShopViewReader::~ShopViewReader() {
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
-  for (auto& [read, done] : queue_) done({ViewAnswer::Kind::hub_unavailable, {}, "the daemon is stopping"});
+  for (auto& [read, done] : queue_) done({ViewAnswer::Kind::hub_unavailable, {}, "the daemon is stopping", {}});
 }
 
 void ShopViewReader::submit(Read read, Done done) {
@@ -71,7 +71,7 @@ void ShopViewReader::submit(Read read, Done done) {
     }
   }
   done({ViewAnswer::Kind::hub_unavailable, {},
-        "shop hub " + redact_url(url_) + ": " + std::to_string(max_pending_) + " reads already wait for it; try again"});
+        "shop hub " + redact_url(url_) + ": " + std::to_string(max_pending_) + " reads already wait for it; try again", {}});
 }
 
 void ShopViewReader::worker() {
@@ -93,7 +93,7 @@ ViewAnswer ShopViewReader::answer(const Read& read) {
   for (int attempt = 0; attempt < 2; ++attempt) {
     if (!db_ || !db_->ok()) {
       db_.reset();
-      if (detail_shop_view::steady_s() < down_until_) return {Kind::hub_unavailable, {}, down_reason_};
+      if (detail_shop_view::steady_s() < down_until_) return {Kind::hub_unavailable, {}, down_reason_, {}};
       try {
         db_ = std::make_unique<PgConnection>(url_);
         // A hub that hangs must not hold the view's thread for long.
@@ -102,26 +102,30 @@ ViewAnswer ShopViewReader::answer(const Read& read) {
         db_.reset();
         down_until_ = detail_shop_view::steady_s() + retry_s_;
         down_reason_ = e.what();
-        return {Kind::hub_unavailable, {}, down_reason_};
+        return {Kind::hub_unavailable, {}, down_reason_, {}};
       }
     }
     try {
       auto body = read(*db_);
-      if (!body) return {Kind::not_found, {}, {}};
-      return {Kind::ok, std::move(*body), {}};
+      if (!body) return {Kind::not_found, {}, {}, {}};
+      return {Kind::ok, std::move(*body), {}, {}};
     } catch (const ShopError& e) {
       if (db_->last_sqlstate() == "42883")  // undefined_function: a hub migrated by an older program
         return {Kind::hub_unavailable, {},
                 "shop hub " + redact_url(url_) +
-                    ": its schema has no shop view (shop.view_*): run `cncstream shop init URL` as its administrator"};
+                    ": its schema has no shop view (shop.view_*): run `cncstream shop init URL` as its administrator", {}};
+      // The hub said no (the connection is fine): its words, for the caller to map.
+      const std::string& st = db_->last_sqlstate();
+      if (db_->ok() && (st == "P0001" || st == "42501" || st.rfind("22", 0) == 0 || st.rfind("23", 0) == 0))
+        return {Kind::refused, {}, db_->last_error(), st};
       // A connection the server dropped (a restart): once more on a fresh one.
       if (!db_->ok() && attempt == 0) continue;
-      return {Kind::hub_unavailable, {}, e.what()};
+      return {Kind::hub_unavailable, {}, e.what(), {}};
     } catch (const std::exception& e) {  // never lets the reader's thread end
-      return {Kind::hub_unavailable, {}, "shop hub " + redact_url(url_) + ": " + e.what()};
+      return {Kind::hub_unavailable, {}, "shop hub " + redact_url(url_) + ": " + e.what(), {}};
     }
   }
-  return {Kind::hub_unavailable, {}, "shop hub " + redact_url(url_) + ": the connection was lost"};
+  return {Kind::hub_unavailable, {}, "shop hub " + redact_url(url_) + ": the connection was lost", {}};
 }
 
 }  // namespace cncstream::shop

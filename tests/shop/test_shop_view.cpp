@@ -176,6 +176,11 @@ TEST(ShopView, ADaemonOutsideAShopSaysSo) {
     EXPECT_EQ(r.status, 409) << path;
     EXPECT_NE(r.body.find("not_in_shop"), std::string::npos) << path << ": " << r.body;
   }
+  for (const char* path : {"/api/v1/shop/jobs", "/api/v1/shop/jobs/1/cancel", "/api/v1/shop/jobs/1/requeue"}) {
+    const auto r = d.http.post(path, {{"file", std::string(64, 'a')}, {"on", "any_machine"}});
+    EXPECT_EQ(r.status, 409) << path;
+    EXPECT_NE(r.body.find("not_in_shop"), std::string::npos) << path << ": " << r.body;
+  }
   d.shutdown();
   std::error_code ec;
   fs::remove_all(dir, ec);

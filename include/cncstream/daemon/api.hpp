@@ -58,6 +58,7 @@ class Api {
   void job_routes();
   void tool_routes();
   void shop_routes();
+  void shop_act_routes();
   void static_routes();
   Machine& machine(const Request& r, std::size_t param = 0);
   std::int64_t job_id(const Request& r) const;

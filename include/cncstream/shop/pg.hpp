@@ -56,11 +56,15 @@ class PgConnection {
   const std::string& url() const { return url_; }
   // The SQLSTATE of the last failed exec ("" : none).
   const std::string& last_sqlstate() const { return sqlstate_; }
+  // The server's own words for the last failed exec, without the hub or the
+  // SQLSTATE (e.g. a function's RAISE EXCEPTION text; "" : none).
+  const std::string& last_error() const { return error_; }
 
  private:
   pg_conn* c_ = nullptr;
   std::string url_;
   std::string sqlstate_;
+  std::string error_;
 };
 
 // bytea: PostgreSQL's hex form ("\x...") to bytes and back.

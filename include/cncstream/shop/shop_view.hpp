@@ -39,12 +39,18 @@ nlohmann::json view_jobs(PgConnection& db, const JobFilter& f);
 std::optional<nlohmann::json> view_job_events(PgConnection& db, std::int64_t job, int limit);
 
 struct ViewAnswer {
-  enum class Kind { ok, not_found, hub_unavailable };
+  // refused: the hub answered and said no (a function's RAISE EXCEPTION, a
+  // right the login lacks, a value it rejects); `sqlstate` says which.
+  enum class Kind { ok, not_found, hub_unavailable, refused };
   Kind kind = Kind::ok;
   nlohmann::json body;  // ok
-  std::string message;  // otherwise
+  std::string message;  // otherwise (refused: the server's own words)
+  std::string sqlstate;  // refused
 };
 
+// Also carries the web page's operator acts (submit, cancel, requeue: the
+// hub's functions, each one statement), which must not wait on the event
+// loop either.
 class ShopViewReader {
  public:
   // A read: returns the answer's body, nullopt for "not found"; throws ShopError.
