@@ -92,7 +92,9 @@ async function api(method, path, body, { raw = false, blob = false, retry = true
   const headers = { 'X-Client-Id': S.clientId };
   if (S.token) headers.Authorization = 'Bearer ' + S.token;
   let payload;
-  if (body !== undefined) { headers['Content-Type'] = 'application/json'; payload = JSON.stringify(body); }
+  // A Blob (a File) goes as it is: an upload (POST /files).
+  if (body instanceof Blob) { headers['Content-Type'] = 'application/octet-stream'; payload = body; }
+  else if (body !== undefined) { headers['Content-Type'] = 'application/json'; payload = JSON.stringify(body); }
   const r = await fetch(API + path, { method, headers, body: payload, cache: 'no-store' });
   if (r.status === 401 && retry) {
     if (await askToken()) return api(method, path, body, { raw, blob, retry: false });

@@ -3,6 +3,8 @@
 // (an ES module cycle: nothing here runs before app.js has been evaluated).
 import { $, el, api, run, duration } from './app.js';
 
+const enc = encodeURIComponent;
+
 // ---------------------------------------------------------------- shop
 // The shop view (docs/shop.md): the hub's machines, queue and history, read
 // through this daemon (GET /shop/…). The hub sends no notification of state
@@ -22,6 +24,9 @@ export async function setupShop() {
   $('#shop-name').textContent = `“${r.name}” · this PC: ${r.pc}`;
   $('#shop-status-filter').addEventListener('change', () => pollShopSoon(0));
   $('#shop-machine-filter').addEventListener('change', () => pollShopSoon(0));
+  $('#shop-submit').addEventListener('submit', (e) => { e.preventDefault(); run('Submit to the shop', submitToShop); });
+  $('#shop-file').addEventListener('change', showToolField);
+  showToolField();
   $('#shop-events-close').addEventListener('click', () => { SHOP.eventsJob = null; SHOP.eventsSig = null; $('#shop-events').hidden = true; });
   document.addEventListener('visibilitychange', () => { if (!document.hidden) pollShopSoon(0); });
   pollShopSoon(0);
@@ -72,14 +77,67 @@ function renderShopMachines(list) {
       el('td', {}, m.job ? `#${m.job.id} ${m.job.file_name} (${m.job.status.replace('_', ' ')})` : '—'),
       el('td', { class: age > 15 ? 'oc-error' : 'muted' }, age == null ? 'never' : `${duration(age)} ago`));
   }) : [el('tr', {}, el('td', { colspan: 7, class: 'muted' }, 'No machine has joined the shop yet.'))]));
-  // The machine filter offers every machine of the shop.
-  const sel = $('#shop-machine-filter');
+  // The machine filter and the submit form offer every machine of the shop.
   const names = list.map((m) => m.name);
-  const have = [...sel.options].slice(1).map((o) => o.value);
-  if (JSON.stringify(names) !== JSON.stringify(have)) {
+  for (const [sel, any] of [[$('#shop-machine-filter'), 'Any'], [$('#shop-submit-machine'), 'Any that can']]) {
+    const have = [...sel.options].slice(1).map((o) => o.value);
+    if (JSON.stringify(names) === JSON.stringify(have)) continue;
     const cur = sel.value;
-    sel.replaceChildren(el('option', { value: '' }, 'Any'), ...names.map((n) => el('option', { value: n, selected: n === cur }, n)));
+    sel.replaceChildren(el('option', { value: '' }, any), ...names.map((n) => el('option', { value: n, selected: n === cur }, n)));
   }
+}
+
+// ---------------------------------------------------------------- submit, cancel, requeue
+// The operator's acts, through this daemon (POST /shop/jobs…), which calls
+// the hub's functions; the hub refuses what its rules forbid (docs/shop.md).
+const isStl = (f) => !!f && /\.stl$/i.test(f.name);
+function showToolField() { $('#shop-tool-label').hidden = !isStl($('#shop-file').files[0]); }
+
+async function submitToShop() {
+  const file = $('#shop-file').files[0];
+  if (!file) throw new Error('Choose a part (STL) or a program (G-code) to submit.');
+  const body = {};
+  const needs = $('#shop-needs').value.split(/[\s,]+/).filter(Boolean);
+  if (needs.length) body.needs = needs;
+  if ($('#shop-submit-machine').value) body.machine = $('#shop-submit-machine').value;
+  const status = $('#shop-submit-status');
+  status.textContent = `Uploading ${file.name}…`;
+  try {
+    const stored = await api('POST', `/files?name=${enc(file.name)}`, file);
+    body.file = stored.id;
+    if (stored.kind === 'stl') {
+      const tool = $('#shop-tool').value.trim();
+      if (!tool) throw new Error('An STL needs its cutter (e.g. ball:3.175): the machine that claims it makes the tool path.');
+      body.params = { tool };
+    }
+    status.textContent = `Submitting ${file.name}…`;
+    const job = await api('POST', '/shop/jobs', body);
+    status.textContent = `${job.file_name} is job #${job.id} of the shop, pending.`;
+    $('#shop-submit').reset();
+    showToolField();
+  } catch (e) {
+    status.textContent = '';
+    throw e;
+  }
+  pollShopSoon(0);
+}
+
+// The buttons a job's row offers for its status.
+function jobActions(j) {
+  const act = (label, what, fn, title) => el('button', {
+    class: 'btn small', type: 'button', title, dataset: { act: what },
+    onclick: (e) => { e.stopPropagation(); run(label, async () => { await fn(); SHOP.jobsSig = null; pollShopSoon(0); }); },
+  }, label);
+  if (['pending', 'assigned', 'awaiting_operator'].includes(j.status))
+    return [act('Cancel', 'cancel', () => api('POST', `/shop/jobs/${j.id}/cancel`, {}), 'Take it out of the queue (only a job that has not started)')];
+  if (['interrupted', 'failed', 'cancelled'].includes(j.status)) {
+    const again = (on) => () => api('POST', `/shop/jobs/${j.id}/requeue`, { on });
+    return [
+      j.machine ? act(`Requeue on ${j.machine}`, 'requeue-same', again('same_machine'), `Back to ${j.machine}: it waits for its operator there, who may start it from a line (it stopped at line ${j.last_line || 0})`) : null,
+      act('Requeue anywhere', 'requeue-any', again('any_machine'), 'Back into the queue for any machine that can do it: a restart from the beginning'),
+    ];
+  }
+  return [];
 }
 
 function renderShopJobs(r) {
@@ -99,7 +157,8 @@ function renderShopJobs(r) {
   el('td', { class: 'mono' }, j.last_line ? j.last_line.toLocaleString() : '—'),
   el('td', { class: 'c-when' }, when(j.created_at)),
   el('td', { class: 'c-when' }, when(j.ended_at)),
-  el('td', { class: 'muted' }, j.message || ''))) : [el('tr', {}, el('td', { colspan: 8, class: 'muted' }, 'No shop job matches.'))]));
+  el('td', { class: 'muted' }, j.message || ''),
+  el('td', { class: 'c-act' }, jobActions(j)))) : [el('tr', {}, el('td', { colspan: 9, class: 'muted' }, 'No shop job matches.'))]));
 }
 
 async function showShopEvents(id) {
