@@ -59,6 +59,17 @@ def free_port():
         return s.getsockname()[1]
 
 
+def end_process(proc, sig=15):
+    """Asks a child to end (SIGTERM; PostgreSQL's fast shutdown is SIGINT), killed after 10 s."""
+    if proc.poll() is None:
+        proc.send_signal(sig)
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
 class Daemon:
     """The daemon under test on a free loopback port with a fresh data folder."""
 
@@ -118,13 +129,7 @@ class Daemon:
                 self.token = f.read().strip()
 
     def stop(self):
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+        end_process(self.proc)
         self.log.close()
         shutil.rmtree(self.data, ignore_errors=True)
 

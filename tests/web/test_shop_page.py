@@ -107,13 +107,7 @@ class TempHub:
         return r.stdout.strip()
 
     def stop(self):
-        if self.proc.poll() is None:
-            self.proc.send_signal(2)  # fast shutdown
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+        tp.end_process(self.proc, 2)  # SIGINT: fast shutdown
         self.log.close()
         shutil.rmtree(self.dir, ignore_errors=True)
 
@@ -145,7 +139,7 @@ def shop_flow(args, out, d, hub):
         assert "acme" in p.text("#shop-name"), p.text("#shop-name")
 
         # Submit a program from the page's form.
-        program = os.path.join(out, "shop-part.nc")
+        program = os.path.abspath(os.path.join(out, "shop-part.nc"))  # the browser wants an absolute path
         with open(program, "w") as f:
             f.write("G21\nG90\nG0 X1\nG1 X0 F600\n")
         p.q("#shop-file").send_keys(program)
