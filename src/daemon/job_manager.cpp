@@ -709,14 +709,27 @@ json JobManager::cancel(std::int64_t id, const std::string& client) {
   const auto& s = j.row.state;
   if (s != "queued" && s != "generating" && s != "ready")
     throw ApiError{409, "bad_state", "job " + std::to_string(id) + " is " + s + (s == "running" || s == "held" ? "; stop it instead" : "")};
-  if (s == "generating") {
+  cancel_waiting(j, "cancelled by " + (client.empty() ? std::string("a client") : client));
+  return to_json(j);
+}
+
+bool JobManager::cancel_for_shop(std::int64_t id) {
+  auto& j = get(id);
+  const auto& s = j.row.state;
+  if (s != "queued" && s != "generating" && s != "ready") return false;
+  cancel_waiting(j, "cancelled on the shop's hub");
+  return true;
+}
+
+// A job that has not started: its generation stopped if nobody else waits on it.
+void JobManager::cancel_waiting(DaemonJob& j, const std::string& message) {
+  if (j.row.state == "generating") {
     auto& waiting = generating_[j.cache_key];
-    std::erase(waiting, id);
+    std::erase(waiting, j.row.id);
     if (waiting.empty())
       if (auto st = generation_stop_.find(j.cache_key); st != generation_stop_.end()) st->second->request_stop();
   }
-  set_state(j, "cancelled", "cancelled by " + (client.empty() ? std::string("a client") : client));
-  return to_json(j);
+  set_state(j, "cancelled", message);
 }
 
 json JobManager::move(std::int64_t id, std::int64_t position) {

@@ -98,4 +98,12 @@ std::int64_t ShopLink::add_shop_job(const std::string& machine, const shop::Clai
   }
 }
 
+void ShopLink::shop_job_cancelled(std::int64_t local_id) {
+  try {
+    if (jobs_.cancel_for_shop(local_id)) spdlog::info("job {}: cancelled on the shop's hub; taken off the local queue", local_id);
+  } catch (const ApiError&) {
+    // No such local job any more (removed): nothing to drop.
+  }
+}
+
 }  // namespace cncstream::daemon

@@ -173,4 +173,12 @@ std::optional<std::int64_t> Outbox::shop_job_of(std::int64_t local_id) const {
   return q.col_num(0);
 }
 
+std::optional<std::int64_t> Outbox::local_job_of(std::int64_t shop_id) const {
+  std::lock_guard lock(mu_);
+  Query q(db_, path_, "SELECT local_id FROM shop_jobs WHERE shop_id = ?1 ORDER BY local_id DESC LIMIT 1");
+  q.num(1, shop_id);
+  if (!q.step()) return std::nullopt;
+  return q.col_num(0);
+}
+
 }  // namespace cncstream::shop

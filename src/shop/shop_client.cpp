@@ -284,8 +284,25 @@ void ShopClient::serve(Hub& hub) {
       std::lock_guard lock(mu_);
       for (const auto& [name, info] : infos_) beats.emplace_back(info, states_[name]);
     }
-    for (const auto& [info, st] : beats) hub.heartbeat(info, st, settings_.lease_s);
+    std::vector<std::int64_t> cancelled;
+    for (const auto& [info, st] : beats)
+      for (const auto& j : hub.heartbeat(info, st, settings_.lease_s))
+        if (j.status == "cancelled") cancelled.push_back(j.id);
     registered_ = true;
+    // Jobs cancelled on the hub (the shop view, an operator) after this PC
+    // claimed them leave the local queue; each once.
+    if (!cancelled.empty())
+      boost::asio::post(io_, [this, cancelled, alive = alive_] {
+        if (!*alive) return;
+        for (const auto id : cancelled) {
+          if (!cancelled_seen_.insert(id).second) continue;
+          try {
+            if (const auto local = outbox_.local_job_of(id)) local_.shop_job_cancelled(*local);
+          } catch (const std::exception& e) {
+            spdlog::warn("shop: shop job {} was cancelled on the hub: {}", id, e.what());
+          }
+        }
+      });
     next_heartbeat_ = steady_now() + settings_.heartbeat_s;
   }
   for (const auto& machine : outbox_.machines_with_unsent()) {

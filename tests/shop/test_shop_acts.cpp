@@ -140,3 +140,40 @@ TEST(ShopActs, ThePageSubmitsCancelsAndRequeuesThroughTheHubUnderAGrantedPcLogin
   std::error_code ec;
   fs::remove_all(dir, ec);
 }
+
+// A job cancelled on the hub after a machine claimed it leaves that machine's
+// local queue (the heartbeat brings the cancellation), so its operator cannot
+// start it; the machine is free for the next job.
+TEST(ShopActs, AJobCancelledOnTheHubLeavesTheLocalQueueOfTheMachineThatClaimedIt) {
+  SHOP_REQUIRE_POSTGRES();
+  shoptest::TempPostgres pg;
+  pg.create_database("acts2");
+  PgConnection admin(pg.url("acts2"));
+  shop::migrate(admin);
+  admin.exec("CREATE ROLE pc_web LOGIN IN ROLE cncstream_pc, cncstream_web_operator");
+  const fs::path dir = dtest::temp_dir("shop-acts2");
+  dtest::RunningDaemon d(shoptest::shop_daemon_config(dir / "pc", pg.url("acts2", "pc_web"), {dtest::sim_machine("w1")}));
+  const auto local_states = [&] {
+    const auto l = shoptest::on_loop(d.daemon(), [&] { return d.daemon().jobs().list(std::nullopt, std::nullopt); });
+    std::vector<std::string> out;
+    for (const auto& j : l["jobs"]) out.push_back(j["file_name"].get<std::string>() + ":" + j["state"].get<std::string>());
+    return out;
+  };
+  const std::string nc = detail_shop_acts::upload(d.http, "held.nc", shoptest::tiny_program(4));
+  const auto sub = d.http.post("/api/v1/shop/jobs", {{"file", nc}});
+  ASSERT_EQ(sub.status, 201) << sub.body;
+  const std::string id = std::to_string(sub.j()["id"].get<std::int64_t>());
+  ASSERT_TRUE(dtest::wait_for([&] {
+    return admin.exec("SELECT status FROM shop.jobs WHERE id = $1", {id}).text(0, 0) == "awaiting_operator";
+  }, 15)) << "w1 should claim the job";
+  ASSERT_EQ(local_states(), std::vector<std::string>{"held.nc:ready"});
+  const auto cancel = d.http.post("/api/v1/shop/jobs/" + id + "/cancel");
+  ASSERT_EQ(cancel.status, 200) << cancel.body;
+  EXPECT_TRUE(dtest::wait_for([&] { return local_states() == std::vector<std::string>{"held.nc:cancelled"}; }, 10))
+      << "the local job stayed: " << testing::PrintToString(local_states());
+  EXPECT_EQ(shoptest::start_ready_jobs(d.daemon()), 0);
+  EXPECT_EQ(admin.exec("SELECT status FROM shop.jobs WHERE id = $1", {id}).text(0, 0), "cancelled");
+  d.shutdown();
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}

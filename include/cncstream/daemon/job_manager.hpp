@@ -104,6 +104,9 @@ class JobManager {
   void resume(std::int64_t id, const std::string& client);
   void stop(std::int64_t id);
   nlohmann::json cancel(std::int64_t id, const std::string& client);
+  // The shop's hub cancelled the shop job this one holds: cancelled unless it
+  // has started (no control needed: it moves nothing); false when it had.
+  bool cancel_for_shop(std::int64_t id);
   nlohmann::json move(std::int64_t id, std::int64_t position);
   // Answers later (plans on the pool).
   void resume_plan(std::int64_t id, long from_line, const std::string& client, const Respond& respond);
@@ -137,6 +140,7 @@ class JobManager {
   void publish_queue(const std::string& machine);
   void set_state(DaemonJob& j, const std::string& state, const std::string& message = {});
   DaemonJob* running_on(const std::string& machine);
+  void cancel_waiting(DaemonJob& j, const std::string& message);
   std::vector<DaemonJob*> unfinished(const std::string& machine);
   Machine& machine_of(const DaemonJob& j);
   void cache_put(const std::string& key, std::shared_ptr<const Program> p);

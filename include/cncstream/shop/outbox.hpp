@@ -44,6 +44,8 @@ class Outbox {
   // Which local (daemon) job runs which shop job.
   void link_job(std::int64_t local_id, std::int64_t shop_id, const std::string& machine);
   std::optional<std::int64_t> shop_job_of(std::int64_t local_id) const;
+  // The newest local job that holds the shop job, if any.
+  std::optional<std::int64_t> local_job_of(std::int64_t shop_id) const;
 
  private:
   void exec(const char* sql) const;

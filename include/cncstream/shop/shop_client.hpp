@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <set>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -55,6 +56,9 @@ class LocalJobs {
   // Creates the local job (never started by itself); returns its id;
   // throws std::exception with the reason it cannot.
   virtual std::int64_t add_shop_job(const std::string& machine, const ClaimedJob& job) = 0;
+  // The hub cancelled the shop job this local job holds: drop it if it has
+  // not started (a started one is the operator's to stop).
+  virtual void shop_job_cancelled(std::int64_t local_id) = 0;
 };
 
 class ShopClient {
@@ -96,6 +100,7 @@ class ShopClient {
   ShopSettings settings_;
   LocalJobs& local_;
   Outbox outbox_;
+  std::set<std::int64_t> cancelled_seen_;  // shop jobs whose cancellation was handled (event loop)
   std::vector<std::unique_ptr<Reporter>> reporters_;
   std::map<std::string, std::unique_ptr<MqttMachine>> mqtt_;
   std::vector<StateListener> state_listeners_;
