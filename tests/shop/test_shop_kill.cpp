@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -67,6 +68,7 @@ TEST(ShopLease, ADaemonKilledMidJobLeavesItInterruptedAtItsLastLineAndNobodyElse
   a.pid = ::fork();
   ASSERT_GE(a.pid, 0);
   if (a.pid == 0) {
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlives a test that crashed
     try {
       dtest::RunningDaemon d(config("pc-a", "routerA"));
       while (shoptest::start_ready_jobs(d.daemon()) == 0) ::usleep(50'000);  // polling the local queue
