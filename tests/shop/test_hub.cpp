@@ -61,6 +61,33 @@ TEST(ShopSchema, InitCreatesThenMigratesNothingTheSecondTime) {
   }
 }
 
+// A hub that ran a later migration but not an earlier one (two branches'
+// migrations merged: 4 ran, 2 was added beside it) gets the one it lacks.
+TEST(ShopSchema, AMigrationTheHubLacksBelowItsNewestStillRuns) {
+  SHOP_REQUIRE_POSTGRES();
+  shoptest::TempPostgres pg;
+  PgConnection db(pg.create_database("gap"));
+  const auto& all = migrations();
+  const auto find = [&](int v) {
+    for (const auto& m : all)
+      if (m.version == v) return m.sql;
+    throw std::runtime_error("no migration " + std::to_string(v));
+  };
+  db.exec("CREATE TABLE public.cncstream_shop_schema (version integer PRIMARY KEY, note text NOT NULL,"
+          " applied_at timestamptz NOT NULL DEFAULT now())");
+  for (int v : {1, 4}) {
+    db.exec(find(v));
+    db.exec("INSERT INTO public.cncstream_shop_schema (version, note) VALUES ($1, 'by hand')", {std::to_string(v)});
+  }
+  EXPECT_EQ(db.exec("SELECT to_regprocedure('shop.view_machines()') IS NULL").text(0, 0), "t");
+  const auto r = migrate(db);
+  EXPECT_EQ(r.to, schema_version_known());
+  EXPECT_EQ(db.exec("SELECT to_regprocedure('shop.view_machines()') IS NOT NULL").text(0, 0), "t")
+      << "migration 2 did not run";
+  EXPECT_EQ(db.exec("SELECT count(*) FROM public.cncstream_shop_schema").i64(0, 0),
+            static_cast<std::int64_t>(all.size()));
+}
+
 // A PC's login calls its three functions and the shop view's read-only ones;
 // nothing else.
 TEST(ShopSecurity, APcRoleWorksOnlyThroughItsFunctions) {
