@@ -37,7 +37,7 @@ struct ClEngine::Impl {
     for (std::size_t k = 0; k < n; ++k) {
       const bool untouched = z[k] == kNoContact;
       on_floor[k] = untouched ? 1 : 0;
-      if (untouched) z[k] = floor;
+      if (untouched || (options.floor_is_lowest && z[k] < floor)) z[k] = floor;
     }
   }
 };
@@ -154,7 +154,7 @@ double ClEngine::height_at(double x, double y, bool& on_floor) const {
   std::call_once(d.index_once, [&] { d.index = std::make_unique<cl_detail::PointIndex>(*d.mesh, d.prims, d.shape); });
   const double z = d.index->drop(x, y);
   on_floor = z == kNoContact;
-  return on_floor ? d.floor : z;
+  return on_floor || (d.options.floor_is_lowest && z < d.floor) ? d.floor : z;
 }
 
 double ClEngine::height_at(double x, double y) const {

@@ -82,6 +82,7 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
 
   ClOptions clo;
   clo.floor = p.floor;
+  clo.floor_is_lowest = true;  // as the finishing's engine
   const ClEngine engine(mesh, small, clo);
   const double grow = small.radius + h;
   XYBounds box{std::max(region.x0, x0 - grow), std::max(region.y0, y0 - grow), std::min(region.x1, x1 + grow),

@@ -59,6 +59,8 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     run.stage("CL grids + raster paths", 0.01, 0.30);
     t0 = std::chrono::steady_clock::now();
     const ClEngine e_ball(mesh, r.pair.ball), e_rad(mesh, r.pair.radiused);
+    std::optional<ClEngine> e_tap;
+    if (o.tapered) e_tap.emplace(mesh, *o.tapered);
     RasterOptions ro;
     ro.stepover = o.stepover;
     ro.step = o.step;
@@ -67,8 +69,14 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     ro.keep_grid = true;
     r.ball.cutter = r.pair.ball;
     r.radiused.cutter = r.pair.radiused;
-    r.ball.path = build_raster(e_ball, b, ro, [&](double f) { run.within(0.5 * f); });
-    r.radiused.path = build_raster(e_rad, b, ro, [&](double f) { run.within(0.5 + 0.5 * f); });
+    const double raster_share = e_tap ? 1.0 / 3 : 0.5;
+    r.ball.path = build_raster(e_ball, b, ro, [&](double f) { run.within(raster_share * f); });
+    r.radiused.path = build_raster(e_rad, b, ro, [&](double f) { run.within(raster_share * (1 + f)); });
+    if (e_tap) {
+      r.tapered.emplace();
+      r.tapered->cutter = *o.tapered;
+      r.tapered->path = build_raster(*e_tap, b, ro, [&](double f) { run.within(raster_share * (2 + f)); });
+    }
     r.timings.push_back({"CL grids + raster paths", seconds_since(t0)});
     run.stage("choice", 0.30, 0.33);
     t0 = std::chrono::steady_clock::now();
@@ -97,10 +105,13 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     run.stage("cut simulation", 0.35, 0.85);
     t0 = std::chrono::steady_clock::now();
     const double stock_top = box.hi.z + 1;
-    for (CutterRun* cr : {&r.ball, &r.radiused}) {
-      const double base = cr == &r.ball ? 0 : 0.5;
+    const std::vector<CutterRun*> runs = r.runs();
+    const double share = 1.0 / double(runs.size());
+    for (std::size_t n = 0; n < runs.size(); ++n) {
+      CutterRun* cr = runs[n];
+      const double base = double(n) * share;
       cr->machined = machine_path(sg, std::vector<double>(sg.size(), stock_top), raster_pieces(cr->path), cr->cutter,
-                                  [&](double f) { run.within(base + 0.5 * f); });
+                                  [&](double f) { run.within(base + share * f); });
     }
     r.timings.push_back({"cut simulation", seconds_since(t0)});
 
@@ -113,19 +124,21 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     // Default: stepover/3, which on the simulation grid's alignment gives
     // stepover/3 along the passes and stepover/4 across (0.133 x 0.1 mm at 0.4).
     const double pitch = o.reach_pitch < 0 ? std::min(0.15, o.stepover / 3) : o.reach_pitch;
-    for (CutterRun* cr : {&r.ball, &r.radiused}) {
-      const double base = cr == &r.ball ? 0 : 0.5;
+    for (std::size_t n = 0; n < runs.size(); ++n) {
+      CutterRun* cr = runs[n];
+      const double base = double(n) * share;
       std::vector<double> rows;
       for (const auto& row : cr->path.rows) rows.push_back(along_x ? row.front().y : row.front().x);
       std::vector<double> reach;
       if (pitch > 0) {
-        const ClEngine& e = cr == &r.ball ? e_ball : e_rad;
+        const ClEngine& e = cr == &r.ball ? e_ball : cr == &r.radiused ? e_rad : *e_tap;
         std::vector<std::uint8_t> wanted(sg.size(), 0);
         for (std::size_t k = 0; k < sg.size(); ++k)
           wanted[k] = !r.design.off_part[k] && cr->machined[k] - r.design.z[k] > kReachSplitMin;
         const ClGrid dense = e.compute(reach_lattice(sg, b.x0, b.y0, b.x1, b.y1, pitch, pitch),
-                                       [&](double f) { run.within(base + 0.25 * f); });
-        reach = reach_heights(dense, cr->cutter, sg, wanted, [&](double f) { run.within(base + 0.25 + 0.25 * f); });
+                                       [&](double f) { run.within(base + 0.5 * share * f); });
+        reach = reach_heights(dense, cr->cutter, sg, wanted,
+                              [&](double f) { run.within(base + 0.5 * share * (1 + f)); });
       }
       cr->scallops = scallops_from_cut(sg, cr->machined, r.design, rows, along_x, pitch > 0 ? &reach : nullptr);
       cr->reach = std::move(reach);
@@ -134,7 +147,7 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
 
     // The 2-D estimate at every analysis node from the slope across the passes.
     run.stage("scallops", 0.99, 1.0);
-    for (CutterRun* cr : {&r.ball, &r.radiused}) {
+    for (CutterRun* cr : runs) {
       const auto table = scallop_table(cr->cutter, o.stepover);
       std::vector<double> est(ag.size(), std::numeric_limits<double>::quiet_NaN());
       const ClGrid& g = g_ball;
@@ -166,13 +179,27 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
   return r;
 }
 
+std::vector<const CutterRun*> SelectionResult::runs() const {
+  std::vector<const CutterRun*> v{&ball, &radiused};
+  if (tapered) v.push_back(&*tapered);
+  return v;
+}
+
+std::vector<CutterRun*> SelectionResult::runs() {
+  std::vector<CutterRun*> v{&ball, &radiused};
+  if (tapered) v.push_back(&*tapered);
+  return v;
+}
+
 std::string SelectionResult::table() const {
   const auto mm = [](double v, int digits = 4) { return fixed_text(v, digits); };
   std::ostringstream o;
   const double vol_sw = switch_angle(pair.rc(), choice.d_base_volume) * 180 / M_PI;
   const double area_sw = switch_angle(pair.rc(), choice.d_base_area) * 180 / M_PI;
   o << "cutters: " << pair.ball.description() << " [" << pair.ball.spec() << "] vs " << pair.radiused.description() << " ["
-    << pair.radiused.spec() << "]\n";
+    << pair.radiused.spec() << "]";
+  if (tapered) o << ", beside them " << tapered->cutter.description() << " [" << tapered->cutter.spec() << "]";
+  o << "\n";
   o << "d_base: volume " << mm(choice.d_base_volume) << " mm, area " << mm(choice.d_base_area) << " mm (corrected forms)\n";
   const double on = std::max<double>(1, double(choice.on_part));
   o << "radiused removes more on " << mm(100 * double(choice.radiused_by_volume) / on, 1) << " % of the part by volume, "
@@ -182,7 +209,7 @@ std::string SelectionResult::table() const {
     << " deg measured\n";
   o << "scallop heights, stepover " << mm(params.stepover, 3) << " mm (Table 4.1 form):\n";
   o << "  cutter                   method            max mm    min mm    mean mm\n";
-  for (const CutterRun* run : {&ball, &radiused}) {
+  for (const CutterRun* run : runs()) {
     auto row = [&](const char* method, const ScallopStats& s) {
       o << "  " << std::left << std::setw(24) << run->cutter.spec() << " " << std::setw(16) << method << std::right
         << std::setw(8) << mm(s.max) << "  " << std::setw(8) << mm(s.min) << "  " << std::setw(8) << mm(s.mean) << "\n";
@@ -192,7 +219,7 @@ std::string SelectionResult::table() const {
   }
   if (ball.scallops.unreachable_stats.computed) {
     o << "material no stepover removes (gaps and inside corners narrower than the cutter; not counted as scallop):\n";
-    for (const CutterRun* run : {&ball, &radiused}) {
+    for (const CutterRun* run : runs()) {
       const UnreachableStats& u = run->scallops.unreachable_stats;
       o << "  " << std::left << std::setw(24) << run->cutter.spec() << std::right << " max " << mm(u.max) << " mm at ("
         << mm(u.max_x + work_offset.x, 2) << ", " << mm(u.max_y + work_offset.y, 2) << ") work, mean " << mm(u.mean)

@@ -53,6 +53,7 @@ std::string json_text(const SelectionResult& r) {
   j["step_mm"] = r.params.step;
   j["direction"] = r.params.direction == RasterDirection::Y ? "y" : "x";
   j["cutters"] = {{"ball", r.pair.ball.spec()}, {"radiused", r.pair.radiused.spec()}};
+  if (r.tapered) j["cutters"]["tapered"] = r.tapered->cutter.spec();
   j["d_base_mm"] = {{"volume", r.choice.d_base_volume}, {"area", r.choice.d_base_area}};
   j["switch_deg"] = {{"volume_plane", switch_angle(r.pair.rc(), r.choice.d_base_volume) * 180 / M_PI},
                      {"area_plane", switch_angle(r.pair.rc(), r.choice.d_base_area) * 180 / M_PI},
@@ -65,7 +66,7 @@ std::string json_text(const SelectionResult& r) {
   auto stats = [](const ScallopStats& s) {
     return nlohmann::json{{"max_mm", s.max}, {"min_mm", s.min}, {"mean_mm", s.mean}, {"samples", s.samples}};
   };
-  for (const CutterRun* run : {&r.ball, &r.radiused}) {
+  for (const CutterRun* run : r.runs()) {
     j["scallop"][run->cutter.spec()] = {{"cut_simulation", stats(run->scallops.stats)},
                                         {"estimate_2d", stats(run->estimate_2d)}};
     const UnreachableStats& u = run->scallops.unreachable_stats;
@@ -144,7 +145,7 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
       const fs::path p = dir / "table_4_1.csv";
       write_report_file(p, [&](std::ostream& f) {
         f << "cutter,method,max_mm,min_mm,mean_mm,samples\n";
-        for (const CutterRun* cr : {&r.ball, &r.radiused}) {
+        for (const CutterRun* cr : r.runs()) {
           for (const auto& [method, s] : {std::pair<const char*, ScallopStats>{"cut_simulation", cr->scallops.stats},
                                           {"estimate_2d", cr->estimate_2d}})
             f << cr->cutter.spec() << "," << method << "," << mm(s.max, 6) << "," << mm(s.min, 6) << "," << mm(s.mean, 6)

@@ -70,6 +70,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     t0 = std::chrono::steady_clock::now();
     ClOptions clo;
     clo.floor = p.floor;
+    clo.floor_is_lowest = true;  // no pass below the part's bottom (ClOptions)
     const ClEngine engine(*mesh, r.cutter, clo);
     const Box3 box = mesh->bounds();
     const WorkSetup work = work_setup(box, p.origin, p.z_zero);

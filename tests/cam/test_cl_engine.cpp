@@ -128,6 +128,38 @@ TEST(ClEngine, FloorAndUntouchedNodes) {
   EXPECT_EQ(h.on_floor[25 * spec.nx + 19], 0);
 }
 
+// A tapered ball's flutes end 12.9 mm above its tip: beside a 3 mm wall, out
+// near its reach, it touches the wall's top rim with its tip far below the
+// part's bottom. With floor_is_lowest such a node comes out at the floor
+// (still touched), in the grid and the point query alike; nodes above it
+// and untouched ones are as before.
+TEST(ClEngine, FloorIsLowestRaisesTouchedNodesBelowTheFloorToIt) {
+  const Mesh m = cl_test::box({0, 0, 0}, {10, 10, 3});
+  const Cutter taper = parse_cutter_spec("taper:1:5:3.175");
+  const GridSpec spec = GridSpec::covering(-2, -2, 12, 12, 0.1, 0.1);
+  const ClEngine surface(m, taper);
+  ClOptions o;
+  o.floor_is_lowest = true;
+  const ClEngine lowest(m, taper, o);
+  const ClGrid a = surface.compute(spec), b = lowest.compute(spec);
+  // (-1.5, 5): 1.5 mm outside the wall, the cone touches the rim 11.3 mm above the tip.
+  const std::size_t i = 5, j = 70, k = j * spec.nx + i;
+  ASSERT_NEAR(spec.x(i), -1.5, 1e-9);
+  EXPECT_NEAR(a.at(i, j), 3 - taper.profile_height(1.5), 1e-9);
+  EXPECT_LT(a.at(i, j), -8);
+  EXPECT_EQ(b.at(i, j), 0.0);
+  EXPECT_EQ(b.on_floor[k], 0);
+  EXPECT_EQ(lowest.height_at(spec.x(i), spec.y(j)), 0.0);
+  EXPECT_NEAR(surface.height_at(spec.x(i), spec.y(j)), a.at(i, j), 1e-9);
+  std::size_t raised = 0;
+  for (std::size_t n = 0; n < spec.size(); ++n) {
+    EXPECT_EQ(a.on_floor[n], b.on_floor[n]) << n;
+    EXPECT_EQ(b.z[n], std::max(a.z[n], 0.0)) << n;
+    raised += a.z[n] < 0;
+  }
+  EXPECT_GT(raised, 4 * 100u);  // a ring all round the box
+}
+
 TEST(ClEngine, EmptyMeshIsAllFloor) {
   const Mesh m;
   const ClEngine e(m, Cutter::flat(6));

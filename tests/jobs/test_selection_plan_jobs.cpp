@@ -86,6 +86,46 @@ TEST(SelectionJob, SameTableAsTheCliAndTheReportFiles) {
   EXPECT_EQ(header, "cutter,method,max_mm,min_mm,mean_mm,samples");
 }
 
+// The tapered ball against ball and bull-nose (issue 28): cut on the same
+// passes beside the pair, which keeps its table; the taper's 0.5 mm tip
+// leaves higher scallops than the 3.175 mm ball at the same stepover, and
+// its narrow cone leaves less where neither can reach the bottom.
+TEST(SelectionJob, TaperedBallBesideBallAndBullNose) {
+  jobs::SelectionParams p = coarse_plaque();
+  p.tapered = parse_cutter_spec("taper:1:5:3.175");
+  const jobs::SelectionResult r = jobs::run_selection(p);
+  ASSERT_TRUE(r.tapered);
+  ASSERT_EQ(r.runs().size(), 3u);
+  const std::string table = without_time(r.table());
+  std::cout << table;
+  // The pair's lines as without the third cutter.
+  std::string pair_lines = kSelectTable;
+  pair_lines = pair_lines.substr(pair_lines.find('\n'));  // after the cutters line
+  for (std::size_t a = 0, b; (b = pair_lines.find('\n', a + 1)) != std::string::npos; a = b) {
+    const std::string line = pair_lines.substr(a + 1, b - a - 1);
+    if (!line.empty()) {
+      EXPECT_NE(table.find(line), std::string::npos) << line;
+    }
+  }
+  EXPECT_NE(table.find(", beside them 1 mm tapered ball-nose"), std::string::npos);
+  EXPECT_NE(table.find("  taper:1:5:3.175          cut simulation"), std::string::npos);
+  EXPECT_NE(table.find("  taper:1:5:3.175          2-D estimate"), std::string::npos);
+  EXPECT_NE(table.find("  taper:1:5:3.175          max "), std::string::npos);  // what it cannot reach
+  const jobs::CutterRun& t = *r.tapered;
+  EXPECT_GT(t.scallops.stats.mean, 2 * r.ball.scallops.stats.mean);
+  EXPECT_GT(t.estimate_2d.mean, 2 * r.ball.estimate_2d.mean);
+  ASSERT_TRUE(t.scallops.unreachable_stats.computed);
+  EXPECT_LT(t.scallops.unreachable_stats.mean, r.ball.scallops.unreachable_stats.mean);
+
+  const fs::path dir = temp_dir("select_taper");
+  (void)jobs::write_selection_report(r, dir / "report");
+  std::ifstream csv(dir / "report" / "table_4_1.csv");
+  std::vector<std::string> rows;
+  for (std::string line; std::getline(csv, line);) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 7u);  // the header and two methods of three cutters
+  EXPECT_EQ(rows[5].rfind("taper:1:5:3.175,cut_simulation,", 0), 0u) << rows[5];
+}
+
 TEST(SelectionJob, SelectionPathsLieOnTheToolpathJobsLattice) {
   // Both jobs place the part and the G-code lattice the same way: the
   // selection's ball path is the tool path job's, point for point.

@@ -123,6 +123,21 @@ void expect_no_gouge(const jobs::ToolpathProgram& prog, const HeightFieldStock& 
       << dev.stats.largest_gouge.y;
 }
 
+// No move deeper than its operation may cut (beyond 1e-3 mm; the finishing
+// beyond `finishing_slack`). The finishing's max_depth is what it was
+// measured to cut; its limit is its cutter's.
+void expect_moves_within_limits(const jobs::ToolpathProgram& prog, const Cut& c, double finishing_slack) {
+  for (std::size_t k = 0; k < prog.operations.size(); ++k) {
+    const jobs::OperationSummary& o = prog.operations[k];
+    const bool finishing = o.name == "finishing";
+    const double limit = finishing ? jobs::default_max_depth(o.cutter) : o.max_depth;
+    const int op = static_cast<int>(k) + 1;
+    ASSERT_TRUE(c.depth.deepest.count(op)) << o.name;
+    std::cout << o.name << ": deepest cut of one move " << c.depth.deepest.at(op) << " mm (max " << limit << ")\n";
+    EXPECT_LE(c.depth.deepest.at(op), limit + (finishing ? finishing_slack : 1e-3)) << o.name;
+  }
+}
+
 // LinuxCNC's interpreter takes the whole program (the tool change's M0,
 // the roughing's G17 arcs, the rows' G18 arcs) and makes the same moves of
 // it as ours. (setup.sh installs it; skipped where it is missing.)
@@ -209,19 +224,49 @@ TEST(CompleteJob, GearwheelRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   const Cut c = run(prog, block_of(prog), p.tolerance);
   EXPECT_EQ(c.pauses, 1);
   print_deepest(c);
-  for (std::size_t k = 0; k < prog.operations.size(); ++k) {
-    const jobs::OperationSummary& o = prog.operations[k];
-    // The finishing's max_depth is what it was measured to cut; its limit
-    // is its cutter's.
-    const double limit = o.name == "finishing" ? jobs::default_max_depth(o.cutter) : o.max_depth;
-    const int op = static_cast<int>(k) + 1;
-    ASSERT_TRUE(c.depth.deepest.count(op)) << o.name;
-    std::cout << o.name << ": deepest cut of one move " << c.depth.deepest.at(op) << " mm (max " << limit << ")\n";
-    EXPECT_LE(c.depth.deepest.at(op), limit + 1e-3) << o.name;
-  }
+  expect_moves_within_limits(prog, c, 1e-3);
   EXPECT_GT(c.depth.deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
   expect_no_gouge(prog, c.stock);
   expect_rs274_makes_our_moves(prog.gcode);
+}
+
+// The README's main job with a tapered ball (issue 28): a flat roughs, the
+// taper (0.5 mm tip radius, 5 degrees per side, 12.9 mm of flutes) rest-roughs
+// where the flat does not fit, then finishes steep-and-shallow. Its flutes
+// touch the plaque's 3 mm base rim from out at their reach with the tip
+// 9.9 mm below the part: no pass goes below the part's bottom, no move
+// deeper than its cutter may cut, no gouge.
+TEST(CompleteJob, PlaqueRoughedWithAFlatThenFinishedWithATaperedBallWithoutGougeOrOverDeepPass) {
+  jobs::ToolpathParams p = plaque_job();
+  p.cutter = parse_cutter_spec("taper:1:5:3.175");
+  p.strategy = jobs::FinishStrategy::SteepShallow;  // the command's default
+  const jobs::ToolpathProgram prog = jobs::generate_toolpath(p);
+  for (const auto& n : prog.notes) std::cout << n << "\n";
+  std::vector<std::string> names;
+  for (const auto& o : prog.operations) names.push_back(o.name);
+  ASSERT_EQ(names, (std::vector<std::string>{"roughing", "rest roughing", "finishing"}));
+  EXPECT_EQ(prog.operations[1].cutter.spec(), "taper:1:5:3.175");
+  EXPECT_EQ(prog.operations[1].tool, 2);
+  EXPECT_EQ(prog.operations[2].tool, 2);
+  ASSERT_TRUE(prog.stock);
+  // The part's bottom in work coordinates: the lowest the tip goes.
+  const double bottom = prog.work_mesh.bounds().lo.z;
+  std::string error;
+  double lowest = 1e9;
+  for (const auto& mv : test::our_moves(prog.gcode, error)) lowest = std::min(lowest, mv.to.z);
+  ASSERT_EQ(error, "");
+  EXPECT_GE(lowest, bottom - 1e-6);
+
+  const Cut c = run(prog, block_of(prog), p.tolerance);
+  EXPECT_EQ(c.pauses, 1);
+  print_deepest(c);
+  // The plan measures the finishing's path against the stock the rest
+  // roughing leaves, which brings it to exactly the limit; the program
+  // follows that path within its tolerance (arcs, merged points): the
+  // simulator measured 1.5935 mm against the 1.5875 mm limit at one move.
+  expect_moves_within_limits(prog, c, p.tolerance);
+  EXPECT_GT(c.depth.deepest.at(2), 0.5 * prog.operations[1].max_depth);  // the rest roughing took full cuts
+  expect_no_gouge(prog, c.stock);
 }
 
 // A roughing interrupted half way, its result written as the simulator

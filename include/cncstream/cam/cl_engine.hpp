@@ -18,6 +18,14 @@ namespace cncstream {
 struct ClOptions {
   // Height for nodes the cutter cannot touch; default: the mesh's lowest z.
   std::optional<double> floor;
+  // The floor is also the lowest the tip goes: a touched node whose contact
+  // lies below it comes out at the floor. A job's part rests on its floor
+  // (below it is the fixture); a cutter touches the top rim of a wall lower
+  // than its flutes from as far as its reach, its tip that far below the rim
+  // (a 3.175 mm tapered ball's flutes end 12.9 mm above its tip: 9.9 mm
+  // below the plaque's 3 mm base). Raising a tip never gouges. Off (the CL
+  // surface itself, below the floor where it is): clgrid and the oracles.
+  bool floor_is_lowest = false;
   // Worker threads: 0 = the caller's oneTBB task arena (the shared pool of all
   // cores unless the caller limited it); n = a task arena of n slots.
   unsigned threads = 0;

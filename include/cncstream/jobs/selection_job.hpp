@@ -4,6 +4,7 @@
 // both cutters' raster finishing paths machined by the shared cut simulation,
 // the scallops split from material no stepover removes, and Table 4.1.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,6 +21,10 @@ namespace cncstream::jobs {
 struct SelectionParams {
   PartSource part;
   CutterPair cutters;       // the ball and the radiused cutter, same diameter
+  // A third cutter on the same passes, beside the pair (its scallops and what
+  // it cannot reach; the choice stays the pair's): the sign maker's tapered
+  // ball against ball and bull-nose (issue 28).
+  std::optional<Cutter> tapered;
   double stepover = 0.4;
   double step = 0.05;       // along the passes
   RasterDirection direction = RasterDirection::X;
@@ -46,6 +51,10 @@ struct SelectionResult {
   SlopeProfile profile;
   DesignHeights design;              // on the simulation grid
   CutterRun ball, radiused;
+  std::optional<CutterRun> tapered;  // when params.tapered
+  // The runs in the report's order: ball, radiused, then the tapered.
+  std::vector<const CutterRun*> runs() const;
+  std::vector<CutterRun*> runs();
   std::vector<std::int8_t> min_scallop_choice;  // per simulation node: Choice, or 2 = equal
   double seconds = 0;
   std::vector<std::pair<std::string, double>> timings;

@@ -14,7 +14,8 @@ void add_selection_options(CLI::App* sub, SelectionOptions& o) {
   add_part_options(sub, o.part);
   sub->add_option("--tools", o.tools,
                   "The ball and the radiused cutter, same diameter: ball:D,bull:D:r, or tools of the library by "
-                  "number or name (3,4)")
+                  "number or name (3,4); a third (a tapered ball, taper:TIP_D:ANGLE:TOP_D) is cut on the same passes "
+                  "beside them")
       ->capture_default_str();
   sub->add_option("--tool-library", o.tool_library,
                   "The tool library file (default: $CNCSTREAM_TOOLS, else tools.toml beside the journal)");
@@ -35,22 +36,27 @@ void add_selection_options(CLI::App* sub, SelectionOptions& o) {
 
 namespace {
 
-CutterPair parse_pair(const std::string& tools, const std::string& library) {
+// The pair, and a third cutter beside them if given.
+void parse_cutters(const std::string& tools, const std::string& library, jobs::SelectionParams& p) {
   std::vector<Cutter> cs;
   std::stringstream ss(tools);
   ToolLookup lookup(library);
   for (std::string item; std::getline(ss, item, ',');)
     if (!item.empty()) cs.push_back(parse_cutter_spec(lookup.choose(item).spec()));
-  if (cs.size() != 2) throw std::invalid_argument("--tools '" + tools + "': give exactly two cutters, e.g. ball:3.175,bull:3.175:0.79");
+  if (cs.size() != 2 && cs.size() != 3)
+    throw std::invalid_argument("--tools '" + tools +
+                                "': give the ball and the radiused cutter, e.g. ball:3.175,bull:3.175:0.79, and "
+                                "optionally a third, e.g. taper:1:5:3.175");
   if (cs[0].type != CutterType::Ball) std::swap(cs[0], cs[1]);
-  return CutterPair(cs[0], cs[1]);
+  p.cutters = CutterPair(cs[0], cs[1]);
+  if (cs.size() == 3) p.tapered = cs[2];
 }
 
 }  // namespace
 
 jobs::SelectionParams selection_params(const SelectionOptions& o) {
   jobs::SelectionParams p;
-  p.cutters = parse_pair(o.tools, o.tool_library);
+  parse_cutters(o.tools, o.tool_library, p);
   p.part = part_source(o.part);
   p.stepover = o.stepover;
   p.step = o.step;
