@@ -987,6 +987,8 @@ function onMessage(m) {
       break;
     }
     case 'queue': reloadJobsSoon(); break;
+    // The hub said the shop changed (docs/api-v1.md): the shop view reads it now.
+    case 'shop': pollShopSoon(0); break;
     case 'event': onEvent(m); break;
     case 'console': log(m.machine, m.dir === 'out' ? '> ' + m.text : m.text, m.dir === 'out' ? 'out' : /^error|alarm/i.test(m.text) ? 'err' : ''); break;
     case 'link': {

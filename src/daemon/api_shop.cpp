@@ -136,7 +136,7 @@ void Api::shop_routes() {
                              {"hub", shop::redact_url(c.settings().url)},
                              {"hub_up", c.hub_up()},
                              {"unsent_events", c.unsent()},
-                             {"poll_ms", 1000}}));
+                             {"poll_ms", 5000}}));  // a slow fallback: the `shop` frame brings changes at once
   });
   router_.add("GET", "/api/v1/shop/machines", [this](Request&, const Respond& res) {
     if (!shop_) throw not_in_shop();

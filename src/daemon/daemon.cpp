@@ -20,6 +20,7 @@
 #include "cncstream/daemon/job_manager.hpp"
 #include "cncstream/daemon/machines.hpp"
 #include "cncstream/daemon/shop_link.hpp"
+#include "cncstream/daemon/shop_watch.hpp"
 #include "cncstream/daemon/ws_hub.hpp"
 #include "cncstream/pendant/pendant_controller.hpp"
 #include "cncstream/pendant/pendant_usb.hpp"
@@ -168,7 +169,11 @@ Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_c
                                        config_.data_dir / "programs");
   jobs_->recover();
   // A shop's member: its events go to the hub through the journal's outbox.
-  if (!config_.shop.url.empty()) shop_ = std::make_unique<ShopLink>(io_, config_, *files_, *machines_, *jobs_);
+  if (!config_.shop.url.empty()) {
+    shop_ = std::make_unique<ShopLink>(io_, config_, *files_, *machines_, *jobs_);
+    // The hub's wake-ups push the shop view to the WebSocket clients.
+    shop_watch_ = std::make_unique<ShopWatch>(io_, shop_->view(), *hub_, config_.shop.url);
+  }
   const fs::path web = find_web_root(config_);
   if (web.empty()) spdlog::warn("no web page folder found (set web.root): GET / answers 404");
   api_ = std::make_unique<Api>(io_, pool_, config_, *auth_, *files_, *machines_, *jobs_, *hub_, web, shop_.get());
@@ -196,7 +201,8 @@ Daemon::~Daemon() {
   // pool is joined before the objects its tasks use go away.
   jobs_->stop_generations();
   pool_.join();
-  shop_.reset();  // before the jobs and machines it reports
+  shop_watch_.reset();  // before the view reader it reads through
+  shop_.reset();        // before the jobs and machines it reports
   jobs_.reset();
   server_.reset();
   api_.reset();

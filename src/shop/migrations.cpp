@@ -363,6 +363,47 @@ GRANT EXECUTE ON FUNCTION shop.view_machines(), shop.view_jobs(text[], text, int
   shop.view_job_events(bigint, integer) TO cncstream_pc, cncstream_operator, cncstream_reader;
 )SQL";
 
+// 3: the hub says when the shop view changed (docs/shop.md, "The shop view"):
+// a NOTIFY on channel cncstream_state, payload "machine:NAME" or "job:ID",
+// after any change to a machine's state or a job, whichever function (or an
+// administrator's UPDATE) made it; sent at commit, identical ones in one
+// transaction once. A wake-up only: the daemons that LISTEN re-read the view.
+// Triggers rather than new copies of migration 1's functions: nothing that
+// writes these tables can forget to notify.
+constexpr const char* kMigration3 = R"SQL(
+CREATE FUNCTION shop.notify_machine_state() RETURNS trigger
+LANGUAGE plpgsql SET search_path = shop, pg_temp AS $f$
+BEGIN
+  PERFORM pg_notify('cncstream_state', 'machine:' || (SELECT m.name FROM shop.machines m WHERE m.id = NEW.machine_id));
+  RETURN NULL;
+END $f$;
+
+CREATE FUNCTION shop.notify_job() RETURNS trigger
+LANGUAGE plpgsql SET search_path = shop, pg_temp AS $f$
+BEGIN
+  PERFORM pg_notify('cncstream_state', 'job:' || NEW.id);
+  RETURN NULL;
+END $f$;
+
+-- What the view shows of a machine's state (not its position or feed, which
+-- every heartbeat of a moving machine changes).
+CREATE TRIGGER machine_state_inserted AFTER INSERT ON shop.machine_state
+  FOR EACH ROW EXECUTE FUNCTION shop.notify_machine_state();
+CREATE TRIGGER machine_state_changed AFTER UPDATE ON shop.machine_state
+  FOR EACH ROW WHEN ((OLD.availability, OLD.execution, OLD.controller_mode, OLD.program, OLD.line, OLD.alarm)
+                     IS DISTINCT FROM (NEW.availability, NEW.execution, NEW.controller_mode, NEW.program, NEW.line,
+                                       NEW.alarm))
+  EXECUTE FUNCTION shop.notify_machine_state();
+CREATE TRIGGER job_inserted AFTER INSERT ON shop.jobs
+  FOR EACH ROW EXECUTE FUNCTION shop.notify_job();
+CREATE TRIGGER job_changed AFTER UPDATE ON shop.jobs
+  FOR EACH ROW WHEN ((OLD.status, OLD.machine_id, OLD.machine, OLD.last_line, OLD.message)
+                     IS DISTINCT FROM (NEW.status, NEW.machine_id, NEW.machine, NEW.last_line, NEW.message))
+  EXECUTE FUNCTION shop.notify_job();
+
+REVOKE ALL ON FUNCTION shop.notify_machine_state(), shop.notify_job() FROM PUBLIC;
+)SQL";
+
 // 4: a daemon's web page submits, cancels and requeues (issue 29: "the same
 // from any daemon's web page"). A daemon logs in with its PC's login
 // (cncstream_pc, which may only claim, report and heartbeat), so the three
@@ -386,6 +427,7 @@ const std::vector<Migration>& migrations() {
   static const std::vector<Migration> all = {
       {1, "tables, roles, claim_job, report_events, heartbeat, submit/cancel/requeue", kMigration1},
       {2, "the shop view's reads: view_machines, view_jobs, view_job_events", kMigration2},
+      {3, "NOTIFY cncstream_state when a machine's state or a job changes", kMigration3},
       {4, "cncstream_web_operator: a daemon's web page submits, cancels and requeues", kMigration4},
   };
   return all;

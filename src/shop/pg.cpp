@@ -97,6 +97,25 @@ PgResult PgConnection::exec(const std::string& sql, const PgParams& params) {
   return res;
 }
 
+int PgConnection::socket() const { return c_ ? PQsocket(c_) : -1; }
+
+std::vector<PgNotification> PgConnection::take_notifications() {
+  if (!c_) throw ShopError("shop hub " + redact_url(url_) + ": not connected");
+  if (!PQconsumeInput(c_) || PQstatus(c_) != CONNECTION_OK) {
+    std::string msg = PQerrorMessage(c_);
+    while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+    PQfinish(c_);
+    c_ = nullptr;
+    throw ShopError("shop hub " + redact_url(url_) + ": the connection was lost: " + msg);
+  }
+  std::vector<PgNotification> out;
+  while (PGnotify* n = PQnotifies(c_)) {
+    out.push_back({n->relname ? n->relname : "", n->extra ? n->extra : ""});
+    PQfreemem(n);
+  }
+  return out;
+}
+
 std::string bytea_hex(const std::string& bytes) {
   static const char* digits = "0123456789abcdef";
   std::string out = "\\x";

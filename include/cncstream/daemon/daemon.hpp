@@ -22,6 +22,7 @@ class Api;
 class HttpServer;
 struct DaemonPendant;
 class ShopLink;
+class ShopWatch;
 
 class Daemon {
  public:
@@ -44,6 +45,7 @@ class Daemon {
   Api& api() { return *api_; }
   std::size_t pendant_count() const { return pendants_.size(); }
   ShopLink* shop() { return shop_.get(); }  // nullptr: not in a shop
+  ShopWatch* shop_watch() { return shop_watch_.get(); }  // nullptr: not in a shop
 
  private:
   std::unique_ptr<DaemonPendant> start_pendant(const PendantSection& p);
@@ -59,6 +61,7 @@ class Daemon {
   std::vector<std::unique_ptr<DaemonPendant>> pendants_;
   std::unique_ptr<JobManager> jobs_;
   std::unique_ptr<ShopLink> shop_;
+  std::unique_ptr<ShopWatch> shop_watch_;  // reads through shop_'s view reader
   std::unique_ptr<Api> api_;
   std::unique_ptr<HttpServer> server_;
 };

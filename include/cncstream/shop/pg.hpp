@@ -41,6 +41,12 @@ class PgResult {
 
 using PgParams = std::vector<std::optional<std::string>>;
 
+// A NOTIFY that arrived on a connection that LISTENs.
+struct PgNotification {
+  std::string channel;
+  std::string payload;
+};
+
 class PgConnection {
  public:
   // Connects (3 s time-out unless the URL sets connect_timeout); throws ShopError.
@@ -59,6 +65,13 @@ class PgConnection {
   // The server's own words for the last failed exec, without the hub or the
   // SQLSTATE (e.g. a function's RAISE EXCEPTION text; "" : none).
   const std::string& last_error() const { return error_; }
+
+  // For a connection that LISTENs: its socket (to poll for reading; -1 when
+  // not connected), and the notifications that arrived, reading what the
+  // socket holds without blocking. Throws ShopError when the connection is
+  // lost (the hub stopped): the connection is then closed.
+  int socket() const;
+  std::vector<PgNotification> take_notifications();
 
  private:
   pg_conn* c_ = nullptr;

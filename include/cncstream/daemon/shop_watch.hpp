@@ -1,0 +1,55 @@
+#pragma once
+// The shop view pushed (docs/shop.md, "The shop view"; docs/api-v1.md, the
+// `shop` frame): the hub's wake-ups (shop::HubListener, its own connection
+// and thread) make the daemon re-read every machine of the shop through the
+// view's reader (its own connection and thread) and send the answer to its
+// WebSocket clients, so a page shows a change without waiting for its poll.
+// Bursts coalesce: at most one read in flight and one waiting, the waiting
+// one carrying every wake-up's payloads. Everything but the two threads runs
+// on the event loop, which never waits on the hub; a hub that is down costs
+// nothing here but the listener's retries.
+#include <boost/asio/io_context.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cncstream/shop/hub_listener.hpp"
+#include "cncstream/shop/shop_view.hpp"
+
+namespace cncstream::daemon {
+
+class WsHub;
+
+class ShopWatch {
+ public:
+  ShopWatch(boost::asio::io_context& io, shop::ShopViewReader& view, WsHub& hub, const std::string& url);
+  ~ShopWatch();  // before the view reader and the WebSocket hub go
+  ShopWatch(const ShopWatch&) = delete;
+  ShopWatch& operator=(const ShopWatch&) = delete;
+
+  bool listening() const { return listener_ && listener_->listening(); }
+  // Frames sent and reads made (the event loop's figures; for tests and benchmarks).
+  std::uint64_t frames_sent() const { return frames_sent_; }
+  std::uint64_t reads() const { return reads_; }
+
+ private:
+  void wake(shop::HubWake w);  // the event loop
+  void start_read();
+  void read_done(shop::ViewAnswer a, std::vector<std::string> changed, bool resync);
+
+  boost::asio::io_context& io_;
+  shop::ShopViewReader& view_;
+  WsHub& hub_;
+  std::shared_ptr<std::atomic<bool>> alive_ = std::make_shared<std::atomic<bool>>(true);
+  bool in_flight_ = false;
+  bool queued_ = false;
+  std::vector<std::string> pending_;  // the waiting read's payloads
+  bool pending_resync_ = false;
+  std::atomic<std::uint64_t> frames_sent_{0}, reads_{0};
+  std::unique_ptr<shop::HubListener> listener_;  // last: its thread stops first
+};
+
+}  // namespace cncstream::daemon
