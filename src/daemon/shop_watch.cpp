@@ -16,7 +16,7 @@ constexpr std::size_t kMaxChanged = 64;
 }  // namespace detail_shop_watch
 
 ShopWatch::ShopWatch(boost::asio::io_context& io, shop::ShopViewReader& view, WsHub& hub, const std::string& url)
-    : io_(io), view_(view), hub_(hub) {
+    : io_(io), view_(view), hub_(hub), retry_(io) {
   listener_ = std::make_unique<shop::HubListener>(url, [this, alive = alive_](shop::HubWake w) {
     boost::asio::post(io_, [this, alive, w = std::move(w)]() mutable {
       if (*alive) wake(std::move(w));
@@ -27,6 +27,7 @@ ShopWatch::ShopWatch(boost::asio::io_context& io, shop::ShopViewReader& view, Ws
 ShopWatch::~ShopWatch() {
   *alive_ = false;
   listener_.reset();
+  retry_.cancel();
 }
 
 void ShopWatch::wake(shop::HubWake w) {
@@ -58,9 +59,19 @@ void ShopWatch::start_read() {
 
 void ShopWatch::read_done(shop::ViewAnswer a, std::vector<std::string> changed, bool resync) {
   in_flight_ = false;
-  if (a.kind == shop::ViewAnswer::Kind::ok) {
-    // Fail soft: a read the hub did not answer sends nothing (the page's
-    // slow poll says the hub is down); the next wake-up reads again.
+  if (a.kind != shop::ViewAnswer::Kind::ok) {
+    // Fail soft: nothing is sent (the page's slow poll says why); the
+    // wake-ups wait for a read a second later, or for the next wake-up.
+    for (auto& c : changed)
+      if (std::find(pending_.begin(), pending_.end(), c) == pending_.end()) pending_.push_back(std::move(c));
+    pending_resync_ = pending_resync_ || resync;
+    retry_.expires_after(std::chrono::seconds(1));
+    retry_.async_wait([this, alive = alive_](const boost::system::error_code& ec) {
+      if (!ec && *alive && !in_flight_ && listening()) start_read();
+    });
+    return;
+  }
+  {
     nlohmann::json f = {{"type", "shop"}, {"now", a.body.value("now", nlohmann::json())},
                         {"machines", a.body.value("machines", nlohmann::json::array())}, {"resync", resync}};
     const bool more = changed.size() > detail_shop_watch::kMaxChanged;

@@ -6,9 +6,11 @@
 // WebSocket clients, so a page shows a change without waiting for its poll.
 // Bursts coalesce: at most one read in flight and one waiting, the waiting
 // one carrying every wake-up's payloads. Everything but the two threads runs
-// on the event loop, which never waits on the hub; a hub that is down costs
-// nothing here but the listener's retries.
+// on the event loop, which never waits on the hub. A read the hub does not
+// answer is tried again a second later (its wake-ups kept); a hub that is
+// down costs nothing here but the listener's retries.
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
 
 #include <atomic>
 #include <cstdint>
@@ -48,6 +50,7 @@ class ShopWatch {
   bool queued_ = false;
   std::vector<std::string> pending_;  // the waiting read's payloads
   bool pending_resync_ = false;
+  boost::asio::steady_timer retry_;  // a read the hub did not answer, again in a second
   std::atomic<std::uint64_t> frames_sent_{0}, reads_{0};
   std::unique_ptr<shop::HubListener> listener_;  // last: its thread stops first
 };
