@@ -172,7 +172,8 @@ Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), pool_(worker_c
   if (!config_.shop.url.empty()) {
     shop_ = std::make_unique<ShopLink>(io_, config_, *files_, *machines_, *jobs_);
     // The hub's wake-ups push the shop view to the WebSocket clients.
-    shop_watch_ = std::make_unique<ShopWatch>(io_, shop_->view(), *hub_, config_.shop.url);
+    shop_watch_ = std::make_unique<ShopWatch>(io_, shop_->view(), *hub_, config_.shop.url,
+                                              config_.shop.watch_min_interval_s);
   }
   const fs::path web = find_web_root(config_);
   if (web.empty()) spdlog::warn("no web page folder found (set web.root): GET / answers 404");

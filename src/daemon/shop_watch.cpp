@@ -15,10 +15,18 @@ namespace detail_shop_watch {
 constexpr std::size_t kMaxChanged = 64;
 }  // namespace detail_shop_watch
 
-ShopWatch::ShopWatch(boost::asio::io_context& io, shop::ShopViewReader& view, WsHub& hub, const std::string& url)
-    : io_(io), view_(view), hub_(hub), retry_(io) {
-  listener_ = std::make_unique<shop::HubListener>(url, [this, alive = alive_](shop::HubWake w) {
-    boost::asio::post(io_, [this, alive, w = std::move(w)]() mutable {
+ShopWatch::ShopWatch(boost::asio::io_context& io, shop::ShopViewReader& view, WsHub& hub, const std::string& url,
+                     double min_interval_s)
+    : io_(io),
+      view_(view),
+      hub_(hub),
+      min_interval_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+          std::chrono::duration<double>(min_interval_s))),
+      timer_(io) {
+  // The callbacks of the other threads hold the io_context (the daemon's),
+  // never this, until the alive flag says this still exists.
+  listener_ = std::make_unique<shop::HubListener>(url, [this, &io, alive = alive_](shop::HubWake w) {
+    boost::asio::post(io, [this, alive, w = std::move(w)]() mutable {
       if (*alive) wake(std::move(w));
     });
   });
@@ -27,31 +35,49 @@ ShopWatch::ShopWatch(boost::asio::io_context& io, shop::ShopViewReader& view, Ws
 ShopWatch::~ShopWatch() {
   *alive_ = false;
   listener_.reset();
-  retry_.cancel();
+  timer_.cancel();
 }
 
 void ShopWatch::wake(shop::HubWake w) {
   for (auto& p : w.payloads)
     if (std::find(pending_.begin(), pending_.end(), p) == pending_.end()) pending_.push_back(std::move(p));
   pending_resync_ = pending_resync_ || w.resync;
-  if (in_flight_) {
+  request();
+}
+
+void ShopWatch::request() {
+  if (in_flight_ || timer_armed_) {
     queued_ = true;  // one read waits, with every payload since
     return;
   }
-  start_read();
+  const auto due = last_start_ + min_interval_;
+  if (std::chrono::steady_clock::now() >= due) start_read();
+  else arm(due);
+}
+
+void ShopWatch::arm(boost::asio::steady_timer::time_point at) {
+  timer_armed_ = true;
+  timer_.expires_at(at);
+  timer_.async_wait([this, alive = alive_](const boost::system::error_code& ec) {
+    if (ec || !*alive) return;
+    timer_armed_ = false;
+    // After a failed read, only while the hub is heard (else its return's resync reads).
+    if (!in_flight_ && (!failed_ || listening())) start_read();
+  });
 }
 
 void ShopWatch::start_read() {
   in_flight_ = true;
   queued_ = false;
+  last_start_ = std::chrono::steady_clock::now();
   auto changed = std::move(pending_);
   pending_.clear();
   const bool resync = pending_resync_;
   pending_resync_ = false;
   ++reads_;
   view_.submit([](shop::PgConnection& db) -> std::optional<nlohmann::json> { return shop::view_machines(db); },
-               [this, alive = alive_, changed = std::move(changed), resync](shop::ViewAnswer a) mutable {
-                 boost::asio::post(io_, [this, alive, a = std::move(a), changed = std::move(changed), resync]() mutable {
+               [this, &io = io_, alive = alive_, changed = std::move(changed), resync](shop::ViewAnswer a) mutable {
+                 boost::asio::post(io, [this, alive, a = std::move(a), changed = std::move(changed), resync]() mutable {
                    if (*alive) read_done(std::move(a), std::move(changed), resync);
                  });
                });
@@ -65,12 +91,11 @@ void ShopWatch::read_done(shop::ViewAnswer a, std::vector<std::string> changed, 
     for (auto& c : changed)
       if (std::find(pending_.begin(), pending_.end(), c) == pending_.end()) pending_.push_back(std::move(c));
     pending_resync_ = pending_resync_ || resync;
-    retry_.expires_after(std::chrono::seconds(1));
-    retry_.async_wait([this, alive = alive_](const boost::system::error_code& ec) {
-      if (!ec && *alive && !in_flight_ && listening()) start_read();
-    });
+    failed_ = true;
+    arm(std::chrono::steady_clock::now() + std::chrono::seconds(1));
     return;
   }
+  failed_ = false;
   {
     nlohmann::json f = {{"type", "shop"}, {"now", a.body.value("now", nlohmann::json())},
                         {"machines", a.body.value("machines", nlohmann::json::array())}, {"resync", resync}};
@@ -81,7 +106,7 @@ void ShopWatch::read_done(shop::ViewAnswer a, std::vector<std::string> changed, 
     hub_.broadcast(WsHub::frame(dump_json(f)));
     ++frames_sent_;
   }
-  if (queued_) start_read();
+  if (queued_) request();
 }
 
 }  // namespace cncstream::daemon

@@ -24,6 +24,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "cncstream/daemon/daemon.hpp"
 #include "../support/loopback_http.hpp"
@@ -150,15 +151,23 @@ class WsClient {
       std::string payload = in_.substr(off, len);
       in_.erase(0, off + len);
       const int op = b0 & 0x0f;
+      const bool fin = (b0 & 0x80) != 0;
       if (op == 8) {
         closed_ = true;
         return std::nullopt;
       }
-      if (op == 1) return payload;
+      // A long message may come in fragments (a text frame, then continuations).
+      if (op == 1 || (op == 0 && in_text_)) {
+        text_.append(payload);
+        in_text_ = !fin;
+        if (fin) return std::exchange(text_, std::string());
+      }
     }
   }
   int fd_ = -1;
   std::string in_;
+  std::string text_;  // a fragmented text message so far
+  bool in_text_ = false;
   bool closed_ = false;
 };
 

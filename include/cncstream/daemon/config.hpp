@@ -47,6 +47,9 @@ struct ShopSection {
   std::string pc;             // this PC's name ("" : the host name)
   double lease_s = 30;        // a shop job's lease, renewed by heartbeats
   double heartbeat_s = 5;
+  // The shop view's pushes: a re-read of the hub at most this often (not in
+  // the TOML: the benchmark's knob, tools/bench_shop_latency.cpp).
+  double watch_min_interval_s = 0.2;
   // MTConnect SHDR adapters: machine i listens on mtconnect_port + i (0: any
   // free port, tests); none without it.
   std::optional<unsigned short> mtconnect_port;

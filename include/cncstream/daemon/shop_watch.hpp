@@ -5,7 +5,9 @@
 // view's reader (its own connection and thread) and send the answer to its
 // WebSocket clients, so a page shows a change without waiting for its poll.
 // Bursts coalesce: at most one read in flight and one waiting, the waiting
-// one carrying every wake-up's payloads. Everything but the two threads runs
+// one carrying every wake-up's payloads, and reads start at most every
+// `min_interval_s` (a busy shop wakes every daemon many times a second; each
+// read costs the hub the whole view). Everything but the two threads runs
 // on the event loop, which never waits on the hub. A read the hub does not
 // answer is tried again a second later (its wake-ups kept); a hub that is
 // down costs nothing here but the listener's retries.
@@ -13,6 +15,7 @@
 #include <boost/asio/steady_timer.hpp>
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -27,7 +30,9 @@ class WsHub;
 
 class ShopWatch {
  public:
-  ShopWatch(boost::asio::io_context& io, shop::ShopViewReader& view, WsHub& hub, const std::string& url);
+  ShopWatch(boost::asio::io_context& io, shop::ShopViewReader& view, WsHub& hub, const std::string& url,
+            double min_interval_s = kMinIntervalS);
+  static constexpr double kMinIntervalS = 0.2;
   ~ShopWatch();  // before the view reader and the WebSocket hub go
   ShopWatch(const ShopWatch&) = delete;
   ShopWatch& operator=(const ShopWatch&) = delete;
@@ -39,6 +44,8 @@ class ShopWatch {
 
  private:
   void wake(shop::HubWake w);  // the event loop
+  void request();  // a read now, or when the interval allows
+  void arm(boost::asio::steady_timer::time_point at);
   void start_read();
   void read_done(shop::ViewAnswer a, std::vector<std::string> changed, bool resync);
 
@@ -50,7 +57,11 @@ class ShopWatch {
   bool queued_ = false;
   std::vector<std::string> pending_;  // the waiting read's payloads
   bool pending_resync_ = false;
-  boost::asio::steady_timer retry_;  // a read the hub did not answer, again in a second
+  std::chrono::steady_clock::duration min_interval_;
+  std::chrono::steady_clock::time_point last_start_{};
+  boost::asio::steady_timer timer_;  // the next read: paced, or a failed one again in a second
+  bool timer_armed_ = false;
+  bool failed_ = false;  // the last read: the hub did not answer
   std::atomic<std::uint64_t> frames_sent_{0}, reads_{0};
   std::unique_ptr<shop::HubListener> listener_;  // last: its thread stops first
 };
