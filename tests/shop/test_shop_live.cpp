@@ -153,5 +153,5 @@ TEST(ShopLive, TheHubNotifiesStateAndJobChangesOnly) {
   EXPECT_EQ(take(), (std::vector<std::string>{"job:" + std::to_string(id)}));
   ASSERT_TRUE(hub.claim_job("n1", 30));
   EXPECT_EQ(take(), (std::vector<std::string>{"job:" + std::to_string(id)}));
-  EXPECT_EQ(shop::hub_schema_version(admin), 3);
+  EXPECT_GE(shop::hub_schema_version(admin), 3);
 }
