@@ -113,6 +113,16 @@ JobManager::JobManager(boost::asio::io_context& io, boost::asio::thread_pool& po
   l.start_failed = [this](const std::string& m, bool, const std::string& why) { on_start_failed(m, why); };
   machines_.set_listener(std::move(l));
   machines_.current_job = [this](const std::string& m) { return current_job(m); };
+  machines_.library_tool = [this](int number) -> json {
+    const tooling::ToolLibrary library = tools_.snapshot();
+    const tooling::Tool* t = library.by_number(number);
+    if (!t) return nullptr;
+    return {{"number", t->number},
+            {"name", t->name},
+            {"shape", t->geometry.spec()},
+            {"description", t->geometry.description()},
+            {"stick_out", t->stick_out > 0 ? json(t->stick_out) : json(nullptr)}};  // 0: not known
+  };
 }
 
 JobManager::~JobManager() {

@@ -90,6 +90,10 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(r.j()["from_line"], 8);
 
+  // T2 is in the daemon's tool library: the prompt names it with its expected stick-out (T1 is not).
+  r = h.post("/api/v1/tools", {{"number", 2}, {"name", "6 mm finisher"}, {"shape", "flat:6"}, {"flutes", 2}, {"stick_out", 37.3}});
+  ASSERT_EQ(r.status, 201) << r.body;
+
   // The machine's sensor, at the job's own safe Z.
   const auto id = create(h, "tc", file, {{"safe_z", 30}});
   EXPECT_EQ(job(h, id)["tool_change"]["safe_z"], 30);
@@ -118,6 +122,12 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   EXPECT_TRUE(tc["operator_turn"].get<bool>());
   EXPECT_NE(tc["description"].get<std::string>().find("finishing"), std::string::npos) << tc.dump();
   EXPECT_NE(tc["prompt"]["text"].get<std::string>().find("mount T2"), std::string::npos) << tc.dump();
+  ASSERT_TRUE(tc["library_tool"].is_object()) << tc.dump();
+  EXPECT_EQ(tc["library_tool"]["number"], 2);
+  EXPECT_EQ(tc["library_tool"]["name"], "6 mm finisher");
+  EXPECT_EQ(tc["library_tool"]["shape"], "flat:6");
+  EXPECT_DOUBLE_EQ(tc["library_tool"]["stick_out"].get<double>(), 37.3);
+  EXPECT_EQ((*frame)["state"]["library_tool"]["name"], "6 mm finisher");  // the same on the WebSocket
   EXPECT_EQ(job(h, id)["state"], "running");
 
   // At the prompt the machine is the operator's: a step jog moves it.
@@ -180,6 +190,7 @@ TEST(DaemonToolChange, DeclineAndAMissingSensorEndTheJobWithTheLengthUnknown) {
     const json tc = machine(h, "with")["tool_change"];
     return !tc.is_null() && tc["step"] == "mount_tool";
   }, 60));
+  EXPECT_TRUE(machine(h, "with")["tool_change"]["library_tool"].is_null());  // T2 is in no library here
   ASSERT_EQ(h.post("/api/v1/machines/with/tool-change/decline").status, 202);
   ASSERT_TRUE(wait_for([&] { return job(h, declined)["state"] == "failed"; }, 30)) << job(h, declined).dump();
   EXPECT_NE(job(h, declined)["message"].get<std::string>().find("declined"), std::string::npos);
