@@ -170,10 +170,13 @@ async function importFile(file) {
 
 // What the tool-change panel says of the incoming tool, from the daemon's
 // library (the tool-change state's `library_tool`, docs/api-v1.md): its name
-// and the stick-out the operator should see from the collet.
+// and the stick-out the operator should see from the collet. Nothing when the
+// library has no such tool (a guess would be worse than no line). A program the
+// daemon generated numbers its tools by operation, so the library's number may differ.
 export function toolChangeLibraryText(tc) {
   const t = tc && tc.library_tool;
-  if (!t) return tc && tc.tool ? `T${tc.tool} is not in the tool library.` : '';
-  return `T${t.number}: ${t.name}, ${t.description || t.shape}; expected stick-out ` +
+  if (!t) return '';
+  return `${t.number === tc.tool ? `T${t.number}` : `T${tc.tool} is the library's T${t.number}`}: ${t.name}, ` +
+    `${t.description || t.shape}; expected stick-out ` +
     (t.stick_out ? `${+t.stick_out} mm from the collet.` : 'not known (the library has none).');
 }

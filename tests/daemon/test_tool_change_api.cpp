@@ -164,6 +164,52 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   std::filesystem::remove_all(dir);
 }
 
+// A program the daemon generates numbers its tools by operation (roughing T1, finishing T2): the
+// tool change names the library's tool of the finishing cutter (T7 here), never the library's T2.
+TEST(DaemonToolChange, AGeneratedProgramsChangeNamesTheLibraryToolOfItsOperation) {
+  const auto dir = temp_dir("toolchange-library");
+  auto cfg = test_config(dir);
+  cfg.machines = {tool_machine("gen", "max", true)};
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return ready(h, "gen"); }, 30));
+  ASSERT_EQ(h.post("/api/v1/machines/gen/control").status, 200);
+  auto r = h.post("/api/v1/tools", {{"number", 7}, {"name", "3 mm ball"}, {"shape", "ball:3"}, {"stick_out", 25}});
+  ASSERT_EQ(r.status, 201) << r.body;
+  r = h.post("/api/v1/tools", {{"number", 2}, {"name", "not this one"}, {"shape", "flat:2"}, {"stick_out", 40}});
+  ASSERT_EQ(r.status, 201) << r.body;
+  std::string pyramid = "solid p\n";
+  const char* base[5] = {"0 0 0", "20 0 0", "20 20 0", "0 20 0", "0 0 0"};
+  for (int i = 0; i < 4; ++i)
+    pyramid += std::string("facet normal 0 0 0\nouter loop\nvertex ") + base[i] + "\nvertex " + base[i + 1] +
+               "\nvertex 10 10 5\nendloop\nendfacet\n";
+  pyramid += "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 20 20 0\nvertex 20 0 0\nendloop\nendfacet\n"
+             "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 20 0\nvertex 20 20 0\nendloop\nendfacet\nendsolid p\n";
+  const auto file = upload_text(h, pyramid, "pyramid.stl");
+  r = h.post("/api/v1/jobs", {{"machine", "gen"},
+                              {"file", file["id"]},
+                              {"params", {{"tool", "T7"}, {"rough", "flat:6"}, {"stepover", 1}, {"feed", 2000},
+                                          {"plunge_feed", 500}, {"rpm", 18000}}}});
+  ASSERT_EQ(r.status, 201) << r.body;
+  const auto id = r.j()["id"].get<std::int64_t>();
+  ASSERT_TRUE(wait_for([&] { return job(h, id)["state"] == "ready"; }, 60)) << job(h, id).dump();
+  ASSERT_EQ(h.post("/api/v1/jobs/" + std::to_string(id) + "/start").status, 202);
+  json tc;
+  ASSERT_TRUE(wait_for([&] {
+    tc = machine(h, "gen")["tool_change"];
+    return !tc.is_null() && tc["step"] == "mount_tool";
+  }, 60)) << job(h, id).dump();
+  EXPECT_EQ(tc["tool"], 2) << tc.dump();
+  ASSERT_TRUE(tc["library_tool"].is_object()) << tc.dump();
+  EXPECT_EQ(tc["library_tool"]["number"], 7) << tc.dump();
+  EXPECT_EQ(tc["library_tool"]["name"], "3 mm ball");
+  EXPECT_DOUBLE_EQ(tc["library_tool"]["stick_out"].get<double>(), 25);
+  ASSERT_EQ(h.post("/api/v1/machines/gen/tool-change/decline").status, 202);
+  ASSERT_TRUE(wait_for([&] { return job(h, id)["state"] == "failed"; }, 30)) << job(h, id).dump();
+  d.shutdown();
+  std::filesystem::remove_all(dir);
+}
+
 TEST(DaemonToolChange, DeclineAndAMissingSensorEndTheJobWithTheLengthUnknown) {
   const auto dir = temp_dir("toolchange-fail");
   auto cfg = test_config(dir);
