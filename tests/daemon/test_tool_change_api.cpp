@@ -169,7 +169,9 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
 TEST(DaemonToolChange, AGeneratedProgramsChangeNamesTheLibraryToolOfItsOperation) {
   const auto dir = temp_dir("toolchange-library");
   auto cfg = test_config(dir);
-  cfg.machines = {tool_machine("gen", "max", true)};
+  auto gen = tool_machine("gen", "max", true);
+  gen.tool_change.probe_travel = 100;  // the sensor (top at Z -10) is measured from the safe Z (50)
+  cfg.machines = {gen};
   RunningDaemon d(cfg);
   const Http h = with_client(d.http);
   ASSERT_TRUE(wait_for([&] { return ready(h, "gen"); }, 30));
