@@ -4,6 +4,8 @@
 
 // The shop view: its own module (pollShop/pollShopSoon also for a push that says the shop changed).
 import { setupShop, pollShop, pollShopSoon } from './shop.js';
+// The tool library: its panel, the tool-path form's pickers, the tool change's name and stick-out.
+import { setupTools, pickedLibraryTool, toolChangeLibraryText } from './tools.js';
 
 const API = '/api/v1';
 const JOG_RENEW_MS = 150;  // the daemon's lease is 0.3 s; renew well inside it (the API asks <= 250 ms)
@@ -355,6 +357,7 @@ function renderToolChange(rec, operatorTurn) {
   const prompted = rec.tcPrompted === key;
   $('#tc-what').textContent = `${tc.tool ? 'T' + tc.tool : 'Next tool'}${tc.description ? ' — ' + tc.description : ''}` +
     ` (line ${tc.line}, ${tc.method}${tc.from_tool ? ', T' + tc.from_tool + ' in the spindle' : ''})`;
+  $('#tc-library').textContent = toolChangeLibraryText(tc);
   const steps = toolChangeSteps(tc);
   let current = 0;
   if (tc.step === 'mount_tool' || tc.step === 'zero_manually') current = 1;
@@ -717,7 +720,7 @@ async function generate() {
   if (S.upload.kind === 'stl') {
     const cutter = $('#tp-cutter').value;
     const d = numberOf('#tp-diameter');
-    const tool = cutter === 'bull' ? `bull:${d}:${numberOf('#tp-radius')}` : `${cutter}:${d}`;
+    const tool = pickedLibraryTool() || (cutter === 'bull' ? `bull:${d}:${numberOf('#tp-radius')}` : `${cutter}:${d}`);
     body.params = {
       tool, stepover: numberOf('#tp-stepover'), direction: $('#tp-direction').value,
       feed: numberOf('#tp-feed'), plunge_feed: numberOf('#tp-plunge'), rpm: numberOf('#tp-rpm'),
@@ -1211,7 +1214,8 @@ renderMachine();
 renderHistory();
 connectWs();
 run('Loading the shop', setupShop);
-// The shop view (shop.js) uses the page's helpers.
+run('Loading the tool library', setupTools);
+// The shop view (shop.js) and the tool library (tools.js) use the page's helpers.
 export { $, el, api, run, duration };
 // For the browser tests and for debugging from the console.
 window.cncstream = { state: S, showPreview };  // the browser test drives and reads these

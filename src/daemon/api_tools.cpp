@@ -181,7 +181,11 @@ void Api::tool_routes() {
     } catch (const std::exception& e) {
       std::error_code ec;
       std::filesystem::remove(path, ec);
-      bad(e.what());
+      // The importer names the temporary file: the client is told its own file's name.
+      std::string what = e.what();
+      for (auto at = what.find(path.string()); at != std::string::npos; at = what.find(path.string(), at + name.size()))
+        what.replace(at, path.string().size(), name);
+      bad(what);
     }
     std::error_code ec;
     std::filesystem::remove(path, ec);

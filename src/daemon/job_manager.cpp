@@ -113,6 +113,36 @@ JobManager::JobManager(boost::asio::io_context& io, boost::asio::thread_pool& po
   l.start_failed = [this](const std::string& m, bool, const std::string& why) { on_start_failed(m, why); };
   machines_.set_listener(std::move(l));
   machines_.current_job = [this](const std::string& m) { return current_job(m); };
+  machines_.library_tool = [this](const std::string& m, int tool) { return library_tool(m, tool); };
+}
+
+json JobManager::library_tool(const std::string& machine, int number) const {
+  const tooling::ToolLibrary library = tools_.snapshot();
+  const tooling::Tool* t = nullptr;
+  const auto run = running_.find(machine);
+  const auto job = run == running_.end() ? jobs_.end() : jobs_.find(run->second);
+  if (job != jobs_.end() && !job->second->params.is_null()) {
+    // A program the daemon generated numbers its tools in the operations' order, not the library's:
+    // the library tool is the one whose shape that operation cuts with (none when no tool has it).
+    const Program* p = job->second->program.get();
+    std::optional<Cutter> cutter;
+    if (p && p->tools.count(number)) cutter = p->tools.at(number);
+    else if (p && p->tools.empty() && number == 1) cutter = p->cutter;
+    if (cutter)
+      for (const auto& candidate : library.tools)
+        if (candidate.geometry.spec() == cutter->spec()) {
+          t = &candidate;
+          break;
+        }
+  } else {
+    t = library.by_number(number);  // a G-code file's T numbers are the shop's
+  }
+  if (!t) return nullptr;
+  return {{"number", t->number},
+          {"name", t->name},
+          {"shape", t->geometry.spec()},
+          {"description", t->geometry.description()},
+          {"stick_out", t->stick_out > 0 ? json(t->stick_out) : json(nullptr)}};  // 0: not known
 }
 
 JobManager::~JobManager() {

@@ -492,6 +492,8 @@ json Machines::tool_change(const Machine& m) const {
   return {{"line", req->line},
           {"from_tool", req->from_tool},
           {"tool", req->to_tool},
+          // The incoming tool as the library knows it: the operator checks the name and the stick-out.
+          {"library_tool", req->to_tool > 0 && library_tool ? library_tool(m.config.name, req->to_tool) : json(nullptr)},
           {"description", req->note},
           {"method", cfg ? protocol::to_string(cfg->method) : "pause"},
           // "routine": the machine moves or probes by itself (wait); otherwise the operator's turn.

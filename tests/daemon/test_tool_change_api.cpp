@@ -90,6 +90,10 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(r.j()["from_line"], 8);
 
+  // T2 is in the daemon's tool library: the prompt names it with its expected stick-out (T1 is not).
+  r = h.post("/api/v1/tools", {{"number", 2}, {"name", "6 mm finisher"}, {"shape", "flat:6"}, {"flutes", 2}, {"stick_out", 37.3}});
+  ASSERT_EQ(r.status, 201) << r.body;
+
   // The machine's sensor, at the job's own safe Z.
   const auto id = create(h, "tc", file, {{"safe_z", 30}});
   EXPECT_EQ(job(h, id)["tool_change"]["safe_z"], 30);
@@ -118,6 +122,12 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   EXPECT_TRUE(tc["operator_turn"].get<bool>());
   EXPECT_NE(tc["description"].get<std::string>().find("finishing"), std::string::npos) << tc.dump();
   EXPECT_NE(tc["prompt"]["text"].get<std::string>().find("mount T2"), std::string::npos) << tc.dump();
+  ASSERT_TRUE(tc["library_tool"].is_object()) << tc.dump();
+  EXPECT_EQ(tc["library_tool"]["number"], 2);
+  EXPECT_EQ(tc["library_tool"]["name"], "6 mm finisher");
+  EXPECT_EQ(tc["library_tool"]["shape"], "flat:6");
+  EXPECT_DOUBLE_EQ(tc["library_tool"]["stick_out"].get<double>(), 37.3);
+  EXPECT_EQ((*frame)["state"]["library_tool"]["name"], "6 mm finisher");  // the same on the WebSocket
   EXPECT_EQ(job(h, id)["state"], "running");
 
   // At the prompt the machine is the operator's: a step jog moves it.
@@ -154,6 +164,54 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   std::filesystem::remove_all(dir);
 }
 
+// A program the daemon generates numbers its tools by operation (roughing T1, finishing T2): the
+// tool change names the library's tool of the finishing cutter (T7 here), never the library's T2.
+TEST(DaemonToolChange, AGeneratedProgramsChangeNamesTheLibraryToolOfItsOperation) {
+  const auto dir = temp_dir("toolchange-library");
+  auto cfg = test_config(dir);
+  auto gen = tool_machine("gen", "max", true);
+  gen.tool_change.probe_travel = 100;  // the sensor (top at Z -10) is measured from the safe Z (50)
+  cfg.machines = {gen};
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return ready(h, "gen"); }, 30));
+  ASSERT_EQ(h.post("/api/v1/machines/gen/control").status, 200);
+  auto r = h.post("/api/v1/tools", {{"number", 7}, {"name", "3 mm ball"}, {"shape", "ball:3"}, {"stick_out", 25}});
+  ASSERT_EQ(r.status, 201) << r.body;
+  r = h.post("/api/v1/tools", {{"number", 2}, {"name", "not this one"}, {"shape", "flat:2"}, {"stick_out", 40}});
+  ASSERT_EQ(r.status, 201) << r.body;
+  std::string pyramid = "solid p\n";
+  const char* base[5] = {"0 0 0", "20 0 0", "20 20 0", "0 20 0", "0 0 0"};
+  for (int i = 0; i < 4; ++i)
+    pyramid += std::string("facet normal 0 0 0\nouter loop\nvertex ") + base[i] + "\nvertex " + base[i + 1] +
+               "\nvertex 10 10 5\nendloop\nendfacet\n";
+  pyramid += "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 20 20 0\nvertex 20 0 0\nendloop\nendfacet\n"
+             "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 20 0\nvertex 20 20 0\nendloop\nendfacet\nendsolid p\n";
+  const auto file = upload_text(h, pyramid, "pyramid.stl");
+  r = h.post("/api/v1/jobs", {{"machine", "gen"},
+                              {"file", file["id"]},
+                              {"params", {{"tool", "T7"}, {"rough", "flat:6"}, {"stepover", 1}, {"feed", 2000},
+                                          {"plunge_feed", 500}, {"rpm", 18000}}}});
+  ASSERT_EQ(r.status, 201) << r.body;
+  const auto id = r.j()["id"].get<std::int64_t>();
+  ASSERT_TRUE(wait_for([&] { return job(h, id)["state"] == "ready"; }, 60)) << job(h, id).dump();
+  ASSERT_EQ(h.post("/api/v1/jobs/" + std::to_string(id) + "/start").status, 202);
+  json tc;
+  ASSERT_TRUE(wait_for([&] {
+    tc = machine(h, "gen")["tool_change"];
+    return !tc.is_null() && tc["step"] == "mount_tool";
+  }, 60)) << job(h, id).dump();
+  EXPECT_EQ(tc["tool"], 2) << tc.dump();
+  ASSERT_TRUE(tc["library_tool"].is_object()) << tc.dump();
+  EXPECT_EQ(tc["library_tool"]["number"], 7) << tc.dump();
+  EXPECT_EQ(tc["library_tool"]["name"], "3 mm ball");
+  EXPECT_DOUBLE_EQ(tc["library_tool"]["stick_out"].get<double>(), 25);
+  ASSERT_EQ(h.post("/api/v1/machines/gen/tool-change/decline").status, 202);
+  ASSERT_TRUE(wait_for([&] { return job(h, id)["state"] == "failed"; }, 30)) << job(h, id).dump();
+  d.shutdown();
+  std::filesystem::remove_all(dir);
+}
+
 TEST(DaemonToolChange, DeclineAndAMissingSensorEndTheJobWithTheLengthUnknown) {
   const auto dir = temp_dir("toolchange-fail");
   auto cfg = test_config(dir);
@@ -180,6 +238,7 @@ TEST(DaemonToolChange, DeclineAndAMissingSensorEndTheJobWithTheLengthUnknown) {
     const json tc = machine(h, "with")["tool_change"];
     return !tc.is_null() && tc["step"] == "mount_tool";
   }, 60));
+  EXPECT_TRUE(machine(h, "with")["tool_change"]["library_tool"].is_null());  // T2 is in no library here
   ASSERT_EQ(h.post("/api/v1/machines/with/tool-change/decline").status, 202);
   ASSERT_TRUE(wait_for([&] { return job(h, declined)["state"] == "failed"; }, 30)) << job(h, declined).dump();
   EXPECT_NE(job(h, declined)["message"].get<std::string>().find("declined"), std::string::npos);

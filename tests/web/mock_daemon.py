@@ -500,6 +500,8 @@ class Handler(BaseHTTPRequestHandler):
             return self.reply(200, {"token": t, "expires_in_s": 30})
         if parts == ["machines"]:
             return self.reply(200, {"machines": [m.summary() for m in MACHINES.values()]})
+        if parts == ["tools"] and method == "GET":
+            return self.reply(200, {"tools": []})  # an empty library (the real daemon's is tested in test_tools_page.py)
         if parts[0] == "machines" and len(parts) >= 2:
             m = self.machine(parts[1])
             rest = parts[2:]

@@ -588,6 +588,12 @@ def tool_change_flow(args, out, d):
     d.get("about:blank")  # no page of an earlier flow still reconnecting to its stopped daemon
     p.console_errors()  # reading the log empties it: what follows belongs to this flow
     try:
+        # T2 is in the daemon's tool library: the panel shows its name and expected stick-out.
+        add = urllib.request.Request(daemon.url + "api/v1/tools", method="POST", headers={"Content-Type": "application/json"},
+                                     data=json.dumps({"number": 2, "name": "3 mm ball finisher", "shape": "ball:3",
+                                                      "stick_out": 37.3}).encode())
+        with urllib.request.urlopen(add, timeout=10) as r:
+            assert r.status == 201, r.status
         d.get(daemon.url)
         p.wait("the page to connect to the tool-change machine", p.connected, 30)
         drop_text_file(d, "two-tools.nc", TWO_TOOLS)
@@ -608,6 +614,8 @@ def tool_change_flow(args, out, d):
         say(f"tool change: {what} / {prompt}")
         assert what.startswith("T2") and "finishing: 3 mm ball nose" in what and "line 7" in what, what
         assert "mount T2" in prompt, prompt
+        library = p.text("#tc-library")
+        assert "3 mm ball finisher" in library and "37.3 mm" in library, library
         steps = d.execute_script("return [...document.querySelectorAll('#tc-steps li')].map(l => [l.className, l.dataset.step])")
         assert steps[0] == ["done", "before"] and steps[1] == ["current", "zero_manually"], steps
         assert p.q("#tc-confirm").is_enabled() and p.q("#tc-probe").is_enabled()

@@ -140,6 +140,8 @@ class JobManager {
   void publish_queue(const std::string& machine);
   void set_state(DaemonJob& j, const std::string& state, const std::string& message = {});
   DaemonJob* running_on(const std::string& machine);
+  // Machines::library_tool: the library's tool for T `number` of the job running on `machine`.
+  nlohmann::json library_tool(const std::string& machine, int number) const;
   void cancel_waiting(DaemonJob& j, const std::string& message);
   std::vector<DaemonJob*> unfinished(const std::string& machine);
   Machine& machine_of(const DaemonJob& j);

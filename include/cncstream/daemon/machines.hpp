@@ -136,6 +136,10 @@ class Machines {
   nlohmann::json tool_reference(const Machine& m) const;
 
   std::function<nlohmann::json(const std::string& machine)> current_job;  // the job manager's view
+  // The daemon's tool library's entry for the tool a machine's program
+  // changes to (T number), as the tool change shows it (name, shape,
+  // stick-out), or null when the library has none: the job manager's view.
+  std::function<nlohmann::json(const std::string& machine, int tool)> library_tool;
 
  private:
   void on_event(Machine& m, const session::SessionEvent& e);
