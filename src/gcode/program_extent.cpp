@@ -90,7 +90,7 @@ ProgramExtent program_extent(const std::vector<std::string>& lines, double arc_t
             if (axes[i].known) axes[i].add(component(m->to, i));
         } else if (const auto* arc = std::get_if<ArcMove>(&action)) {
           // Its chords need a known start as well as a known end.
-          for (const Vec3& p : arc_chords(*arc, arc_tolerance).points)
+          for (const geometry::Vec3& p : arc_chords(*arc, arc_tolerance).points)
             for (int i = 0; i < 3; ++i)
               if (axes[i].known && known_before[i]) axes[i].add(component(p, i));
           for (int i = 0; i < 3; ++i)

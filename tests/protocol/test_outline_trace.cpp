@@ -19,14 +19,14 @@ const std::vector<std::string> kOutlineProgram = {
 
 struct OutlineBench : test::RoutineBench {
   struct Move {
-    Vec3 a, b;
+    geometry::Vec3 a, b;
     bool rapid;
   };
   std::vector<Move> moves;
   OutlineBench() : RoutineBench(cncsim::MachineOptions{}) {
     command("G10 L2 P1 X100 Y50 Z-20");
     command("G0 X0 Y0 Z1");  // work: below the program's travel height
-    m.set_motion_observer([this](const Vec3& a, const Vec3& b, bool rapid) { moves.push_back({a, b, rapid}); });
+    m.set_motion_observer([this](const geometry::Vec3& a, const geometry::Vec3& b, bool rapid) { moves.push_back({a, b, rapid}); });
   }
 };
 
@@ -45,10 +45,10 @@ TEST(OutlineTrace, TracesTheProgramsExtentAtTheSafeHeight) {
   OutlineTraceRoutine r(c);
   b.run(r);
   ASSERT_TRUE(r.succeeded()) << r.failure();
-  const Vec3 wco{100, 50, -20};
+  const geometry::Vec3 wco{100, 50, -20};
   bool corners[4] = {false, false, false, false};
   for (const auto& mv : b.moves) {
-    const Vec3 a = mv.a - wco, e = mv.b - wco;
+    const geometry::Vec3 a = mv.a - wco, e = mv.b - wco;
     if (std::hypot(e.x - a.x, e.y - a.y) < 1e-9) continue;  // the climb
     // Every XY move at the safe height...
     EXPECT_NEAR(a.z, 5, 1e-6);
@@ -86,7 +86,7 @@ TEST(OutlineTrace, ALostLinkLeavesAtMostTheSegmentInFlight) {
   EXPECT_EQ(b.sent.size(), at_loss);
   b.m.run_until_idle();
   // It stopped where the second segment ends: (x1, y1), not further.
-  const Vec3 w = b.m.work_position();
+  const geometry::Vec3 w = b.m.work_position();
   EXPECT_NEAR(w.x, c.x1, 1e-6);
   EXPECT_NEAR(w.y, c.y1, 1e-6);
   EXPECT_NEAR(w.z, 10, 1e-6);

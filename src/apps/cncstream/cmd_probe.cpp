@@ -53,14 +53,14 @@ int run_probe(ProbeCliOptions o) {
     throw std::invalid_argument("--plate '" + o.plate +
                                 "': expected THICKNESS,LIP[,SIZE] (mm: thickness > 0, lip >= 0, size > lip)");
   }
-  const Cutter cutter = parse_cutter_spec(o.tool);
+  const cam::Cutter cutter = cam::parse_cutter_spec(o.tool);
   o.cfg.tool_radius = cutter.radius;
   auto routine = std::make_shared<protocol::CornerProbeRoutine>(o.cfg);
   session::SimulatorOptions so = simulator_options(o.sim);
   if (o.conn.port == "sim") {
     // A block with the plate on its X-min/Y-min corner, the bit over the plate.
     const cncsim::StockBox box = cncsim::parse_stock_box(o.sim_stock, 1.0);
-    so.stock = Box3{box.lo, box.hi};
+    so.stock = geometry::Box3{box.lo, box.hi};
     so.cutter = cutter;
     so.corner_plate = o.plate;
     if (!o.sim_start.empty()) {
@@ -69,7 +69,7 @@ int run_probe(ProbeCliOptions o) {
       so.start_position = *p;
     } else {
       const auto& pl = o.cfg.plate;
-      so.start_position = Vec3{box.lo.x - pl.lip + pl.size / 2, box.lo.y - pl.lip + pl.size / 2,
+      so.start_position = geometry::Vec3{box.lo.x - pl.lip + pl.size / 2, box.lo.y - pl.lip + pl.size / 2,
                                box.hi.z + pl.thickness + 10};
     }
   }
