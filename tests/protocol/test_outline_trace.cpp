@@ -32,9 +32,9 @@ struct OutlineBench : test::RoutineBench {
 
 }  // namespace
 
-TEST(OutlineTrace, TracesTheProgramsExtentAtTheSafeHeight) {
+TEST(OutlineTrace, TracesTheProgramsBoxAtTheSafeHeight) {
   const auto extent = gcode::program_extent(kOutlineProgram);
-  const OutlineConfig c = outline_from_extent(extent, std::nullopt, 2000, "part.nc");
+  const OutlineConfig c = outline_from_extent(extent, std::nullopt, 2000, "part.nc", OutlineShape::Box);
   // The arc bulges to X50: the extent is the chorded arc's, as the firmware runs it.
   EXPECT_NEAR(c.x0, 2, 1e-9);
   EXPECT_NEAR(c.x1, 50, 0.01);
@@ -69,8 +69,52 @@ TEST(OutlineTrace, TracesTheProgramsExtentAtTheSafeHeight) {
   EXPECT_TRUE(b.sent_any("G1 X50.000 Y3.000 F2000.000") || b.sent_any("G1 X49.999") || b.sent_any("G1 X50.001"));
 }
 
+// The default trace: the hull of the program's moves, corner to corner, at
+// the safe height; the box's empty corner (X50 Y3, beside the arc) is never
+// visited, and every position the program moves to lies within the
+// tolerance of the traced polygon.
+TEST(OutlineTrace, TracesTheHullOfTheProgramsMovesByDefault) {
+  const auto extent = gcode::program_extent(kOutlineProgram);
+  const OutlineConfig c = outline_from_extent(extent, std::nullopt, 2000, "part.nc");
+  ASSERT_EQ(c.shape, OutlineShape::Hull);
+  ASSERT_GE(c.path.size(), 5u);
+  OutlineBench b;
+  OutlineTraceRoutine r(c);
+  b.run(r);
+  ASSERT_TRUE(r.succeeded()) << r.failure();
+  EXPECT_NE(r.summary().find("hull"), std::string::npos) << r.summary();
+  const geometry::Vec3 wco{100, 50, -20};
+  std::vector<gcode::XyPoint> traced;
+  for (const auto& mv : b.moves) {
+    const geometry::Vec3 a = mv.a - wco, e = mv.b - wco;
+    if (std::hypot(e.x - a.x, e.y - a.y) < 1e-9) continue;
+    EXPECT_NEAR(e.z, 5, 1e-6);
+    if (!mv.rapid) traced.push_back({e.x, e.y});
+    EXPECT_GT(std::hypot(e.x - 50, e.y - 3), 1.0) << "the box's corner beside the arc";
+  }
+  ASSERT_EQ(traced.size(), c.path.size());  // every corner, back to the first
+  for (std::size_t k = 0; k < traced.size(); ++k) {
+    EXPECT_NEAR(traced[k][0], c.path[(k + 1) % c.path.size()][0], 1e-3);
+    EXPECT_NEAR(traced[k][1], c.path[(k + 1) % c.path.size()][1], 1e-3);
+  }
+  // The arc's chords (what the program runs) lie within the tolerance of it.
+  for (int k = 0; k <= 90; ++k) {
+    const double a = -M_PI / 2 + M_PI * k / 90.0;
+    const gcode::XyPoint p{40 + 10 * std::cos(a), 13 + 10 * std::sin(a)};
+    double inside = 1e300;
+    for (std::size_t i = 0; i < c.path.size(); ++i) {
+      const auto& u = c.path[i];
+      const auto& v = c.path[(i + 1) % c.path.size()];
+      inside = std::min(inside, ((v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0])) /
+                                    std::hypot(v[0] - u[0], v[1] - u[1]));
+    }
+    EXPECT_GE(inside, -kOutlineHullTolerance - 0.003) << "arc point " << k;
+  }
+}
+
 TEST(OutlineTrace, ALostLinkLeavesAtMostTheSegmentInFlight) {
-  const OutlineConfig c = outline_from_extent(gcode::program_extent(kOutlineProgram), 10.0, 2000, "part.nc");
+  const OutlineConfig c =
+      outline_from_extent(gcode::program_extent(kOutlineProgram), 10.0, 2000, "part.nc", OutlineShape::Box);
   OutlineBench b;
   OutlineTraceRoutine r(c);
   std::size_t at_loss = 0;
