@@ -257,6 +257,22 @@ Feeds compute_feeds(const CutRequest& q) {
   return f;
 }
 
+MachineLimits machine_limits_from_settings(const std::map<int, double>& settings, bool with_spindle) {
+  auto get = [&](int n) {
+    const auto it = settings.find(n);
+    return it != settings.end() && it->second > 0 ? it->second : 0.0;
+  };
+  MachineLimits l;
+  const double x = get(110), y = get(111);
+  l.max_feed_xy = x > 0 && y > 0 ? std::min(x, y) : std::max(x, y);
+  l.max_feed_z = get(112);
+  if (with_spindle) {
+    l.spindle_max = get(30);
+    l.spindle_min = get(31);
+  }
+  return l;
+}
+
 std::string feeds_text(const Feeds& f) {
   return fmt::format("{:.0f} rpm, feed {:.0f} mm/min, chip {:.3f} mm/tooth, {:.2f} cm³/min", f.rpm, f.feed, f.chip_load,
                      f.removal_rate / 1000);
