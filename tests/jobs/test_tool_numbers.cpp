@@ -15,7 +15,8 @@ using namespace cncstream;
 
 namespace {
 
-// Roughing with a flat, finishing with a 6 mm ball, rest machining with a 2 mm ball.
+// Roughing with a flat, rest roughing and finishing with a 6 mm ball, rest
+// machining with a 2 mm ball.
 jobs::ToolpathParams three_tool_job() {
   jobs::ToolpathParams p = test::v_groove_job("ball:6", "ball:2");
   p.rough = cam::parse_cutter_spec("flat:6");
@@ -57,10 +58,12 @@ std::vector<int> read_back_tools(const std::string& gcode) {
 TEST(JobToolNumbers, LibraryToolsWriteTheirOwnNumbersASpecKeepsItsPlaceAndNeverTakesOne) {
   // Specs only: the operations' order, as before.
   const jobs::ToolpathProgram specs = jobs::generate_toolpath(three_tool_job());
-  ASSERT_EQ(specs.operations.size(), 3u);
-  EXPECT_EQ(operation_tools(specs), (std::vector<int>{1, 2, 3}));
+  std::vector<std::string> names;
+  for (const auto& o : specs.operations) names.push_back(o.name);
+  ASSERT_EQ(names, (std::vector<std::string>{"roughing", "rest roughing", "finishing", "rest machining"}));
+  EXPECT_EQ(operation_tools(specs), (std::vector<int>{1, 2, 2, 3}));
   EXPECT_EQ(t_words(specs.gcode), (std::vector<int>{1, 2, 3}));
-  EXPECT_EQ(read_back_tools(specs.gcode), (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(read_back_tools(specs.gcode), (std::vector<int>{1, 2, 2, 3}));
 
   // Library tools 5 (roughing) and 3 (finishing): T5 then T3; the rest
   // machining's spec would be the third, 3, which the finishing holds: T4.
@@ -68,15 +71,15 @@ TEST(JobToolNumbers, LibraryToolsWriteTheirOwnNumbersASpecKeepsItsPlaceAndNeverT
   p.rough_tool_number = 5;
   p.tool_number = 3;
   const jobs::ToolpathProgram lib = jobs::generate_toolpath(p);
-  EXPECT_EQ(operation_tools(lib), (std::vector<int>{5, 3, 4}));
+  EXPECT_EQ(operation_tools(lib), (std::vector<int>{5, 3, 3, 4}));
   EXPECT_EQ(t_words(lib.gcode), (std::vector<int>{5, 3, 4}));
-  EXPECT_EQ(read_back_tools(lib.gcode), (std::vector<int>{5, 3, 4}));
-  EXPECT_NE(lib.gcode.find("TOOL CHANGE for finishing: mount T3"), std::string::npos);
+  EXPECT_EQ(read_back_tools(lib.gcode), (std::vector<int>{5, 3, 3, 4}));
+  EXPECT_NE(lib.gcode.find("TOOL CHANGE for rest roughing: mount T3"), std::string::npos);
   // The same paths: only the numbers differ.
   EXPECT_EQ(lib.stats.motion_lines, specs.stats.motion_lines);
 
   // A spec roughing before library tool 1: its place (1) is taken, it becomes T2.
   p = three_tool_job();
   p.tool_number = 1;
-  EXPECT_EQ(operation_tools(jobs::generate_toolpath(p)), (std::vector<int>{2, 1, 3}));
+  EXPECT_EQ(operation_tools(jobs::generate_toolpath(p)), (std::vector<int>{2, 1, 1, 3}));
 }
