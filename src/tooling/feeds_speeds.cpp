@@ -227,7 +227,11 @@ Feeds compute_feeds(const CutRequest& q) {
     // its load (a thin chip rubs and, in wood, burns); not below $31.
     if (!q.rpm && !(data && data->rpm)) {
       const double slower = std::max(f.rpm * f.feed / wanted, q.limits.spindle_min);
-      f.rpm_from = fmt::format("lowered from {:.0f} with the feed to keep the chip{}", f.rpm,
+      // Where the spindle's top bound it before, the plan still says so.
+      const bool at_spindle_max = f.rpm_from.rfind("spindle max $30", 0) == 0;
+      f.rpm_from = fmt::format("lowered from {:.0f}{} with the feed to keep the chip{}", f.rpm,
+                               at_spindle_max ? fmt::format(" (spindle max $30 = {:.0f})", q.limits.spindle_max)
+                                              : std::string(),
                                slower == q.limits.spindle_min ? fmt::format(", to spindle min $31 = {:.0f}", slower)
                                                               : std::string());
       f.rpm = slower;
