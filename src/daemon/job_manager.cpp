@@ -16,6 +16,7 @@
 #include "cncstream/gcode/program.hpp"
 #include "cncstream/gcode/tool_change_line.hpp"
 #include "cncstream/jobs/toolpath_job.hpp"
+#include "cncstream/tooling/feeds_speeds.hpp"
 #include "cncstream/protocol/link_model.hpp"
 #include "cncstream/protocol/grbl_settings.hpp"
 #include "cncstream/transport/sha256.hpp"
@@ -122,18 +123,21 @@ json JobManager::library_tool(const std::string& machine, int number) const {
   const auto run = running_.find(machine);
   const auto job = run == running_.end() ? jobs_.end() : jobs_.find(run->second);
   if (job != jobs_.end() && !job->second->params.is_null()) {
-    // A program the daemon generated numbers its tools in the operations' order, not the library's:
-    // the library tool is the one whose shape that operation cuts with (none when no tool has it).
+    // A program the daemon generated writes a library tool's own number; a
+    // cutter given as a spec keeps its place in the operations' order, which
+    // may be another tool's number: the library tool of that number when it
+    // has the shape the operation cuts with, else (a spec, a program numbered
+    // before the library's numbers were written) the one with that shape.
     const Program* p = job->second->program.get();
     std::optional<cam::Cutter> cutter;
     if (p && p->tools.count(number)) cutter = p->tools.at(number);
     else if (p && p->tools.empty() && number == 1) cutter = p->cutter;
-    if (cutter)
+    if (cutter) {
+      t = library.by_number(number);
+      if (t && t->geometry.spec() != cutter->spec()) t = nullptr;
       for (const auto& candidate : library.tools)
-        if (candidate.geometry.spec() == cutter->spec()) {
-          t = &candidate;
-          break;
-        }
+        if (!t && candidate.geometry.spec() == cutter->spec()) t = &candidate;
+    }
   } else {
     t = library.by_number(number);  // a G-code file's T numbers are the shop's
   }
@@ -360,13 +364,12 @@ json JobManager::create(const json& body) {
   }
   if (info->kind == "stl") {
     if (!body.contains("params")) throw ApiError{400, "bad_request", "params: required for an STL file (at least tool)"};
-    // The machine's rates bound the feeds a material gives.
+    // The machine's $$ bounds the feeds and speeds a material gives: its
+    // rates, and a real controller's spindle $30/$31 (the simulator's are
+    // GRBL's shipped PWM scale, not a spindle's).
     tooling::MachineLimits machine_limits;
     if (Machine* m = machines_.find(machine))
-      if (auto l = protocol::motion_limits_from(m->session->settings())) {
-        machine_limits.max_feed_xy = std::min(l->max_rate.x, l->max_rate.y);
-        machine_limits.max_feed_z = l->max_rate.z;
-      }
+      machine_limits = tooling::machine_limits_from_settings(m->session->settings(), m->config.port != "sim");
     const tooling::ToolLibrary library = tools_.snapshot();
     const auto checked = check_toolpath_params(body["params"], *info, config_.limits, &library, machine_limits);
     j->params = checked.canonical;

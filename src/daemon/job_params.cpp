@@ -47,6 +47,18 @@ std::string choice(const json& j, const char* key, const std::string& dflt, std:
   bad(key, cat({"'", s.substr(0, 40), "' is not one of ", list}));
 }
 
+// A cutter's T number in the program: its library tool's, else the
+// request's `key` (a spec's number as the canonical params, or the CLI's own
+// library, give it), else none (numbered by the operations' order).
+std::optional<int> program_tool_number(const json& j, const char* key, const std::optional<tooling::ToolChoice>& choice) {
+  if (choice && choice->tool) return choice->tool->number;
+  if (!j.contains(key) || j.at(key).is_null()) return std::nullopt;
+  const auto& v = j.at(key);
+  if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > 9999)
+    bad(key, "expected a tool number from 1 to 9999");
+  return static_cast<int>(v.get<long long>());
+}
+
 }  // namespace
 
 CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const Limits& limits,
@@ -155,6 +167,9 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
     }
     if (!(p.rest->diameter() > 0 && p.rest->diameter() <= 50)) bad("rest", "the diameter must be > 0 and <= 50 mm");
   }
+  p.tool_number = program_tool_number(j, "tool_number", tool_choice);
+  if (p.rough) p.rough_tool_number = program_tool_number(j, "rough_tool_number", rough_choice);
+  if (p.rest) p.rest_tool_number = program_tool_number(j, "rest_tool_number", rest_choice);
   p.rough_max_depth = opt_number(j, "rough_max_depth", 0.01, 100);
   p.leave = number(j, "leave", 0.3, 0, 10);
   p.step_down = opt_number(j, "step_down", 0.01, 100);
@@ -165,6 +180,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   if (!p.stock && (p.rough || p.max_depth || p.step_down))
     bad("stock", "none finishes from the part's top without a depth check: rough, max_depth and step_down need a stock");
   auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  auto opt_int = [](const std::optional<int>& v) { return v ? json(*v) : json(nullptr); };
   p.rough_rpm = opt_number(j, "rough_rpm", 0, 100000);
   p.rest_feed = opt_number(j, "rest_feed", 0.1, 100000);
   p.rest_rpm = opt_number(j, "rest_rpm", 0, 100000);
@@ -235,6 +251,9 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
                    {"rough_feed", opt(p.rough_feed)}, {"tool_change", tool_change},
                    {"rest", p.rest ? json(p.rest->spec()) : json(nullptr)},
                    {"rough_rpm", opt(p.rough_rpm)}, {"rest_feed", opt(p.rest_feed)}, {"rest_rpm", opt(p.rest_rpm)},
+                   // The library's numbers: the program's T words (the spec above alone would lose them).
+                   {"tool_number", opt_int(p.tool_number)}, {"rough_tool_number", opt_int(p.rough_tool_number)},
+                   {"rest_tool_number", opt_int(p.rest_tool_number)},
                    // Informational: the feeds above are the material's, computed once.
                    {"material_used", material.empty() ? json(nullptr) : json(material)}};
   return out;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 
 #include "cncstream/cam/cl_engine.hpp"
@@ -28,6 +29,24 @@ OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParam
   o.cut_length = stats.cut_length;
   o.feed_time_s = stats.feed_time_s;
   return o;
+}
+
+std::vector<int> job_tool_numbers(const std::vector<std::optional<int>>& library_numbers) {
+  std::set<int> taken;
+  for (const auto& n : library_numbers)
+    if (n) taken.insert(*n);
+  std::vector<int> out;
+  for (std::size_t k = 0; k < library_numbers.size(); ++k) {
+    if (library_numbers[k]) {
+      out.push_back(*library_numbers[k]);
+      continue;
+    }
+    int n = static_cast<int>(k) + 1;
+    while (taken.count(n)) ++n;
+    taken.insert(n);
+    out.push_back(n);
+  }
+  return out;
 }
 
 void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStage* with_stock, const RestStage* rest,
@@ -94,7 +113,21 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
     r.operations.push_back(std::move(o));
   };
 
-  int tool = 1;
+  // The program's cutters in order, with their library numbers: the
+  // roughing's (unless the finishing cutter roughs), the finishing's (rest
+  // roughing and finishing), the rest machining's.
+  const bool rough_changes = rough.path && rough.path->cutter.spec() != p.cutter.spec();
+  const bool rest_cuts = rest && !rest->pieces.empty();
+  // A roughing with the finishing's own cutter: whichever names its library tool.
+  const std::optional<int> finish_number =
+      p.tool_number ? p.tool_number : rough.path && !rough_changes ? p.rough_tool_number : std::nullopt;
+  std::vector<std::optional<int>> numbered;
+  if (rough_changes) numbered.push_back(p.rough_tool_number);
+  numbered.push_back(finish_number);
+  if (rest_cuts) numbered.push_back(p.rest_tool_number);
+  const std::vector<int> numbers = job_tool_numbers(numbered);
+  std::size_t next_number = 0;
+  int tool = numbers[next_number++];
   if (rough.path) {
     const auto at = begin("roughing", tool, rough.path->cutter, p.rough_rpm.value_or(p.rpm));
     MachiningParams rm = mp;
@@ -108,11 +141,12 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
     o.detail = fmt::format("Z-level, {} levels, stepover {} mm, leave {} mm", rough.path->levels.size(),
                            format_gcode_number(rough.path->stepover, 3), format_gcode_number(p.leave, 3));
     o.max_depth = rough.rough_max_depth;
+    o.depth_limit = o.max_depth;
     o.rpm = rm.rpm;
     o.feed = rm.feed;
     summary(std::move(o), at);
     // The same cutter finishes without a tool change.
-    if (rough.path->cutter.spec() != p.cutter.spec()) ++tool;
+    if (rough_changes) tool = numbers[next_number++];
   }
   if (!rough.rest.empty()) {
     // With the finishing cutter: the finishing follows without a tool change.
@@ -131,6 +165,7 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
                            rough.rest_spots, levels, format_gcode_number(rough.rest.front().stepover, 3),
                            format_gcode_number(rough.rest_leave, 3));
     o.max_depth = rough.rest_step_down;
+    o.depth_limit = o.max_depth;
     o.rpm = p.rpm;
     o.feed = mp.feed;
     summary(std::move(o), at);
@@ -140,11 +175,12 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
   OperationSummary f = finishing_summary(r, p, ProgramStats{});
   f.tool = tool;
   f.max_depth = rough.finish_depth;
+  if (with_stock) f.depth_limit = finishing_depth_limit(rough, p);
   f.rpm = p.rpm;
   f.feed = mp.feed;
   summary(std::move(f), at);
-  if (rest && !rest->pieces.empty()) {
-    ++tool;
+  if (rest_cuts) {
+    tool = numbers[next_number++];
     const auto at_rest = begin("rest machining", tool, rest->cutter, p.rest_rpm.value_or(p.rpm));
     MachiningParams restp = mp;
     restp.feed = p.rest_feed.value_or(p.feed);
@@ -168,6 +204,7 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
                            rest->pieces.size() - rest->pencils, rest->pencils);
     write_pieces(program.writer(), rest->pieces, r.work_offset, restp, program.stats());
     o.max_depth = rest->depth;
+    o.depth_limit = o.max_depth;
     o.rpm = restp.rpm;
     o.feed = restp.feed;
     summary(std::move(o), at_rest);

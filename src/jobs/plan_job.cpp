@@ -1,5 +1,7 @@
 #include "cncstream/jobs/plan_job.hpp"
 
+#include "job_operations.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -125,9 +127,15 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
                            "work origin: XY at the part's min, Z0 at the part's top"};
       return h;
     };
-    p.program_first = finishing_program(first.path, r.work_offset, header(first.cutter, "1 of 2, finishing", 1));
-    p.program_second = pieces.empty() ? std::string()
-                                      : pieces_program(pieces, r.work_offset, header(second.cutter, "2 of 2, clean-up", 2));
+    // T numbers: a library tool's own, a spec's its place past them (job_tool_numbers).
+    const std::vector<int> tools = job_tool_numbers(
+        p.radiused_first ? std::vector<std::optional<int>>{params.radiused_tool_number, params.ball_tool_number}
+                         : std::vector<std::optional<int>>{params.ball_tool_number, params.radiused_tool_number});
+    p.program_first =
+        finishing_program(first.path, r.work_offset, header(first.cutter, "1 of 2, finishing", tools[0]));
+    p.program_second =
+        pieces.empty() ? std::string()
+                       : pieces_program(pieces, r.work_offset, header(second.cutter, "2 of 2, clean-up", tools[1]));
     {
       // Both operations in one program, the tool change between them.
       JobProgramOptions jo;
@@ -139,10 +147,10 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
                                                 : ", then clean-up with " + second.cutter.spec()),
                             "part: " + so.part.stl, "work origin: XY at the part's min, Z0 at the part's top"};
       JobProgram job(jo);
-      job.begin_operation({"finishing", 1, first.cutter, rate_for(first.cutter).rpm});
+      job.begin_operation({"finishing", tools[0], first.cutter, rate_for(first.cutter).rpm});
       write_pieces(job.writer(), raster_as_one_cut(first.path), r.work_offset, rate_for(first.cutter), job.stats());
       if (!pieces.empty()) {
-        job.begin_operation({"clean-up", 2, second.cutter, rate_for(second.cutter).rpm});
+        job.begin_operation({"clean-up", tools[1], second.cutter, rate_for(second.cutter).rpm});
         write_pieces(job.writer(), pieces, r.work_offset, rate_for(second.cutter), job.stats());
       }
       p.program_job = job.finish();

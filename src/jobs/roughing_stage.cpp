@@ -193,6 +193,8 @@ RoughingStage roughing_from_stock(const ToolpathParams& p, const geometry::Mesh&
   return s;
 }
 
+double finishing_depth_limit(const RoughingStage& s, const ToolpathParams& p) { return s.finish_max_depth + p.tolerance; }
+
 void check_roughing(RoughingStage& s, const ToolpathParams& p, const geometry::Mesh& mesh,
                     const std::vector<cam::Polyline>& finishing, const geometry::Vec3& work_offset, const cam::Checkpoint& checkpoint) {
   s.finish_depth_alone = depth_below_stock(finishing, work_offset, s.stock, p.cutter.radius);
@@ -224,6 +226,10 @@ void check_roughing(RoughingStage& s, const ToolpathParams& p, const geometry::M
   auto finishing_depth = [&](const cam::HeightFieldStock& stock) {
     return cam::pass_depth(stock, finishing, p.cutter, p.leave, s.finish_max_depth, retract_z);
   };
+  // The depth is checked on the finishing's path; its program may dip the
+  // path tolerance below it (finishing_depth_limit): the refusals say so.
+  const std::string checked_on_path =
+      fmt::format(" (measured on its path; the program's moves follow it within the {:g} mm tolerance)", p.tolerance);
   auto where = [&](const cam::PassDepth& e) {
     return fmt::format("X{:.3f} Y{:.3f} (work coordinates; down to Z{:.3f})", e.at.x + work_offset.x,
                        e.at.y + work_offset.y, e.at.z + work_offset.z);
@@ -272,10 +278,10 @@ void check_roughing(RoughingStage& s, const ToolpathParams& p, const geometry::M
     cam::RoughingPath rest = cam::build_zlevel_roughing(grown_finish, p.cutter, rest_block, rr, rest_checkpoint);
     if (rest.levels.empty())
       throw std::invalid_argument(fmt::format(
-          "after roughing{} the finishing pass would still cut {} at {}, more than the {}'s {}, and a rest roughing "
+          "after roughing{} the finishing pass would still cut {} at {}, more than the {}'s {}{}, and a rest roughing "
           "with it finds nothing it can cut there: give a smaller --leave or --step-down",
           s.rest.empty() ? "" : " and rest roughing", mm(depth.deepest), where(depth), p.cutter.spec(),
-          mm(s.finish_max_depth)));
+          mm(s.finish_max_depth), checked_on_path));
     cam::HeightFieldStock after = stock_after(stock, rest);
     // Bounded from the measure before (cheap), measured again only where a
     // bound is over.
@@ -289,8 +295,8 @@ void check_roughing(RoughingStage& s, const ToolpathParams& p, const geometry::M
     if (attempt == 3)
       throw std::invalid_argument(fmt::format(
           "after roughing and rest roughing with the {} the finishing pass would still cut {} at {}, more than its "
-          "{}: give a smaller --leave or --step-down, or a smaller finishing cutter",
-          p.cutter.spec(), mm(depth.deepest), where(depth), mm(s.finish_max_depth)));
+          "{}{}: give a smaller --leave or --step-down, or a smaller finishing cutter",
+          p.cutter.spec(), mm(depth.deepest), where(depth), mm(s.finish_max_depth), checked_on_path));
     rr.near = depth.over;
   }
   s.rest_leave = rr.leave;

@@ -46,6 +46,14 @@ struct RoughingStage {
   std::vector<std::string> notes;
 };
 
+// The job's depth-of-cut rule for a move of the finishing program: the
+// finishing's path (its pieces) is checked against its cutter's maximum
+// depth (check_roughing), and the program follows that path within the path
+// tolerance (lines merged and arcs fitted within it, a controller's chords
+// of them): a move may dip up to the tolerance below the checked path, so
+// the program's moves keep within the maximum depth plus the tolerance.
+double finishing_depth_limit(const RoughingStage& s, const ToolpathParams& p);
+
 // A round cutter's roughing stepover: loops close enough that the scallops
 // between them stay under a quarter of the step-down (the roughing allows
 // for a further grid cell, at most a sixth of the radius).

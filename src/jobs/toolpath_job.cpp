@@ -200,6 +200,8 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     if (!rough && !rest) {
       r.gcode = pieces_program(r.finish_pieces, work.offset, mp, &r.stats);
       r.operations.push_back(finishing_summary(r, p, r.stats));
+      // One tool, no tool change in the program: the plan names its library number.
+      r.operations.back().tool = p.tool_number.value_or(1);
     } else {
       compose_job(r, p, rough ? &*rough : nullptr, rest ? &*rest : nullptr, mp);
     }

@@ -227,7 +227,11 @@ Feeds compute_feeds(const CutRequest& q) {
     // its load (a thin chip rubs and, in wood, burns); not below $31.
     if (!q.rpm && !(data && data->rpm)) {
       const double slower = std::max(f.rpm * f.feed / wanted, q.limits.spindle_min);
-      f.rpm_from = fmt::format("lowered from {:.0f} with the feed to keep the chip{}", f.rpm,
+      // Where the spindle's top bound it before, the plan still says so.
+      const bool at_spindle_max = f.rpm_from.rfind("spindle max $30", 0) == 0;
+      f.rpm_from = fmt::format("lowered from {:.0f}{} with the feed to keep the chip{}", f.rpm,
+                               at_spindle_max ? fmt::format(" (spindle max $30 = {:.0f})", q.limits.spindle_max)
+                                              : std::string(),
                                slower == q.limits.spindle_min ? fmt::format(", to spindle min $31 = {:.0f}", slower)
                                                               : std::string());
       f.rpm = slower;
@@ -255,6 +259,22 @@ Feeds compute_feeds(const CutRequest& q) {
                                        f.chip_load, m->name));
   }
   return f;
+}
+
+MachineLimits machine_limits_from_settings(const std::map<int, double>& settings, bool with_spindle) {
+  auto get = [&](int n) {
+    const auto it = settings.find(n);
+    return it != settings.end() && it->second > 0 ? it->second : 0.0;
+  };
+  MachineLimits l;
+  const double x = get(110), y = get(111);
+  l.max_feed_xy = x > 0 && y > 0 ? std::min(x, y) : std::max(x, y);
+  l.max_feed_z = get(112);
+  if (with_spindle) {
+    l.spindle_max = get(30);
+    l.spindle_min = get(31);
+  }
+  return l;
 }
 
 std::string feeds_text(const Feeds& f) {

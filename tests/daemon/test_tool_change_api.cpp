@@ -164,21 +164,25 @@ TEST(DaemonToolChange, SensorChangeStopsAtThePromptJogsThereAndConfirmFinishesTh
   std::filesystem::remove_all(dir);
 }
 
-// A program the daemon generates numbers its tools by operation (roughing T1, finishing T2): the
-// tool change names the library's tool of the finishing cutter (T7 here), never the library's T2.
+// A program the daemon generates from library tools writes their numbers (roughing with tool 5,
+// finishing with tool 3: T5, then T3), and the tool change names library tool 3 by its number.
 TEST(DaemonToolChange, AGeneratedProgramsChangeNamesTheLibraryToolOfItsOperation) {
   const auto dir = temp_dir("toolchange-library");
   auto cfg = test_config(dir);
   auto gen = tool_machine("gen", "max", true);
+  gen.sim_tool_table = "5=flat:6@30,3=ball:3@25";
   gen.tool_change.probe_travel = 100;  // the sensor (top at Z -10) is measured from the safe Z (50)
   cfg.machines = {gen};
   RunningDaemon d(cfg);
   const Http h = with_client(d.http);
   ASSERT_TRUE(wait_for([&] { return ready(h, "gen"); }, 30));
   ASSERT_EQ(h.post("/api/v1/machines/gen/control").status, 200);
-  auto r = h.post("/api/v1/tools", {{"number", 7}, {"name", "3 mm ball"}, {"shape", "ball:3"}, {"stick_out", 25}});
+  auto r = h.post("/api/v1/tools", {{"number", 3}, {"name", "3 mm ball"}, {"shape", "ball:3"}, {"stick_out", 25}});
   ASSERT_EQ(r.status, 201) << r.body;
-  r = h.post("/api/v1/tools", {{"number", 2}, {"name", "not this one"}, {"shape", "flat:2"}, {"stick_out", 40}});
+  r = h.post("/api/v1/tools", {{"number", 5}, {"name", "6 mm rougher"}, {"shape", "flat:6"}, {"stick_out", 30}});
+  ASSERT_EQ(r.status, 201) << r.body;
+  // Another tool of the same shape as tool 3: the change names tool 3 by its number, not by shape.
+  r = h.post("/api/v1/tools", {{"number", 1}, {"name", "not this one"}, {"shape", "ball:3"}, {"stick_out", 40}});
   ASSERT_EQ(r.status, 201) << r.body;
   std::string pyramid = "solid p\n";
   const char* base[5] = {"0 0 0", "20 0 0", "20 20 0", "0 20 0", "0 0 0"};
@@ -190,20 +194,30 @@ TEST(DaemonToolChange, AGeneratedProgramsChangeNamesTheLibraryToolOfItsOperation
   const auto file = upload_text(h, pyramid, "pyramid.stl");
   r = h.post("/api/v1/jobs", {{"machine", "gen"},
                               {"file", file["id"]},
-                              {"params", {{"tool", "T7"}, {"rough", "flat:6"}, {"stepover", 1}, {"feed", 2000},
+                              {"params", {{"tool", "T3"}, {"rough", "5"}, {"stepover", 1}, {"feed", 2000},
                                           {"plunge_feed", 500}, {"rpm", 18000}}}});
   ASSERT_EQ(r.status, 201) << r.body;
   const auto id = r.j()["id"].get<std::int64_t>();
   ASSERT_TRUE(wait_for([&] { return job(h, id)["state"] == "ready"; }, 60)) << job(h, id).dump();
+  // The canonical params keep the library's numbers beside the specs; the program writes them.
+  EXPECT_EQ(job(h, id)["params"]["tool_number"], 3) << job(h, id).dump();
+  EXPECT_EQ(job(h, id)["params"]["rough_tool_number"], 5);
+  const std::string gcode = h.get("/api/v1/jobs/" + std::to_string(id) + "/gcode").body;
+  const auto t5 = gcode.find("\nT5\n"), t3 = gcode.find("\nT3\n");
+  ASSERT_NE(t5, std::string::npos) << gcode.substr(0, 2000);
+  ASSERT_NE(t3, std::string::npos);
+  EXPECT_LT(t5, t3);
+  EXPECT_EQ(gcode.find("\nT1\n"), std::string::npos);
+  EXPECT_EQ(gcode.find("\nT2\n"), std::string::npos);
   ASSERT_EQ(h.post("/api/v1/jobs/" + std::to_string(id) + "/start").status, 202);
   json tc;
   ASSERT_TRUE(wait_for([&] {
     tc = machine(h, "gen")["tool_change"];
     return !tc.is_null() && tc["step"] == "mount_tool";
   }, 60)) << job(h, id).dump();
-  EXPECT_EQ(tc["tool"], 2) << tc.dump();
+  EXPECT_EQ(tc["tool"], 3) << tc.dump();
   ASSERT_TRUE(tc["library_tool"].is_object()) << tc.dump();
-  EXPECT_EQ(tc["library_tool"]["number"], 7) << tc.dump();
+  EXPECT_EQ(tc["library_tool"]["number"], 3) << tc.dump();
   EXPECT_EQ(tc["library_tool"]["name"], "3 mm ball");
   EXPECT_DOUBLE_EQ(tc["library_tool"]["stick_out"].get<double>(), 25);
   ASSERT_EQ(h.post("/api/v1/machines/gen/tool-change/decline").status, 202);

@@ -59,6 +59,16 @@ TEST(JobParams, LibraryToolsAndAMaterialBecomeSpecsAndFeeds) {
   EXPECT_EQ(again.params.rough_feed, c.params.rough_feed);
   EXPECT_EQ(again.params.rough_rpm, c.params.rough_rpm);
   EXPECT_EQ(again.canonical.dump(), c.canonical.dump());
+  // The library's numbers go with the specs (the program's T words), through the run-time check too.
+  EXPECT_EQ(c.canonical["tool_number"], 4);
+  EXPECT_EQ(c.canonical["rough_tool_number"], 6);
+  EXPECT_TRUE(c.canonical["rest_tool_number"].is_null());
+  EXPECT_EQ(again.params.tool_number, std::optional<int>(4));
+  EXPECT_EQ(again.params.rough_tool_number, std::optional<int>(6));
+  // A spec has none, unless the request gives one (1-9999).
+  EXPECT_FALSE(check_toolpath_params({{"tool", "ball:3"}}, f, l, &lib).params.tool_number);
+  EXPECT_EQ(check_toolpath_params({{"tool", "ball:3"}, {"tool_number", 12}}, f, l).params.tool_number,
+            std::optional<int>(12));
   // The operator's feed wins; an unknown tool or material names the field and the candidates.
   const auto given = check_toolpath_params({{"tool", "4"}, {"feed", 700}, {"material", "mdf"}}, f, l, &lib);
   EXPECT_EQ(given.params.feed, 700);
@@ -75,6 +85,8 @@ TEST(JobParams, LibraryToolsAndAMaterialBecomeSpecsAndFeeds) {
   EXPECT_NE(err({{"tool", "4"}, {"material", "cheese"}}).find("params.material: unknown material 'cheese'"),
             std::string::npos);
   EXPECT_NE(err({{"tool", "4"}, {"rest", "9"}}).find("params.rest: no tool number 9"), std::string::npos);
+  EXPECT_NE(err({{"tool", "ball:3"}, {"tool_number", 0}}).find("params.tool_number: expected a tool number from 1 to 9999"),
+            std::string::npos);
 }
 
 TEST(DaemonTools, CreateReplaceDeleteImportAndKeepAcrossARestart) {

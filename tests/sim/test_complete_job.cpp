@@ -126,15 +126,17 @@ void expect_no_gouge(const jobs::ToolpathProgram& prog, const cam::HeightFieldSt
 // No move deeper than its operation may cut (beyond 1e-3 mm; the finishing
 // beyond `finishing_slack`). The finishing's max_depth is what it was
 // measured to cut; its limit is its cutter's.
-void expect_moves_within_limits(const jobs::ToolpathProgram& prog, const Cut& c, double finishing_slack) {
+// Each operation's moves within the job's own depth-of-cut rule
+// (OperationSummary::depth_limit; the simulator's measure within 1e-3 mm).
+void expect_moves_within_limits(const jobs::ToolpathProgram& prog, const Cut& c) {
   for (std::size_t k = 0; k < prog.operations.size(); ++k) {
     const jobs::OperationSummary& o = prog.operations[k];
-    const bool finishing = o.name == "finishing";
-    const double limit = finishing ? jobs::default_max_depth(o.cutter) : o.max_depth;
+    const double limit = o.depth_limit;
+    ASSERT_GT(limit, 0) << o.name;
     const int op = static_cast<int>(k) + 1;
     ASSERT_TRUE(c.depth.deepest.count(op)) << o.name;
     std::cout << o.name << ": deepest cut of one move " << c.depth.deepest.at(op) << " mm (max " << limit << ")\n";
-    EXPECT_LE(c.depth.deepest.at(op), limit + (finishing ? finishing_slack : 1e-3)) << o.name;
+    EXPECT_LE(c.depth.deepest.at(op), limit + 1e-3) << o.name;
   }
 }
 
@@ -224,7 +226,7 @@ TEST(CompleteJob, GearwheelRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   const Cut c = run(prog, block_of(prog), p.tolerance);
   EXPECT_EQ(c.pauses, 1);
   print_deepest(c);
-  expect_moves_within_limits(prog, c, 1e-3);
+  expect_moves_within_limits(prog, c);
   EXPECT_GT(c.depth.deepest.at(1), 0.5 * prog.operations[0].max_depth);  // the roughing did take full cuts
   expect_no_gouge(prog, c.stock);
   expect_rs274_makes_our_moves(prog.gcode);
@@ -261,10 +263,12 @@ TEST(CompleteJob, PlaqueRoughedWithAFlatThenFinishedWithATaperedBallWithoutGouge
   EXPECT_EQ(c.pauses, 1);
   print_deepest(c);
   // The plan measures the finishing's path against the stock the rest
-  // roughing leaves, which brings it to exactly the limit; the program
-  // follows that path within its tolerance (arcs, merged points): the
-  // simulator measured 1.5935 mm against the 1.5875 mm limit at one move.
-  expect_moves_within_limits(prog, c, p.tolerance);
+  // roughing leaves, which brings it to exactly the cutter's depth; the
+  // program follows that path within its tolerance (arcs, merged points):
+  // the simulator measured 1.5935 mm at one move, within the job's limit of
+  // 1.5875 mm plus the 0.01 mm tolerance.
+  EXPECT_DOUBLE_EQ(prog.operations[2].depth_limit, jobs::default_max_depth(p.cutter) + p.tolerance);
+  expect_moves_within_limits(prog, c);
   EXPECT_GT(c.depth.deepest.at(2), 0.5 * prog.operations[1].max_depth);  // the rest roughing took full cuts
   expect_no_gouge(prog, c.stock);
 }

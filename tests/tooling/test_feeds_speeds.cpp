@@ -117,7 +117,7 @@ TEST(FeedsSpeeds, MachineLimitsBindAndSayWhich) {
   // 22557 rpm wanted: $30 binds at 18000; then 18000 x 2 x 0.254 = 9144 mm/min wanted: $110 binds at 5000,
   // and the rpm comes down with it so that the chip keeps 0.254 mm: 5000 / (2 x 0.254) = 9843.
   EXPECT_NEAR(f.rpm, 5000 / (2 * 0.254), 1e-9);
-  EXPECT_EQ(f.rpm_from, "lowered from 18000 with the feed to keep the chip") << f.rpm_from;
+  EXPECT_EQ(f.rpm_from, "lowered from 18000 (spindle max $30 = 18000) with the feed to keep the chip") << f.rpm_from;
   EXPECT_DOUBLE_EQ(f.feed, 5000);
   EXPECT_EQ(f.feed_from.rfind("max rate $110/$111 = 5000 (wanted 9144", 0), 0u) << f.feed_from;
   EXPECT_NEAR(f.chip_load, 0.254, 1e-12);
@@ -133,7 +133,8 @@ TEST(FeedsSpeeds, MachineLimitsBindAndSayWhich) {
   slow.limits.max_feed_xy = 1000;
   const Feeds s = compute_feeds(slow);
   EXPECT_DOUBLE_EQ(s.rpm, 6000);
-  EXPECT_EQ(s.rpm_from, "lowered from 18000 with the feed to keep the chip, to spindle min $31 = 6000");
+  EXPECT_EQ(s.rpm_from, "lowered from 18000 (spindle max $30 = 18000) with the feed to keep the chip, to spindle min "
+                        "$31 = 6000");
   EXPECT_NEAR(s.chip_load, 1000.0 / 12000, 1e-12);
   // The spindle's minimum binds a large tool in a slow material.
   CutRequest big = q;

@@ -28,6 +28,9 @@ struct PlanParams {
     double feed = 0, plunge_feed = 0, rpm = 0;
   };
   std::optional<CutterRate> ball_rate, radiused_rate;
+  // The tool library's numbers of the pair: the programs' T words. Unset: a
+  // spec, numbered by its place (1, 2) past the library's numbers.
+  std::optional<int> ball_tool_number, radiused_tool_number;
 };
 
 struct PlanOption {

@@ -88,6 +88,11 @@ struct ToolpathParams {
   // corners narrower than it), with a tool change before it.
   std::optional<cam::Cutter> rest;
   std::optional<double> rest_feed, rest_rpm;  // the rest machining's; default: feed, rpm
+  // The tool library's numbers of the finishing, roughing and rest cutters:
+  // the program's T words (OperationSummary::tool). Unset: a cutter given as
+  // a spec, numbered by the operations' order and moved past every library
+  // number of the same program (job_tool_numbers).
+  std::optional<int> tool_number, rough_tool_number, rest_tool_number;
   ToolChangeCode tool_change = ToolChangeCode::PauseM0;
   // Set: the raster finishing's CL grids come from here instead of the exact
   // engine (the CLI's --engine gl: the depth buffer), and `grid_note` (asked
@@ -118,6 +123,13 @@ struct OperationSummary {
   double cut_length = 0;   // mm at feed
   double feed_time_s = 0;  // cut length / feed
   double max_depth = 0;    // the deepest any pass of it may cut, mm
+  // The job's depth-of-cut rule for one move of the program (with a stock;
+  // 0 without): the roughing's and the rest operations' max_depth; the
+  // finishing's its cutter's maximum depth plus the path tolerance. The
+  // finishing's path is checked against that depth, and the program follows
+  // the path within the tolerance (lines merged within it, arcs fitted over
+  // them): a move may dip that much below the checked path.
+  double depth_limit = 0;
   // With a link (ToolpathParams::link): the feed its densest stretch streams
   // at (mm/min; infinite: any) and the share of its feed-move length that
   // now runs below the commanded feed.

@@ -7,6 +7,7 @@
 // ball's or a V-bit's is smaller than its nominal one); below half the
 // diameter of radial engagement the chip is thinner than the feed per tooth,
 // and the feed per tooth is raised so that the chip keeps its load.
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -63,6 +64,12 @@ struct MachineLimits {
   double spindle_max = 0;   // rpm: $30
   double spindle_min = 0;   // rpm: $31
 };
+
+// The limits a GRBL-family controller's `$$` gives (setting number ->
+// value): the slower of $110/$111, $112, and with_spindle the spindle's
+// $30/$31 (the built-in simulator's are GRBL's shipped 1000/0, a PWM scale,
+// not a spindle's speeds). A setting missing, or not above 0, stays 0.
+MachineLimits machine_limits_from_settings(const std::map<int, double>& settings, bool with_spindle = true);
 
 struct CutRequest {
   ToolGeometry geometry;

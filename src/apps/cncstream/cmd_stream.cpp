@@ -16,6 +16,7 @@
 #include "daemon_handoff.hpp"
 #include "job_session.hpp"
 #include "long_job.hpp"
+#include "routine_session.hpp"
 #include "tool_choice.hpp"
 #include "toolpath_options.hpp"
 
@@ -77,21 +78,13 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
   registry.add(sub, [o] {
     o->conn.link_rate = o->tp.link_rate;  // --link-rate: the program's link is the ETA's too
     const auto& c = o->conn;
-    // Library tools become specs and --material sets the feeds, before a
-    // daemon is handed the job (its library is not this one). The
-    // simulator's rates are known; a real controller's come from its $$
-    // only once connected: then --max-feed.
+    // Library tools become specs (and their numbers the program's T words)
+    // before a daemon is handed the job: its library is not this one.
     std::optional<jobs::FeedsRequest> feeds_request;
-    if (is_stl(o->file)) {
-      tooling::MachineLimits machine;
-      if (c.port == "sim") {
-        const auto sim_limits = planning_limits(c, o->sim);
-        machine.max_feed_xy = std::min(sim_limits.max_rate.x, sim_limits.max_rate.y);
-        machine.max_feed_z = sim_limits.max_rate.z;
-      }
-      feeds_request = resolve_tool_options(o->tp, machine);
-    }
-    // A running daemon owns the port: it runs the job, this command follows it.
+    if (is_stl(o->file)) feeds_request = resolve_tool_options(o->tp);
+    // A running daemon owns the port: it runs the job, this command follows
+    // it. With --material the daemon computes the feeds, within its
+    // machine's $$ (its job manager): nothing is computed here.
     if (const auto daemon = daemon_owning_port(c.port)) {
       HandoffJob h;
       h.file = o->file;
@@ -111,6 +104,28 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
       if (o->tp.tool.empty())
         throw std::invalid_argument(o->file + " is a part: say which cutter machines it with --tool (e.g. ball:3.175)");
       o->tp.part.stl = o->file;
+      // --material: the feeds and speeds within the machine's limits where
+      // the operator gave none. The simulator's rates are known (its $30 is
+      // GRBL's shipped PWM scale, not a spindle's); a real controller's
+      // $30/$31 and $110-$112 are read from it first, through a session of
+      // their own: connected, `$$` read, closed (the job connects again).
+      tooling::MachineLimits machine;
+      if (feeds_request) {
+        if (c.port == "sim") {
+          const auto sim_limits = planning_limits(c, o->sim);
+          machine.max_feed_xy = std::min(sim_limits.max_rate.x, sim_limits.max_rate.y);
+          machine.max_feed_z = sim_limits.max_rate.z;
+        } else {
+          std::cerr << "reading the controller's settings ($$) on " << c.port << " for the feeds and speeds\n";
+          const auto settings = read_controller_settings(c);
+          if (!settings) {
+            std::cerr << "cncstream: the feeds and speeds need the controller's $30/$31 and $110-$112: no program "
+                         "made, nothing streamed\n";
+            return 2;
+          }
+          machine = tooling::machine_limits_from_settings(*settings);
+        }
+      }
       // Generation runs under its own Ctrl-C handling (stop the job, write
       // nothing, exit 130); the guard is gone before streaming, whose Ctrl-C
       // holds and stops the machine instead.
@@ -126,7 +141,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
           // The built-in simulator powers on with G54 and G92 at zero (unless a settings file says otherwise).
           if (c.port == "sim" && o->sim.settings.empty() && params.stock && !params.stock->work_origin)
             params.stock->work_origin = geometry::Vec3{};
-          feeds = apply_feeds(params, feeds_request);
+          feeds = apply_feeds(params, feeds_request, machine);
           params.link = planning_link(c, o->sim);  // the machine's own link (the simulator's, a profile's, --serial)
           program = jobs::generate_toolpath(params, generation.control());
         } catch (const jobs::Cancelled&) {

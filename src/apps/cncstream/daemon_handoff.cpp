@@ -145,6 +145,10 @@ json job_params_from(const ToolpathOptions& tp) {
   p["rough_stepover"] = tp.rough_stepover;
   p["rough_feed"] = opt(tp.rough_feed);
   p["tool_change"] = tp.tool_change;
+  // This library's numbers for the program's T words (the daemon's library is not this one: it gets the specs).
+  auto opt_int = [](const std::optional<int>& v) { return v ? json(*v) : json(nullptr); };
+  p["tool_number"] = opt_int(tp.tool_number);
+  p["rough_tool_number"] = opt_int(tp.rough_tool_number);
   return p;
 }
 

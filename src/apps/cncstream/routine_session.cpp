@@ -5,6 +5,8 @@
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
 
+#include <fmt/format.h>
+
 #include <csignal>
 #include <iostream>
 #include <string>
@@ -15,23 +17,78 @@
 
 namespace cncstream::app {
 
-int run_machine_routine(const ConnectionOptions& conn, const session::SimulatorOptions& sim,
-                        const std::shared_ptr<protocol::MachineRoutine>& routine) {
+namespace {
+
+// The session's link options (--serial, --profile) on `port`.
+session::MachineOptions machine_options(const ConnectionOptions& conn, std::shared_ptr<session::MachinePort> port) {
   session::MachineOptions mo;
   mo.name = conn.port;
+  mo.port = std::move(port);
+  mo.serial = transport::parse_serial_settings(conn.serial);
+  mo.profiles_dir = protocol::default_profiles_dir();
+  if (!conn.profile.empty()) mo.force_profile = conn.profile;
+  return mo;
+}
+
+}  // namespace
+
+std::optional<protocol::GrblSettings> read_controller_settings(const ConnectionOptions& conn) {
+  const auto device = device_path(conn.port);
+  if (!device) return std::nullopt;
+  boost::asio::io_context io;
+  session::MachineSession session(io, machine_options(conn, std::make_shared<session::DevicePort>(*device)));
+  std::optional<protocol::GrblSettings> settings;
+  std::string why = "the controller did not become ready";
+  boost::asio::steady_timer deadline(io);
+  auto end = [&] {
+    deadline.cancel();
+    session.close();
+  };
+  auto subscription = session.subscribe([&](const session::SessionEvent& e) {
+    using session::SessionEventKind;
+    if (e.kind == SessionEventKind::Log) std::cerr << e.text << "\n";
+    if (e.kind != SessionEventKind::Link) return;
+    if (e.link == session::LinkState::Ready && !settings) {
+      settings = session.settings();  // empty when the controller did not give them (said in the log)
+      boost::asio::post(io, end);
+    } else if (e.link == session::LinkState::Disconnected && !settings) {
+      why = e.text;
+      boost::asio::post(io, end);
+    }
+  });
+  const double limit_s = conn.timeout_s > 0 ? conn.timeout_s : 30;
+  deadline.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(limit_s)));
+  deadline.async_wait([&](const boost::system::error_code& ec) {
+    if (ec || settings) return;
+    why = fmt::format("not ready within {:g} s", limit_s);
+    session.close();
+  });
+  try {
+    session.open();
+  } catch (const std::exception& e) {
+    std::cerr << "cncstream: " << e.what() << "\n";
+    return std::nullopt;
+  }
+  io.run();
+  if (!settings) std::cerr << "cncstream: " << *device << ": " << why << "\n";
+  return settings;
+}
+
+int run_machine_routine(const ConnectionOptions& conn, const session::SimulatorOptions& sim,
+                        const std::shared_ptr<protocol::MachineRoutine>& routine) {
+  std::shared_ptr<session::MachinePort> port;
   std::shared_ptr<session::SimulatorPort> sim_port;
   if (conn.port == "sim") {
     sim_port = std::make_shared<session::SimulatorPort>(sim);
     std::cerr << "simulator: GRBL 1.1h on " << sim_port->path() << " (speed " << sim.speed << ")\n";
-    mo.port = sim_port;
+    port = sim_port;
   } else {
     const auto device = device_path(conn.port);
     if (!device) return 2;
-    mo.port = std::make_shared<session::DevicePort>(*device);
+    port = std::make_shared<session::DevicePort>(*device);
   }
-  mo.serial = transport::parse_serial_settings(conn.serial);
-  mo.profiles_dir = protocol::default_profiles_dir();
-  if (!conn.profile.empty()) mo.force_profile = conn.profile;
+  session::MachineOptions mo = machine_options(conn, port);
 
   boost::asio::io_context io;
   session::MachineSession session(io, mo);

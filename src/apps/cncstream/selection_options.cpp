@@ -69,6 +69,18 @@ jobs::SelectionParams selection_params(const SelectionOptions& o) {
 jobs::PlanParams plan_params(const SelectionOptions& o, std::string* feeds_report) {
   jobs::PlanParams p;
   p.selection = selection_params(o);
+  {
+    // The library's numbers of the pair, for the programs' T words.
+    ToolLookup lookup(o.tool_library);
+    std::stringstream ss(o.tools);
+    for (std::string item; std::getline(ss, item, ',');) {
+      if (item.empty()) continue;
+      const tooling::ToolChoice c = lookup.choose(item);
+      if (!c.tool) continue;
+      if (c.spec() == p.selection.cutters.ball.spec()) p.ball_tool_number = c.tool->number;
+      else if (c.spec() == p.selection.cutters.radiused.spec()) p.radiused_tool_number = c.tool->number;
+    }
+  }
   p.feed = o.feed;
   p.plunge_feed = o.plunge_feed;
   p.rpm = o.rpm;

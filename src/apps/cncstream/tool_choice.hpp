@@ -28,13 +28,20 @@ class ToolLookup {
 };
 
 // Turns --tool, --rough and --rest into specs (from the library where they
-// name a tool). With --material, returns what jobs::apply_material_feeds
-// needs: the tools, the operator's values and the machine's limits (the
-// options' --spindle-max/--spindle-min/--max-feed over `machine`). Throws
-// for an unknown or ambiguous tool, listing the candidates.
-std::optional<jobs::FeedsRequest> resolve_tool_options(ToolpathOptions& o, const tooling::MachineLimits& machine = {});
+// name a tool; its number into o.tool_number ... for the program's T words).
+// With --material, returns what jobs::apply_material_feeds needs: the tools,
+// the operator's values and limits (--spindle-max, --spindle-min,
+// --max-feed, --max-feed-z). Throws for an unknown or ambiguous tool,
+// listing the candidates.
+std::optional<jobs::FeedsRequest> resolve_tool_options(ToolpathOptions& o);
 
-// The job's parameters with the material's feeds applied (none without one).
-jobs::FeedsPlan apply_feeds(jobs::ToolpathParams& p, const std::optional<jobs::FeedsRequest>& request);
+// A spindle's top speed where neither the operator nor the machine says.
+inline constexpr double kDefaultSpindleMax = 24000;
+
+// The job's parameters with the material's feeds applied (none without one),
+// within the operator's limits and, where the operator gave none, the
+// machine's (a controller's $$: tooling::machine_limits_from_settings).
+jobs::FeedsPlan apply_feeds(jobs::ToolpathParams& p, std::optional<jobs::FeedsRequest> request,
+                            const tooling::MachineLimits& machine = {});
 
 }  // namespace cncstream::app

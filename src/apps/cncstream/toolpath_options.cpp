@@ -101,10 +101,13 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
       ->group(feeds);
   sub->add_option("--flutes", o.flutes, "Flutes of a tool given as a spec (default 2; a library tool has its own)")
       ->check(CLI::Range(1, 12))->group(feeds);
-  sub->add_option("--spindle-max", o.spindle_max, "The spindle's highest speed, rpm ($30): computed rpm stays within it")
-      ->check(CLI::NonNegativeNumber)->capture_default_str()->group(feeds);
-  sub->add_option("--spindle-min", o.spindle_min, "The spindle's lowest speed, rpm ($31)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str()->group(feeds);
+  sub->add_option("--spindle-max", o.spindle_max,
+                  "The spindle's highest speed, rpm ($30): computed rpm stays within it (default: a real "
+                  "controller's $30 where the command reads it, else 24000)")
+      ->check(CLI::NonNegativeNumber)->group(feeds);
+  sub->add_option("--spindle-min", o.spindle_min,
+                  "The spindle's lowest speed, rpm ($31; default: a real controller's $31 where the command reads it)")
+      ->check(CLI::NonNegativeNumber)->group(feeds);
   sub->add_option("--max-feed", o.max_feed,
                   "The machine's highest X/Y rate, mm/min ($110/$111): computed feeds stay within it (0: the "
                   "controller's, where the command knows it)")
@@ -145,6 +148,9 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
     if (p.stock) p.stock->work_origin = *v;
   }
   p.max_depth = o.max_depth;
+  p.tool_number = o.tool_number;
+  p.rough_tool_number = o.rough_tool_number;
+  p.rest_tool_number = o.rest_tool_number;
   if (!o.rough.empty()) p.rough = cam::parse_cutter_spec(o.rough);
   if (!o.rest.empty()) p.rest = cam::parse_cutter_spec(o.rest);
   p.rough_max_depth = o.rough_max_depth;

@@ -57,7 +57,10 @@ struct ToolpathOptions {
   std::string tool_library;  // empty: tooling::default_tool_library_path()
   std::string material;
   int flutes = 0;            // a spec's flutes; 0: 2 (a library tool has its own)
-  double spindle_max = 24000, spindle_min = 0;  // rpm ($30, $31)
+  double spindle_max = 0, spindle_min = 0;  // rpm ($30, $31); 0: the machine's, else 24,000 and none
+  // Set by resolve_tool_options: the library's numbers of --tool, --rough and
+  // --rest (the program's T words); unset for a spec.
+  std::optional<int> tool_number, rough_tool_number, rest_tool_number;
   double max_feed = 0;       // mm/min ($110/$111); 0: not known
   double max_feed_z = 0;     // mm/min ($112); 0: not known
   bool feed_given = false, plunge_feed_given = false, rpm_given = false;
