@@ -142,6 +142,13 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
         if (!mc.sim_tool_table.empty()) so.stick_outs = session::parse_sim_stick_outs(mc.sim_tool_table);
         so.tool_sensor = mc.sim_tool_sensor;
         if (!so.tool_sensor.empty()) session::check_sim_tool_sensor(so.tool_sensor);  // checked at start
+        if (!mc.sim_stock.empty()) so.stock = session::parse_sim_stock(mc.sim_stock);
+        if (!mc.sim_corner_plate.empty()) {
+          if (mc.sim_stock.empty()) throw std::invalid_argument("sim_corner_plate sits on the stock's corner: give sim_stock");
+          session::check_sim_corner_plate(mc.sim_corner_plate);
+          so.corner_plate = mc.sim_corner_plate;
+        }
+        if (!mc.sim_start.empty()) so.start_position = session::parse_sim_position(mc.sim_start);
       } catch (const std::exception& e) {
         throw std::invalid_argument(cat({"machine '", mc.name, "': ", e.what()}));
       }
