@@ -13,6 +13,8 @@ function start(label, name, body) {
   const m = S.current;
   if (!m) return;
   run(label, async () => {
+    const rec = S.machines.get(m);
+    if (rec) rec.routineResult = null;  // the last routine's result goes with its start
     $('#rt-result').textContent = '';
     await controlled(m, () => api('POST', `/machines/${enc(m)}/routines/${name}`, body));
   });

@@ -32,6 +32,8 @@ cncsim::StickOuts parse_sim_stick_outs(const std::string& tool_table) { return c
 
 void check_sim_tool_sensor(const std::string& text) { cncsim::parse_tool_sensor(text); }
 
+cncsim::ToolTable parse_sim_tool_shapes(const std::string& tool_table) { return cncsim::parse_tool_table(tool_table); }
+
 geometry::Box3 parse_sim_stock(const std::string& text) {
   const cncsim::StockBox b = cncsim::parse_stock_box(text, 1.0);
   return geometry::Box3{b.lo, b.hi};

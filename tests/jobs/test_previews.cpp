@@ -174,7 +174,9 @@ TEST(PathPreview, EachPointCarriesTheLineOfTheMoveEndingThere) {
       for (std::size_t i = 0; i < polys.size(); ++i) {
         ASSERT_EQ(lines[i].size(), polys[i].size());
         for (std::size_t k = 0; k < polys[i].size(); ++k) {
-          if (k > 0) EXPECT_GE(lines[i][k], lines[i][k - 1]);
+          if (k > 0) {
+            EXPECT_GE(lines[i][k], lines[i][k - 1]);
+          }
           bool on_its_line = false;
           for (const auto& s : trace.segments)
             on_its_line |= s.source_line + 1 == lines[i][k] && (s.work_to() == polys[i][k] || s.work_from() == polys[i][k]);
@@ -183,10 +185,11 @@ TEST(PathPreview, EachPointCarriesTheLineOfTheMoveEndingThere) {
       }
     }
   }
-  // The cut: from where line 3 (a rapid) ends, down on line 4, its corners ending lines 5, 6 and 7.
+  // The cut: from where line 2 (G0 Z5) ends (line 3 goes nowhere: it is at X0 Y0 already), down on line 4,
+  // its corners ending lines 5, 6 and 7.
   const auto all = decimate_path(trace, 1000);
   ASSERT_EQ(all.cuts.size(), 1u);
-  EXPECT_EQ(all.cut_lines[0], (std::vector<std::size_t>{3, 4, 5, 6, 7}));  // from the rapid ending at X0 Y0 Z5
+  EXPECT_EQ(all.cut_lines[0], (std::vector<std::size_t>{2, 4, 5, 6, 7}));
 }
 
 TEST(ToolpathJob, KeepsASmallHeightPreviewOfItsClGridInWorkCoordinates) {

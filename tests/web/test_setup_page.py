@@ -27,19 +27,21 @@ say = tp.say
 
 # The block X20..120 Y20..100, top at machine Z -30; the corner plate (5 mm
 # thick, its walls 3 mm outside the block) on its X-min/Y-min corner; the 6 mm
-# flat over the plate at power-on. A sensor at machine X-30 Y0, its top at Z-10.
+# flat over the plate at power-on. A sensor at machine X-30 Y0, its top at Z-10,
+# within the 50 mm probe travel from the change height, machine Z 30.
 CORNER = (20.0, 20.0, -30.0)
 SETUP_MACHINE = ('[[machine]]\nname = "setup"\nport = "sim"\nsim_speed = "max"\n'
                  'sim_tool_table = "1=flat:6@30,2=flat:6@37.3"\n'
                  'sim_stock = "20,20,-50:120,100,-30"\nsim_corner_plate = "5,3"\nsim_start = "42,42,-15"\n'
                  'sim_tool_sensor = "-30,0,-10"\n'
-                 '[machine.tool_change]\nmethod = "sensor"\nsensor_at = [-30, 0]\nprobe_travel = 50\n')
+                 '[machine.tool_change]\nmethod = "sensor"\nsensor_at = [-30, 0]\nsafe_z = 30\nprobe_travel = 50\n')
 # A slot with a half-circle end: its hull has the arc's corners, its box an empty corner.
 SLOT = "G21 G90\nG0 Z5\nG0 X10 Y10\nG1 Z-1 F300\nG1 X40\nG3 X40 Y30 I0 J10\nG1 X10\nG1 Y10\nG0 Z5\nM2\n"
 
 
-def routine_done(p):
-    return p.q("#rt-active").get_attribute("hidden") is not None and p.text("#rt-result") != ""
+def routine_done(p, says):
+    """The routine over, its result shown and saying `says`."""
+    return p.q("#rt-active").get_attribute("hidden") is not None and says in p.text("#rt-result")
 
 
 def setup_flow(args, out, d):
@@ -68,7 +70,7 @@ def setup_flow(args, out, d):
         assert p.q("#rt-confirm").is_enabled() and not p.q("#rt-corner-go").is_enabled()
         p.shot("30-corner-question")
         p.click("#rt-confirm")
-        p.wait("the corner probe done", lambda: routine_done(p), 60)
+        p.wait("the corner probe done", lambda: routine_done(p, "G54 set to"), 60)
         result = p.text("#rt-result")
         say(f"corner probe: {result}")
         assert result.startswith("Done"), result
@@ -81,9 +83,10 @@ def setup_flow(args, out, d):
         p.shot("31-corner-done")
 
         # ---- the tool-length reference on the sensor
+        p.click("#rt-tool summary")  # the section opens as a user would open it
         fill("#rt-in-spindle", 1)
         p.click("#rt-measure")
-        p.wait("the reference measured", lambda: routine_done(p) and "T1" in p.text("#rt-reference"), 60)
+        p.wait("the reference measured", lambda: routine_done(p, "is the reference") and "T1" in p.text("#rt-reference"), 60)
         assert p.text("#rt-result").startswith("Done"), p.text("#rt-result")
         say(f"reference: {p.text('#rt-reference')}")
 
@@ -98,11 +101,11 @@ def setup_flow(args, out, d):
         p.wait("the preview drawn", lambda: p.q("#preview").get_attribute("data-job") == jid and
                d.execute_script("return !!window.cncstream.state.previewDraw"), 30)
         p.wait("the outline offered for the previewed job", lambda: p.q("#rt-outline-go").is_enabled(), 10)
-        d.execute_script("document.getElementById('rt-outline').open = true")
+        p.click("#rt-outline summary")
         Select(p.q("#rt-outline-shape")).select_by_value("hull")
         fill("#rt-outline-feed", 2000)
         p.click("#rt-outline-go")
-        p.wait("the outline traced", lambda: routine_done(p), 60)
+        p.wait("the outline traced", lambda: routine_done(p, "traced the"), 60)
         result = p.text("#rt-result")
         say(f"outline: {result}")
         assert result.startswith("Done") and "hull" in result, result
