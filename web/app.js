@@ -6,6 +6,7 @@
 import { setupShop, pollShop, pollShopSoon } from './shop.js';
 // The tool library: its panel, the tool-path form's pickers, the tool change's name and stick-out.
 import { setupTools, pickedLibraryTool, toolChangeLibraryText } from './tools.js';
+import { setupRoutines, onRoutineFrame, renderRoutines } from './routines.js';
 
 const API = '/api/v1';
 const JOG_RENEW_MS = 150;  // the daemon's lease is 0.3 s; renew well inside it (the API asks <= 250 ms)
@@ -62,6 +63,8 @@ const S = {
   wsUp: false,
   lastGenerated: null,   // id of the job the form made (its preview is shown when ready)
   previewJob: null,
+  previewDraw: null,     // the last drawing's arguments and its mm -> pixel maps (a click picks a line)
+  previewLine: null,     // {job, x, y, line}: the start from a line's marker
   previewUrl: null,      // the object URL the preview picture is shown from
   upload: null,          // FileInfo of the last upload
 };
@@ -226,6 +229,8 @@ async function loadMachineDetail(name) {
   if (d.status) rec.status = { ...d.status, link: d.link, alarm: d.alarm, jogging: d.jogging, job_active: d.job_active, tool_change: d.tool_change };
   rec.alarmInfo = d.alarm_info;
   rec.toolChange = d.tool_change || null;
+  rec.routine = d.routine || null;
+  rec.toolReference = d.tool_reference || null;
   renderAll();
 }
 
@@ -317,6 +322,7 @@ function renderMachine() {
   document.querySelectorAll('#panel-job .overrides button').forEach((b) => { b.disabled = !ready; });
   renderAlarm(rec, alarm);
   renderToolChange(rec, ready && !alarm && operatorTurn);
+  renderRoutines(rec, { ready, alarm, jobActive });
 }
 
 // ---------------------------------------------------------------- tool change
@@ -404,6 +410,24 @@ function setupFromLine() {
     });
   });
   $('#from-line-cancel').addEventListener('click', () => { fromLinePlan = null; $('#from-line-plan').hidden = true; });
+  // A click on the drawing picks the line of the nearest cutting point; a
+  // typed line moves the marker to the last drawn point at or before it.
+  const redraw = () => { if (S.previewDraw) drawPreview(...S.previewDraw.args); };
+  $('#preview-canvas').addEventListener('click', (e) => {
+    const cv = e.currentTarget;
+    const r = cv.getBoundingClientRect();
+    const p = pickPreviewPoint((e.clientX - r.left) * cv.width / r.width, (e.clientY - r.top) * cv.height / r.height);
+    if (!p) return;
+    $('#from-line').value = p.line;
+    S.previewLine = { ...p, job: S.previewJob };
+    redraw();
+  });
+  $('#from-line').addEventListener('input', () => {
+    const n = Number($('#from-line').value);
+    const p = n > 0 ? previewPointOfLine(n) : null;
+    S.previewLine = p ? { ...p, line: n, job: S.previewJob } : null;
+    redraw();
+  });
   $('#from-line-queue').addEventListener('click', () => {
     const p = fromLinePlan;
     if (!p) return;
@@ -804,6 +828,7 @@ async function showPreview(id) {
     $('#preview-meta').textContent = `${title} · ${path.total_points.toLocaleString()} points${drawn} · X ${fmt(x0, 1)}…${fmt(x1, 1)} Y ${fmt(y0, 1)}…${fmt(y1, 1)} Z ${fmt(pv.z[0], 2)}…${fmt(pv.z[1], 2)} mm`;
   }
   $('#preview').dataset.job = id;
+  renderMachine();  // the set-up panel's outline traces the previewed job
 }
 
 // The PNG through fetch (it needs the token header an <img src> cannot send),
@@ -829,6 +854,7 @@ function drawPreview(cv, W, dpr, pv, img, path, none) {
   const ctx = cv.getContext('2d');
   const pad = 24 * dpr;
   if (!pv) {
+    S.previewDraw = null;
     cv.width = W; cv.height = Math.round(W / 4);
     ctx.fillStyle = '#0b0d10';
     ctx.fillRect(0, 0, cv.width, cv.height);
@@ -881,6 +907,46 @@ function drawPreview(cv, W, dpr, pv, img, path, none) {
     ctx.strokeStyle = '#fff';
     ctx.beginPath(); ctx.arc(X(0), Y(0), 5 * dpr, 0, 2 * Math.PI); ctx.stroke();
   }
+  // Where the start from a line picks up (a click on the drawing picks it).
+  S.previewDraw = { args: [cv, W, dpr, pv, img, path, none], X, Y };
+  const at = S.previewLine;
+  if (at && at.job === S.previewJob) {
+    ctx.strokeStyle = '#ff4fd8';
+    ctx.lineWidth = 2 * dpr;
+    ctx.beginPath(); ctx.arc(X(at.x), Y(at.y), 7 * dpr, 0, 2 * Math.PI); ctx.stroke();
+    ctx.fillStyle = '#ff4fd8';
+    ctx.fillText(`line ${at.line}`, X(at.x) + 10 * dpr, Y(at.y) - 8 * dpr);
+  }
+}
+
+// The drawn cut point nearest a click (canvas pixels), with its program line.
+function pickPreviewPoint(px, py) {
+  const d = S.previewDraw;
+  if (!d) return null;
+  const path = d.args[5];
+  let best = null, bestD = Infinity;
+  (path.cuts || []).forEach((l, i) => {
+    const lines = (path.cut_lines || [])[i] || [];
+    for (let k = 0; k < l.length / 3; k++) {
+      const dx = d.X(l[3 * k]) - px, dy = d.Y(l[3 * k + 1]) - py, dd = dx * dx + dy * dy;
+      if (dd < bestD && lines[k]) { bestD = dd; best = { x: l[3 * k], y: l[3 * k + 1], line: lines[k] }; }
+    }
+  });
+  return best && bestD <= (24 * d.args[2]) ** 2 ? best : null;
+}
+
+// The last drawn point at or before a typed line, for the marker.
+function previewPointOfLine(line) {
+  const d = S.previewDraw;
+  if (!d) return null;
+  const path = d.args[5];
+  let best = null;
+  (path.cuts || []).forEach((l, i) => {
+    const lines = (path.cut_lines || [])[i] || [];
+    for (let k = 0; k < lines.length; k++)
+      if (lines[k] <= line && (!best || lines[k] >= best.line)) best = { x: l[3 * k], y: l[3 * k + 1], line: lines[k] };
+  });
+  return best;
 }
 
 // ---------------------------------------------------------------- WebSocket
@@ -986,6 +1052,12 @@ function onMessage(m) {
       const rec = machine(m.machine);
       rec.toolChange = m.state || null;
       if (m.record) log(m.machine, `tool change: ${m.record.note}`, m.record.length_known ? 'info' : 'err');
+      if (m.machine === S.current) renderMachine();
+      break;
+    }
+    case 'routine': {
+      const rec = machine(m.machine);
+      onRoutineFrame(rec, m);
       if (m.machine === S.current) renderMachine();
       break;
     }
@@ -1215,7 +1287,8 @@ renderHistory();
 connectWs();
 run('Loading the shop', setupShop);
 run('Loading the tool library', setupTools);
+setupRoutines();
 // The shop view (shop.js) and the tool library (tools.js) use the page's helpers.
-export { $, el, api, run, duration };
+export { $, el, api, run, duration, S, controlled };
 // For the browser tests and for debugging from the console.
 window.cncstream = { state: S, showPreview };  // the browser test drives and reads these

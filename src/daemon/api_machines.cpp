@@ -2,9 +2,13 @@
 // hold, stop, and the routines outside a job.
 #include "cncstream/daemon/api.hpp"
 #include "cncstream/daemon/body_fields.hpp"
+#include "cncstream/daemon/routine_bodies.hpp"
 #include "cncstream/daemon/tool_change_settings.hpp"
 
 #include <cmath>
+
+#include "cncstream/gcode/program_extent.hpp"
+#include "cncstream/protocol/outline_trace.hpp"
 
 namespace cncstream::daemon {
 
@@ -152,12 +156,34 @@ void Api::routine_routes() {
     Machine& m = machine(r);
     const json b = parse_body(r);
     const std::string& name = r.params.at(1);
+    if (name == "corner_probe" || name == "outline") {
+      std::shared_ptr<protocol::MachineRoutine> routine;
+      if (name == "corner_probe") {
+        routine = std::make_shared<protocol::CornerProbeRoutine>(corner_probe_body(b));
+      } else {
+        const OutlineBody o = outline_body(b);
+        const auto& j = jobs_.get(o.job);
+        const auto p = jobs_.program(j);
+        if (!p) throw ApiError{409, "bad_state", cat({"job ", std::to_string(o.job), " has no program yet (", j.row.state, ")"})};
+        try {
+          routine = std::make_shared<protocol::OutlineTraceRoutine>(protocol::outline_from_extent(
+              gcode::program_extent(p->lines), o.safe_z, o.feed, cat({"job ", std::to_string(o.job)}),
+              o.box ? protocol::OutlineShape::Box : protocol::OutlineShape::Hull));
+        } catch (const std::invalid_argument& e) {
+          throw ApiError{409, "refused", e.what()};
+        }
+      }
+      machines_.require_control(m, r.client_id);
+      res(accepted(m.session->run_routine(std::move(routine))));
+      return;
+    }
     protocol::ToolRoutineKind kind;
     if (name == "tool_measure") kind = protocol::ToolRoutineKind::MeasureReference;
     else if (name == "tool_change") kind = protocol::ToolRoutineKind::Change;
     else if (name == "tool_check") kind = protocol::ToolRoutineKind::CheckLength;
     else throw ApiError{400, "bad_request",
-                        "unknown routine '" + name.substr(0, 40) + "' (tool_measure, tool_change, tool_check)"};
+                        "unknown routine '" + name.substr(0, 40) +
+                            "' (corner_probe, outline, tool_measure, tool_change, tool_check)"};
     if (!b.is_null() && !b.is_object()) throw ApiError{400, "bad_request", "expected a JSON object"};
     const auto tool_number = [&b](const char* key, double lo) {
       const double v = number_field(b, key, lo, 9999);

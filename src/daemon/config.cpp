@@ -263,7 +263,8 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       Reader r{source, *t, "machine."};
       r.known({"name", "port", "baud", "profile", "reconnect_s", "sim_speed", "sim_verify", "sim_vanish_after",
                "sim_settings", "sim_resolution", "sim_tolerance", "sim_tool_table", "sim_tool_sensor",
-               "sim_probe_surface_z", "tool_change", "capabilities", "shop_claim"});
+               "sim_probe_surface_z", "sim_stock", "sim_corner_plate", "sim_start", "tool_change", "capabilities",
+               "shop_claim"});
       MachineConfig m;
       r.str("name", m.name);
       r.str("port", m.port);
@@ -279,6 +280,9 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       r.str("sim_tool_table", m.sim_tool_table);
       r.str("sim_tool_sensor", m.sim_tool_sensor);
       if (r.get("sim_probe_surface_z")) m.sim_probe_surface_z = r.number("sim_probe_surface_z", 0, -1e4, 1e4);
+      r.str("sim_stock", m.sim_stock);
+      r.str("sim_corner_plate", m.sim_corner_plate);
+      r.str("sim_start", m.sim_start);
       if (const auto* tc = r.get("tool_change")) read_tool_change(source, *tc, m.tool_change);
       r.strings("capabilities", m.capabilities);
       r.boolean("shop_claim", m.shop_claim);

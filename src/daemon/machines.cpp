@@ -72,7 +72,10 @@ json code_info_json(const std::optional<protocol::CodeInfo>& info) {
 }
 
 SimMachinePort::SimMachinePort(session::SimulatorOptions base, std::size_t vanish_first_after)
-    : base_(std::move(base)), vanish_first_after_(vanish_first_after) {}
+    : base_(std::move(base)),
+      configured_stock_(base_.stock),
+      configured_tools_(base_.tools),
+      vanish_first_after_(vanish_first_after) {}
 
 std::string SimMachinePort::path() {
   if (!current_ || current_->ended()) {
@@ -91,8 +94,8 @@ void SimMachinePort::set_next_design(std::optional<geometry::Mesh> design, std::
                                      std::map<int, cam::Cutter> tools, std::optional<geometry::Box3> stock) {
   base_.design = std::move(design);
   base_.cutter = cutter;
-  base_.stock = stock;
-  base_.tools.reset();
+  base_.stock = stock ? stock : configured_stock_;
+  base_.tools = configured_tools_;
   if (!tools.empty()) base_.tools = cncsim::ToolTable(tools.begin(), tools.end());
 }
 
@@ -139,9 +142,20 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
       so.tolerance = mc.sim_tolerance;
       session::parse_sim_speed(so.speed);  // a bad speed fails at start, naming it
       try {
-        if (!mc.sim_tool_table.empty()) so.stick_outs = session::parse_sim_stick_outs(mc.sim_tool_table);
+        if (!mc.sim_tool_table.empty()) {
+          so.stick_outs = session::parse_sim_stick_outs(mc.sim_tool_table);
+          // The shapes too: what touches a corner plate's wall is the cutter's flank.
+          so.tools = session::parse_sim_tool_shapes(mc.sim_tool_table);
+        }
         so.tool_sensor = mc.sim_tool_sensor;
         if (!so.tool_sensor.empty()) session::check_sim_tool_sensor(so.tool_sensor);  // checked at start
+        if (!mc.sim_stock.empty()) so.stock = session::parse_sim_stock(mc.sim_stock);
+        if (!mc.sim_corner_plate.empty()) {
+          if (mc.sim_stock.empty()) throw std::invalid_argument("sim_corner_plate sits on the stock's corner: give sim_stock");
+          session::check_sim_corner_plate(mc.sim_corner_plate);
+          so.corner_plate = mc.sim_corner_plate;
+        }
+        if (!mc.sim_start.empty()) so.start_position = session::parse_sim_position(mc.sim_start);
       } catch (const std::exception& e) {
         throw std::invalid_argument(cat({"machine '", mc.name, "': ", e.what()}));
       }

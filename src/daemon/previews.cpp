@@ -132,7 +132,9 @@ void Previews::path(const std::shared_ptr<const Program>& program, std::size_t m
     return Response::json(200, {{"points", p.points},
                                 {"total_points", p.total_points},
                                 {"cuts", flat(p.cuts)},
-                                {"rapids", flat(p.rapids)}});
+                                {"rapids", flat(p.rapids)},
+                                {"cut_lines", p.cut_lines},
+                                {"rapid_lines", p.rapid_lines}});
   });
 }
 

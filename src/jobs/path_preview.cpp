@@ -57,18 +57,22 @@ PathPreview decimate_path(const gcode::ProgramTrace& trace, std::size_t max_poin
   if (max_points < 2) throw std::invalid_argument("path preview: max_points must be at least 2");
   // The path as one chain of points; span[k] joins pts[k] and pts[k+1].
   std::vector<geometry::Vec3> pts;
+  std::vector<std::size_t> line;  // per point: the 1-based line of the move ending (or starting) there
   std::vector<std::uint8_t> span;
   for (const auto& s : trace.segments) {
     const geometry::Vec3 a = s.work_from(), b = s.work_to();
     if (pts.empty()) {
       pts.push_back(a);
+      line.push_back(s.source_line + 1);
     } else if (norm(pts.back() - a) > 1e-9) {
       span.push_back(kJump);  // the work offset moved under the tool
       pts.push_back(a);
+      line.push_back(s.source_line + 1);
     }
     if (b == a) continue;
     span.push_back(s.rapid ? kRapid : kCut);
     pts.push_back(b);
+    line.push_back(s.source_line + 1);
   }
   PathPreview out;
   out.total_points = pts.size();
@@ -76,6 +80,7 @@ PathPreview decimate_path(const gcode::ProgramTrace& trace, std::size_t max_poin
   const std::size_t n = pts.size();
   if (n == 1) {  // only moves that go nowhere
     out.rapids.push_back({pts[0]});
+    out.rapid_lines.push_back({line[0]});
     out.points = 1;
     return out;
   }
@@ -131,8 +136,13 @@ PathPreview decimate_path(const gcode::ProgramTrace& trace, std::size_t max_poin
   count_with(lo);
   out.points = walk([&](int kind, std::size_t a, std::size_t b, bool fresh) {
     auto& list = kind == kCut ? out.cuts : out.rapids;
-    if (fresh) list.push_back({pts[a]});
+    auto& lines = kind == kCut ? out.cut_lines : out.rapid_lines;
+    if (fresh) {
+      list.push_back({pts[a]});
+      lines.push_back({line[a]});
+    }
     list.back().push_back(pts[b]);
+    lines.back().push_back(line[b]);
   });
   return out;
 }

@@ -180,6 +180,13 @@ void PendantController::on_key(Key key, bool fn) {
         command("tool change: continue", session_.tool_change_confirm());
         return;
       }
+      // At the prompt of a routine outside a job (a tool routine, the corner
+      // probe's question): the operator's confirm, as on the page.
+      if (const auto* r = session_.routine(); r && r->pending_prompt()) {
+        const std::string what = std::string(r->name()) + ": confirm";
+        command(what.c_str(), session_.routine_confirm());
+        return;
+      }
       auto r = session_.toggle_hold();
       // No job: a hold from a feed hold key or a jog is resumed here too.
       const auto st = session_.status();

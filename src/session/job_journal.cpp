@@ -88,6 +88,24 @@ void JobJournal::on_event(const SessionEvent& e) {
         journal_.record_tool_change(row);
       }
       return;
+    case SessionEventKind::Routine:
+      // Outside a job (routines never run in one): what it did, and the tool it left.
+      if (e.routine_succeeded) {
+        transport::RoutineRow row;
+        row.port = port_label_;
+        row.name = e.routine_name;
+        row.succeeded = *e.routine_succeeded;
+        row.text = e.text;
+        if (const auto& r = e.tool_record) {
+          row.tool_routine = true;
+          row.tool = r->tool;
+          row.method = r->skipped ? "skipped" : protocol::to_string(r->method);
+          row.offset_z = r->offset_z;
+          row.length_known = r->length_known;
+        }
+        journal_.record_routine(row);
+      }
+      return;
     case SessionEventKind::Controller: break;
     default: return;
   }

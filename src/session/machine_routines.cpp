@@ -106,6 +106,7 @@ void MachineSession::end_machine_routine(const std::string& why) {
   SessionEvent e;
   e.kind = SessionEventKind::Routine;
   e.routine_succeeded = r->succeeded();
+  e.routine_name = r->name();
   e.text = r->succeeded() ? r->summary() : r->failure();
   if (tool) {
     // The machine's tool and reference, as a job's change keeps them.

@@ -3,7 +3,9 @@
 #include <fmt/core.h>
 
 #include "cncsim/output_file.hpp"
+#include "cncsim/number_text.hpp"
 #include "cncsim/probe_targets.hpp"
+#include "cncsim/removal.hpp"
 
 #include <sstream>
 #include <stdexcept>
@@ -29,6 +31,21 @@ double parse_sim_speed(const std::string& text) {
 cncsim::StickOuts parse_sim_stick_outs(const std::string& tool_table) { return cncsim::parse_tool_stick_outs(tool_table); }
 
 void check_sim_tool_sensor(const std::string& text) { cncsim::parse_tool_sensor(text); }
+
+cncsim::ToolTable parse_sim_tool_shapes(const std::string& tool_table) { return cncsim::parse_tool_table(tool_table); }
+
+geometry::Box3 parse_sim_stock(const std::string& text) {
+  const cncsim::StockBox b = cncsim::parse_stock_box(text, 1.0);
+  return geometry::Box3{b.lo, b.hi};
+}
+
+geometry::Vec3 parse_sim_position(const std::string& text) {
+  const auto p = cncsim::vec3_from(text);
+  if (!p) throw std::invalid_argument("'" + text + "': expected X,Y,Z (machine mm)");
+  return *p;
+}
+
+void check_sim_corner_plate(const std::string& text) { cncsim::parse_corner_plate(text, 0, 0, 0); }
 
 SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)) {
   cncsim::MachineOptions mo;

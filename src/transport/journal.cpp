@@ -141,6 +141,10 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " id INTEGER PRIMARY KEY AUTOINCREMENT, job_id INTEGER NOT NULL REFERENCES jobs(id), at TEXT NOT NULL,"
          " line INTEGER NOT NULL, tool INTEGER NOT NULL, method TEXT NOT NULL, offset_z REAL,"
          " length_known INTEGER NOT NULL, note TEXT NOT NULL)");
+    // Routines outside a job: a new table (older journals gain it when opened).
+    exec("CREATE TABLE IF NOT EXISTS routines ("
+         " id INTEGER PRIMARY KEY AUTOINCREMENT, at TEXT NOT NULL, port TEXT NOT NULL, name TEXT NOT NULL,"
+         " succeeded INTEGER NOT NULL, text TEXT NOT NULL, tool INTEGER, method TEXT, offset_z REAL, length_known INTEGER)");
     // cncstreamd's queue: a new table, so older journals stay readable by
     // older programs and gain it the first time the daemon opens them.
     exec("CREATE TABLE IF NOT EXISTS daemon_jobs ("
@@ -227,6 +231,48 @@ void Journal::record_tool_change(const ToolChangeRow& r) {
   else s.bind_null(6);
   s.bind(7, static_cast<std::int64_t>(r.length_known ? 1 : 0)).bind(8, r.note);
   s.step();
+}
+
+void Journal::record_routine(const RoutineRow& r) {
+  Stmt s(db_, path_,
+         "INSERT INTO routines (at, port, name, succeeded, text, tool, method, offset_z, length_known)"
+         " VALUES (?,?,?,?,?,?,?,?,?)");
+  s.bind(1, now_iso8601()).bind(2, r.port).bind(3, r.name).bind(4, static_cast<std::int64_t>(r.succeeded ? 1 : 0));
+  s.bind(5, r.text);
+  if (r.tool_routine) {
+    s.bind(6, r.tool).bind(7, r.method);
+    if (r.offset_z) s.bind(8, *r.offset_z);
+    else s.bind_null(8);
+    s.bind(9, static_cast<std::int64_t>(r.length_known ? 1 : 0));
+  } else {
+    s.bind_null(6).bind_null(7).bind_null(8).bind_null(9);
+  }
+  s.step();
+}
+
+std::vector<RoutineRow> Journal::routines_since(const std::string& at, const std::string& port) const {
+  Stmt s(db_, path_,
+         "SELECT at, port, name, succeeded, text, tool, method, offset_z, length_known FROM routines"
+         " WHERE at >= ? AND port = ? ORDER BY id");
+  s.bind(1, at).bind(2, port);
+  std::vector<RoutineRow> out;
+  while (s.step()) {
+    RoutineRow r;
+    r.at = s.text(0);
+    r.port = s.text(1);
+    r.name = s.text(2);
+    r.succeeded = s.i64(3) != 0;
+    r.text = s.text(4);
+    r.tool_routine = !s.is_null(5);
+    if (r.tool_routine) {
+      r.tool = s.i64(5);
+      r.method = s.text(6);
+      if (!s.is_null(7)) r.offset_z = s.f64(7);
+      r.length_known = s.i64(8) != 0;
+    }
+    out.push_back(std::move(r));
+  }
+  return out;
 }
 
 std::vector<ToolChangeRow> Journal::tool_changes(std::int64_t job_id) const {

@@ -158,6 +158,40 @@ TEST(PathPreview, AJumpOfTheWorkOffsetIsNotDrawnAcross) {
   EXPECT_EQ(decimate_path(gcode::trace_program("G21\n"), 100).points, 0u);
 }
 
+// Every drawn point carries the program line of its move: the lines of a
+// polyline never go back, and each point lies on a move of its line (checked
+// against the trace), however thinned.
+TEST(PathPreview, EachPointCarriesTheLineOfTheMoveEndingThere) {
+  const std::string program = "G21 G90\nG0 Z5\nG0 X0 Y0\nG1 Z-1 F100\nG1 X10\nG1 Y10\nG1 X0\nG0 Z5\nG0 X20\n";
+  const auto trace = gcode::trace_program(program);
+  for (std::size_t budget : {1000u, 5u}) {
+    const auto p = decimate_path(trace, budget);
+    ASSERT_EQ(p.cut_lines.size(), p.cuts.size());
+    ASSERT_EQ(p.rapid_lines.size(), p.rapids.size());
+    for (int kind = 0; kind < 2; ++kind) {
+      const auto& polys = kind ? p.rapids : p.cuts;
+      const auto& lines = kind ? p.rapid_lines : p.cut_lines;
+      for (std::size_t i = 0; i < polys.size(); ++i) {
+        ASSERT_EQ(lines[i].size(), polys[i].size());
+        for (std::size_t k = 0; k < polys[i].size(); ++k) {
+          if (k > 0) {
+            EXPECT_GE(lines[i][k], lines[i][k - 1]);
+          }
+          bool on_its_line = false;
+          for (const auto& s : trace.segments)
+            on_its_line |= s.source_line + 1 == lines[i][k] && (s.work_to() == polys[i][k] || s.work_from() == polys[i][k]);
+          EXPECT_TRUE(on_its_line) << "budget " << budget << ", point " << k << " line " << lines[i][k];
+        }
+      }
+    }
+  }
+  // The cut: from where line 2 (G0 Z5) ends (line 3 goes nowhere: it is at X0 Y0 already), down on line 4,
+  // its corners ending lines 5, 6 and 7.
+  const auto all = decimate_path(trace, 1000);
+  ASSERT_EQ(all.cuts.size(), 1u);
+  EXPECT_EQ(all.cut_lines[0], (std::vector<std::size_t>{2, 4, 5, 6, 7}));
+}
+
 TEST(ToolpathJob, KeepsASmallHeightPreviewOfItsClGridInWorkCoordinates) {
   ToolpathParams p;
   p.part.mesh = std::make_shared<const geometry::Mesh>(cl_test::dome_on_plate(20, 8));

@@ -424,3 +424,63 @@ TEST(PendantController, AtAToolChangeTheWheelJogsAndStartPauseContinues) {
   io.run_for(std::chrono::milliseconds(50));
   sim->finish(false);
 }
+
+// Outside a job the same key answers a routine's prompt: a tool change run
+// from the page or the API waits for the tool to be mounted; the wheel jogs
+// at the prompt, and Start/Pause confirms it.
+TEST(PendantController, AtARoutinesPromptStartPauseConfirms) {
+  boost::asio::io_context io;
+  cncstream::session::SimulatorOptions so;
+  so.speed = "max";
+  so.stick_outs = {{1, 30.0}, {2, 37.3}};
+  so.tool_sensor = "-30,0,-10";
+  auto sim = std::make_shared<cncstream::session::SimulatorPort>(so);
+  MachineOptions o;
+  o.name = "sim";
+  o.port = sim;
+  o.profiles_dir = cncstream::protocol::default_profiles_dir();
+  MachineSession session(io, o);
+  session.open();
+  ASSERT_TRUE(run_until(io, [&] { return session.ready() && session.status().has_value(); }));
+  FakePendantUsb usb;
+  PendantController controller(session, config(0.2));
+  ReaderOptions ro;
+  ro.reopen_delay = std::chrono::milliseconds(100);
+  auto reader = std::make_unique<UsbPendantReader>(usb, controller, ro);
+  usb.plug();
+  std::optional<bool> ended;
+  auto sub = session.subscribe([&](const SessionEvent& e) {
+    if (e.kind == SessionEventKind::Routine && e.routine_succeeded) ended = *e.routine_succeeded;
+  });
+  cncstream::protocol::ToolChangeConfig tc;
+  tc.method = cncstream::protocol::ToolChangeMethod::Sensor;
+  tc.safe_z = 30;
+  tc.probe_x = -30;
+  tc.probe_y = 0;
+  const auto start = session.run_tool_routine(tc, cncstream::protocol::ToolRoutineKind::Change, 2, 0.1);
+  ASSERT_TRUE(start.result) << start.result.reason;
+  ASSERT_TRUE(run_until(io, [&] {
+    const auto* r = session.routine();
+    return r && r->pending_prompt() && r->pending_prompt()->kind == cncstream::protocol::PromptKind::MountTool;
+  }));
+  // The wheel jogs at the prompt: one detent up on Z at 1 mm a step.
+  const auto mz = [&] { return (*session.status()->mpos)[2]; };
+  const double z0 = mz();
+  usb.send(report(0x10, 0x13));
+  usb.send(report(0x10, 0x13, 1));
+  ASSERT_TRUE(run_until(io, [&] { return std::abs(mz() - (z0 + 1)) < 1e-3 && !session.snapshot().jogging; })) << mz();
+  EXPECT_FALSE(ended.has_value());
+  sim->operator_mount(2);
+  usb.send(report(0x10, 0x13, 0, 0x03));  // Start/Pause: confirm
+  usb.send(report(0x10, 0x13));
+  ASSERT_TRUE(run_until(io, [&] { return ended.has_value(); }, 60));
+  EXPECT_TRUE(*ended);
+  EXPECT_EQ(session.snapshot().tool_in_spindle, 2);
+  ASSERT_TRUE(session.status() && session.status()->wco);
+  EXPECT_NEAR((*session.status()->wco)[2], 7.3, 1e-3);  // T2 is 7.3 mm longer: the work offset moved with it
+  sub.reset();
+  reader.reset();
+  session.close();
+  io.run_for(std::chrono::milliseconds(50));
+  sim->finish(false);
+}

@@ -3,12 +3,16 @@
 // runs it line by line, refuses other motion meanwhile, and a lost link ends
 // it with nothing written.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
 
+#include <filesystem>
+
 #include "cncstream/protocol/corner_probe.hpp"
 #include "cncstream/protocol/firmware_profile.hpp"
+#include "cncstream/session/job_journal.hpp"
 #include "cncstream/session/machine_session.hpp"
 #include "cncstream/session/simulator_port.hpp"
 #include "support/run_until.hpp"
@@ -116,4 +120,38 @@ TEST(RoutinesOnSim, ALostLinkMidProbeEndsItWithNothingWritten) {
   EXPECT_NE(rig.end_text.find("disconnect"), std::string::npos) << rig.end_text;
   EXPECT_FALSE(routine->result().applied);
   EXPECT_TRUE(rig.prompts.empty());
+}
+
+// Routines outside a job are journaled as they end (a resume later reads what
+// changed since its job): the corner probe that wrote the offset, and one
+// that failed when the link went.
+TEST(RoutinesOnSim, EachRoutineOutsideAJobIsJournaledAsItEnds) {
+  const auto db = std::filesystem::temp_directory_path() / ("cncstream_routines_" + std::to_string(::getpid()) + ".sqlite");
+  for (const char* ext : {"", "-wal", "-shm"}) std::filesystem::remove(db.string() + ext);
+  {
+    CornerRig rig;
+    JobJournal journal(*rig.session, db, "sim-corner");
+    ASSERT_TRUE(rig.session->run_routine(std::make_shared<protocol::CornerProbeRoutine>(rig_config())));
+    ASSERT_TRUE(run_until(rig.io, [&] { return rig.ended_ok.has_value(); }, 120));
+    ASSERT_TRUE(*rig.ended_ok) << rig.end_text;
+    const auto rows = journal.journal().routines_since("", "sim-corner");
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_EQ(rows[0].name, "corner probe");
+    EXPECT_TRUE(rows[0].succeeded);
+    EXPECT_EQ(rows[0].text, rig.end_text);
+    EXPECT_FALSE(rows[0].tool_routine);
+    EXPECT_FALSE(rows[0].at.empty());
+    EXPECT_TRUE(journal.journal().routines_since("", "another-port").empty());
+  }
+  {
+    CornerRig rig(6);
+    JobJournal journal(*rig.session, db, "sim-corner");
+    ASSERT_TRUE(rig.session->run_routine(std::make_shared<protocol::CornerProbeRoutine>(rig_config())));
+    ASSERT_TRUE(run_until(rig.io, [&] { return rig.ended_ok.has_value(); }, 120));
+    const auto rows = journal.journal().routines_since("", "sim-corner");
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_FALSE(rows[1].succeeded);
+    EXPECT_NE(rows[1].text.find("disconnect"), std::string::npos) << rows[1].text;
+  }
+  for (const char* ext : {"", "-wal", "-shm"}) std::filesystem::remove(db.string() + ext);
 }

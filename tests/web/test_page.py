@@ -699,6 +699,54 @@ def tool_change_flow(args, out, d):
         daemon.stop()
 
 
+# ---- what every page test's main() does (test_tools_page.py, test_shop_page.py, test_setup_page.py)
+def page_test_args(output_name, extra=None):
+    """The common options (--daemon, --source, --output) and any the test adds."""
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--daemon", default=os.environ.get("CNCSTREAMD"), help="the cncstreamd binary")
+    ap.add_argument("--source", default=os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")))
+    ap.add_argument("--output", default=os.path.join(os.getcwd(), "test-output", output_name))
+    if extra:
+        extra(ap)
+    args = ap.parse_args()
+    args.mock = False
+    return args
+
+
+def have_programs(*named):
+    """(what, path) pairs: False, saying which, when one is not an executable."""
+    for name, path in named:
+        if not (path and os.access(path, os.X_OK)):
+            print(f"FAIL: no {name} to test: {path!r}")
+            return False
+    return True
+
+
+def fresh_output(out, exts):
+    """The artefacts are this run's: none of an earlier run left to mislead."""
+    os.makedirs(out, exist_ok=True)
+    for f in os.listdir(out):
+        if f.endswith(exts):
+            os.remove(os.path.join(out, f))
+
+
+def run_in_browser(args, flow):
+    """flow(d) in a fresh headless Chromium; 0 passed, 1 failed (the trace printed)."""
+    d = None
+    try:
+        d = browser()
+        flow(d)
+    except Exception:
+        traceback.print_exc()
+        say(f"FAILED; screenshots and logs in {args.output}")
+        return 1
+    finally:
+        if d:
+            d.quit()
+    say(f"passed in {time.monotonic() - T0:.1f} s; screenshots in {args.output}")
+    return 0
+
+
 def _alert(d):
     try:
         a = d.switch_to.alert

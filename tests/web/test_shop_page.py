@@ -15,7 +15,6 @@ Exit codes: 0 passed, 1 failed, 77 skipped.
 
   test_shop_page.py --daemon build/release/cncstreamd --cli build/release/cncstream --source . --output DIR
 """
-import argparse
 import fcntl
 import glob
 import os
@@ -25,7 +24,6 @@ import subprocess
 import sys
 import tempfile
 import time
-import traceback
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_page as tp  # noqa: E402  (exits 77 when Chromium is missing)
@@ -181,41 +179,24 @@ def shop_flow(args, out, d, hub):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--daemon", default=os.environ.get("CNCSTREAMD"), help="the cncstreamd binary")
-    ap.add_argument("--cli", default=os.environ.get("CNCSTREAM_CLI"), help="the cncstream binary (for shop init)")
-    ap.add_argument("--source", default=os.path.normpath(os.path.join(os.path.dirname(__file__), "..", "..")))
-    ap.add_argument("--output", default=os.path.join(os.getcwd(), "test-output", "web-shop"))
-    ap.add_argument("--pg-template", help="where PostgreSQL's initialised cluster is kept between runs"
-                    " (default: shop-pg-template beside the output folder's test-output)")
-    args = ap.parse_args()
-    args.mock = False
-    for name, path in (("cncstreamd (--daemon)", args.daemon), ("cncstream (--cli)", args.cli)):
-        if not (path and os.access(path, os.X_OK)):
-            print(f"FAIL: no {name} to test: {path!r}")
-            return 1
-    os.makedirs(args.output, exist_ok=True)
-    for f in os.listdir(args.output):
-        if f.endswith((".png", ".log", ".nc")):
-            os.remove(os.path.join(args.output, f))
-    hub = d = None
-    try:
+    def extra(ap):
+        ap.add_argument("--cli", default=os.environ.get("CNCSTREAM_CLI"), help="the cncstream binary (for shop init)")
+        ap.add_argument("--pg-template", help="where PostgreSQL's initialised cluster is kept between runs"
+                        " (default: shop-pg-template beside the output folder's test-output)")
+    args = tp.page_test_args("web-shop", extra)
+    if not tp.have_programs(("cncstreamd (--daemon)", args.daemon), ("cncstream (--cli)", args.cli)):
+        return 1
+    tp.fresh_output(args.output, (".png", ".log", ".nc"))
+
+    def flow(d):
         template = args.pg_template or os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(args.output))),
                                                     "shop-pg-template")
         hub = TempHub(args.output, template)
-        d = tp.browser()
-        shop_flow(args, args.output, d, hub)
-    except Exception:
-        traceback.print_exc()
-        say(f"FAILED; screenshots and logs in {args.output}")
-        return 1
-    finally:
-        if d:
-            d.quit()
-        if hub:
+        try:
+            shop_flow(args, args.output, d, hub)
+        finally:
             hub.stop()
-    say(f"passed in {time.monotonic() - tp.T0:.1f} s; screenshots in {args.output}")
-    return 0
+    return tp.run_in_browser(args, flow)
 
 
 if __name__ == "__main__":

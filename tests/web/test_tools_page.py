@@ -14,12 +14,9 @@ Exit codes: 0 passed, 1 failed, 77 skipped (no Chromium, as test_page.py).
 
   test_tools_page.py --daemon build/release/cncstreamd --source . --output DIR
 """
-import argparse
 import json
 import os
 import sys
-import time
-import traceback
 import urllib.request
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -157,32 +154,11 @@ def tools_flow(args, out, d):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--daemon", default=os.environ.get("CNCSTREAMD"), help="the cncstreamd binary")
-    ap.add_argument("--source", default=os.path.normpath(os.path.join(os.path.dirname(__file__), "..", "..")))
-    ap.add_argument("--output", default=os.path.join(os.getcwd(), "test-output", "web-tools"))
-    args = ap.parse_args()
-    args.mock = False
-    if not (args.daemon and os.access(args.daemon, os.X_OK)):
-        print(f"FAIL: no cncstreamd to test (--daemon or CNCSTREAMD): {args.daemon!r}")
+    args = tp.page_test_args("web-tools")
+    if not tp.have_programs(("cncstreamd (--daemon)", args.daemon)):
         return 1
-    os.makedirs(args.output, exist_ok=True)
-    for f in os.listdir(args.output):
-        if f.endswith((".png", ".log", ".tbl")):
-            os.remove(os.path.join(args.output, f))
-    d = None
-    try:
-        d = tp.browser()
-        tools_flow(args, args.output, d)
-    except Exception:
-        traceback.print_exc()
-        say(f"FAILED; screenshots and logs in {args.output}")
-        return 1
-    finally:
-        if d:
-            d.quit()
-    say(f"passed in {time.monotonic() - tp.T0:.1f} s; screenshots in {args.output}")
-    return 0
+    tp.fresh_output(args.output, (".png", ".log", ".tbl"))
+    return tp.run_in_browser(args, lambda d: tools_flow(args, args.output, d))
 
 
 if __name__ == "__main__":

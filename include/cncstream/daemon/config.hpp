@@ -32,6 +32,12 @@ struct MachineConfig {
   std::string sim_tool_table;
   std::string sim_tool_sensor;
   std::optional<double> sim_probe_surface_z;
+  // A stock block ("X0,Y0,Z0:X1,Y1,Z1", machine mm) with a corner plate
+  // ("THICKNESS,LIP[,SIZE]") on its X-min/Y-min corner, and where the tool
+  // is at power-on ("X,Y,Z", machine mm): corner probing on the simulator.
+  std::string sim_stock;
+  std::string sim_corner_plate;
+  std::string sim_start;
   // [machine.tool_change]: the routine a program's tool change runs.
   ToolChangeSettings tool_change;
   // In a shop ([shop] url): tags a shop job's needs must be among, and

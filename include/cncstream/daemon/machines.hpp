@@ -48,6 +48,10 @@ class SimMachinePort final : public session::MachinePort {
 
  private:
   session::SimulatorOptions base_;
+  // As configured: a job without its own stock or tools keeps these (the
+  // corner plate's block, the tool table's shapes).
+  std::optional<geometry::Box3> configured_stock_;
+  std::optional<cncsim::ToolTable> configured_tools_;
   std::size_t vanish_first_after_;
   std::shared_ptr<session::SimulatorPort> current_;
 };

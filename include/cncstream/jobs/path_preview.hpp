@@ -15,6 +15,10 @@ namespace cncstream::jobs {
 struct PathPreview {
   std::vector<std::vector<geometry::Vec3>> cuts;    // feed moves, in program order
   std::vector<std::vector<geometry::Vec3>> rapids;  // G0 moves, in program order
+  // Per point of cuts and rapids: the program line (1-based) of the move that
+  // ends there (the path's very first point: its first move's), so a front
+  // end picks a line on the drawing.
+  std::vector<std::vector<std::size_t>> cut_lines, rapid_lines;
   std::size_t points = 0;                 // in cuts and rapids together (a point shared by both counts twice)
   std::size_t total_points = 0;           // the program's path: where it starts and every move's end
 };

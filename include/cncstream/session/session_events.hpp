@@ -62,6 +62,7 @@ struct SessionEvent {
   std::optional<protocol::ToolChangeRecord> tool_record;      // ToolChange
   std::optional<protocol::RoutinePrompt> routine_prompt;      // Routine: the operator is asked
   std::optional<bool> routine_succeeded;                      // Routine: it ended
+  std::string routine_name;                                   // Routine: which ("corner probe", "tool change", ...)
 };
 
 // What a display needs at any moment.

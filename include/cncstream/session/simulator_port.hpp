@@ -64,6 +64,13 @@ double parse_sim_speed(const std::string& text);
 // ("1=flat:6@30,2=ball:3.175@37.3") and a tool-length sensor ("X,Y,Z").
 cncsim::StickOuts parse_sim_stick_outs(const std::string& tool_table);
 void check_sim_tool_sensor(const std::string& text);
+// The same tool table's cutters (T -> shape).
+cncsim::ToolTable parse_sim_tool_shapes(const std::string& tool_table);
+// A stock block "X0,Y0,Z0:X1,Y1,Z1" and a position "X,Y,Z" (machine mm).
+geometry::Box3 parse_sim_stock(const std::string& text);
+geometry::Vec3 parse_sim_position(const std::string& text);
+// A corner plate "THICKNESS,LIP[,SIZE]" (checked only: it is placed on the stock).
+void check_sim_corner_plate(const std::string& text);
 
 class SimulatorPort final : public MachinePort {
  public:

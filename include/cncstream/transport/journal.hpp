@@ -72,6 +72,23 @@ struct ToolChangeRow {
   std::string note;
 };
 
+// A routine run outside a job (corner probing, the outline, the tool
+// routines), as it ended: what it did or why it failed, and for a tool
+// routine the tool left in the spindle and whether its length is known, so a
+// later resume knows what changed since its job.
+struct RoutineRow {
+  std::string at;    // ISO 8601 UTC (set when recorded)
+  std::string port;
+  std::string name;
+  bool succeeded = false;
+  std::string text;
+  bool tool_routine = false;  // the fields below are set
+  std::int64_t tool = 0;
+  std::string method;
+  std::optional<double> offset_z;
+  bool length_known = false;
+};
+
 struct DaemonJobRow {
   std::int64_t id = 0;
   std::string machine;
@@ -109,6 +126,9 @@ class Journal {
   void end_job(std::int64_t job_id, const std::string& outcome, const std::string& message);
   void record_tool_change(const ToolChangeRow& r);
   std::vector<ToolChangeRow> tool_changes(std::int64_t job_id) const;
+  void record_routine(const RoutineRow& r);
+  // The routines on `port` recorded at or after `at` (ISO 8601), oldest first.
+  std::vector<RoutineRow> routines_since(const std::string& at, const std::string& port) const;
 
   std::vector<JobRecord> jobs(int limit = 50) const;  // newest first
   std::optional<JobRecord> job(std::int64_t id) const;

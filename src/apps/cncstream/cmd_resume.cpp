@@ -21,6 +21,24 @@
 
 namespace cncstream::app {
 
+namespace detail_cmd_resume {
+
+// What ran on the job's port outside a job since it started: a tool changed
+// or measured there is the one in the spindle now.
+std::string since_job_text(const std::vector<transport::RoutineRow>& rows) {
+  std::string out;
+  for (const auto& r : rows) {
+    out += "  since the job, " + r.at + ": " + r.name + (r.succeeded ? "" : " (failed)") + ": " + r.text;
+    if (r.tool_routine)
+      out += "; T" + std::to_string(r.tool) + " in the spindle, its length " +
+             (r.length_known ? "measured (" + r.method + ")" : std::string("UNKNOWN"));
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace detail_cmd_resume
+
 void register_resume(CLI::App& app, CommandRegistry& registry) {
   struct Opts {
     long long job = 0;
@@ -51,6 +69,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     std::optional<transport::ProgressRecord> last;
     std::vector<std::int64_t> error_lines;
     std::vector<transport::ToolChangeRow> tool_changes;
+    std::vector<transport::RoutineRow> routines_since;  // on its port after it started: a tool may have changed
     {
       transport::Journal j(jpath);
       rec = j.job(o->job);
@@ -58,6 +77,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
       last = j.last_progress(o->job);
       error_lines = j.progress_lines(o->job, "error");
       tool_changes = j.tool_changes(o->job);
+      routines_since = j.routines_since(rec->started_at, rec->port);
     }
     const std::filesystem::path file = rec->file;
     if (!std::filesystem::exists(file))
@@ -122,6 +142,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
                                                               : std::string("UNKNOWN: measure it and set work Z before "
                                                                             "resuming")) +
                             "\n")
+              << detail_cmd_resume::since_job_text(routines_since)
               << "  the controller must be homed with the same work offset as before\n"
               << "  preamble (retract to Z" << format_gcode_number(ro.safe_z) << ", travel, restore, plunge at F"
               << format_gcode_number(ro.plunge_feed) << "):\n";
