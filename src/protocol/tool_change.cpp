@@ -112,19 +112,26 @@ void ToolChangeRoutine::add_measure(double* trigger_out) {
   add([this] { send("G53 G0 Z" + routine_mm(cfg_.safe_z)); });
 }
 
-// The tool in the spindle (zeroed by the operator) measured with the work
-// offset it was zeroed with: every other tool's offset follows from them.
-void ToolChangeRoutine::add_reference_measure() {
-  add_measure(&old_trigger_);
-  add([this] { wait_idle(); });  // GRBL answers $# with error:8 while moving
+// $# (the machine idle), then the active work offset's Z to `use`; none reported fails.
+void ToolChangeRoutine::add_read_offset_z(std::function<void(double)> use) {
   add([this] { send("$#", false, true); });
-  add([this] {
+  add([this, use = std::move(use)] {
     const auto z = active_offset_z();
     if (!z) {
       fail("$# did not report G5" + std::to_string(4 + wcs_index()));
       return;
     }
-    reference_ = ToolLengthReference{req_.from_tool, old_trigger_, *z, cfg_.method};
+    use(*z);
+  });
+}
+
+// The tool in the spindle (zeroed by the operator) measured with the work
+// offset it was zeroed with: every other tool's offset follows from them.
+void ToolChangeRoutine::add_reference_measure() {
+  add_measure(&old_trigger_);
+  add([this] { wait_idle(); });  // GRBL answers $# with error:8 while moving
+  add_read_offset_z([this](double z) {
+    reference_ = ToolLengthReference{req_.from_tool, old_trigger_, z, cfg_.method};
     reference_->measured_tool = req_.from_tool;
     reference_->measured_trigger_z = old_trigger_;
   });
@@ -160,19 +167,13 @@ void ToolChangeRoutine::add_controller_change(const std::string& what) {
   });
   add([this] { send_realtime(Realtime::CycleStart); });
   add([this] { wait_idle(); });
-  add([this] { send("$#", false, true); });
-  add([this] {
-    const auto z = active_offset_z();
-    if (!z) {
-      fail("$# did not report G5" + std::to_string(4 + wcs_index()));
-      return;
-    }
-    offset_written_ = *z;
+  add_read_offset_z([this](double z) {
+    offset_written_ = z;
     mounted_ = req_.to_tool;
     length_known_ = true;
     reference_.reset();  // a re-zero: lengths measured before no longer apply
     set_summary(fmt::format("the operator zeroed Z with T{} in the controller's Tool state; work Z offset now {}",
-                            req_.to_tool, routine_mm(*z)));
+                            req_.to_tool, routine_mm(z)));
   });
 }
 

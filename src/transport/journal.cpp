@@ -149,6 +149,14 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " message TEXT NOT NULL DEFAULT '', created_at TEXT NOT NULL, started_at TEXT, ended_at TEXT,"
          " journal_id INTEGER, resumed_from INTEGER NOT NULL DEFAULT 0, from_line INTEGER NOT NULL DEFAULT 0,"
          " last_line INTEGER NOT NULL DEFAULT 0)");
+    // A job's own tool-change settings (its JSON as given, '' none): a column
+    // added to older queues; older programs name their columns and skip it.
+    bool has_tool_change = false;
+    {
+      Stmt s(db_, path_, "SELECT COUNT(*) FROM pragma_table_info('daemon_jobs') WHERE name = 'tool_change'");
+      if (s.step()) has_tool_change = s.i64(0) > 0;
+    }
+    if (!has_tool_change) exec("ALTER TABLE daemon_jobs ADD COLUMN tool_change TEXT NOT NULL DEFAULT ''");
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;
@@ -325,7 +333,7 @@ namespace {
 
 constexpr const char* kDaemonJobColumns =
     "id, machine, file_id, file_name, kind, params, state, position, message, created_at, started_at, ended_at,"
-    " journal_id, resumed_from, from_line, last_line";
+    " journal_id, resumed_from, from_line, last_line, tool_change";
 
 void bind_daemon_job(Stmt& s, const DaemonJobRow& r) {
   s.bind(1, r.machine).bind(2, r.file_id).bind(3, r.file_name).bind(4, r.kind).bind(5, r.params_json).bind(6, r.state);
@@ -336,7 +344,7 @@ void bind_daemon_job(Stmt& s, const DaemonJobRow& r) {
   else s.bind_null(11);
   if (r.journal_id) s.bind(12, r.journal_id);
   else s.bind_null(12);
-  s.bind(13, r.resumed_from).bind(14, r.from_line).bind(15, r.last_line);
+  s.bind(13, r.resumed_from).bind(14, r.from_line).bind(15, r.last_line).bind(16, r.tool_change_json);
 }
 
 }  // namespace
@@ -344,8 +352,8 @@ void bind_daemon_job(Stmt& s, const DaemonJobRow& r) {
 std::int64_t Journal::insert_daemon_job(const DaemonJobRow& r) {
   Stmt s(db_, path_,
          "INSERT INTO daemon_jobs (machine, file_id, file_name, kind, params, state, position, message, created_at,"
-         " started_at, ended_at, journal_id, resumed_from, from_line, last_line)"
-         " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)");
+         " started_at, ended_at, journal_id, resumed_from, from_line, last_line, tool_change)"
+         " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)");
   bind_daemon_job(s, r);
   s.step();
   return sqlite3_last_insert_rowid(db_);
@@ -355,9 +363,9 @@ void Journal::update_daemon_job(const DaemonJobRow& r) {
   Stmt s(db_, path_,
          "UPDATE daemon_jobs SET machine=?1, file_id=?2, file_name=?3, kind=?4, params=?5, state=?6, position=?7,"
          " message=?8, created_at=?9, started_at=?10, ended_at=?11, journal_id=?12, resumed_from=?13, from_line=?14,"
-         " last_line=?15 WHERE id=?16");
+         " last_line=?15, tool_change=?16 WHERE id=?17");
   bind_daemon_job(s, r);
-  s.bind(16, r.id);
+  s.bind(17, r.id);
   s.step();
 }
 
@@ -385,6 +393,7 @@ std::vector<DaemonJobRow> Journal::daemon_jobs(int limit) const {
     r.resumed_from = s.i64(13);
     r.from_line = s.i64(14);
     r.last_line = s.i64(15);
+    r.tool_change_json = s.text(16);
     out.push_back(std::move(r));
   }
   return out;

@@ -176,3 +176,21 @@ TEST(ControllerToolChange, ALostLinkInTheToolStateEndsTheJobWithTheLengthUnknown
   EXPECT_NE(rig.record_text.find("the length of the tool in the spindle is unknown"), std::string::npos)
       << rig.record_text;
 }
+
+TEST(ControllerToolChange, ADeclineInTheToolStateStopsTheJobAndResetsTheControllerOutOfIt) {
+  // grblHAL ignores a feed hold in its Tool state: the stop's reset follows at once.
+  ControllerRig rig(cncsim::Firmware::GrblHal);
+  ASSERT_TRUE(rig.session->start_job(ControllerRig::job()));
+  ASSERT_TRUE(run_until(rig.io, [&] { return rig.at_prompt() || rig.outcome; }, 120));
+  ASSERT_TRUE(rig.at_prompt());
+  ASSERT_TRUE(rig.session->tool_change_decline());
+  ASSERT_TRUE(run_until(rig.io, [&] { return rig.outcome.has_value(); }, 60));
+  EXPECT_NE(*rig.outcome, protocol::JobOutcome::Completed);
+  ASSERT_TRUE(rig.record);
+  EXPECT_FALSE(rig.record->length_known);
+  EXPECT_NE(rig.record_text.find("declined"), std::string::npos) << rig.record_text;
+  ASSERT_TRUE(run_until(rig.io, [&] {
+    const auto st = rig.status();
+    return st && st->state == protocol::MachineState::Idle;
+  }));
+}

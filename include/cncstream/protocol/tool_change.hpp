@@ -128,6 +128,7 @@ class ToolChangeRoutine final : public MachineRoutine {
   void add_reference_measure();
   void add_change(const std::string& what);
   void add_controller_change(const std::string& what);
+  void add_read_offset_z(std::function<void(double)> use);
   void add_check();
   void add_return();
   int wcs_index() const;
