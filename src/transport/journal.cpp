@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <initializer_list>
 #include <ctime>
 #include <string>
 
@@ -114,26 +115,23 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " profile TEXT NOT NULL, port TEXT NOT NULL, mode TEXT NOT NULL, total_lines INTEGER NOT NULL,"
          " started_at TEXT NOT NULL, ended_at TEXT, outcome TEXT, message TEXT NOT NULL DEFAULT '')");
     // Columns added later: a journal from an older version gains them here.
-    for (const char* add : {"ALTER TABLE jobs ADD COLUMN resumed_from INTEGER",
-                            "ALTER TABLE jobs ADD COLUMN from_line INTEGER",
-                            "ALTER TABLE jobs ADD COLUMN planner_blocks INTEGER"}) {
-      if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
-          std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
-        throw JournalError(path.string() + ": cannot upgrade the jobs table: " + sqlite3_errmsg(db_));
-    }
+    const auto add_columns = [&](const char* table, std::initializer_list<const char*> adds) {
+      for (const char* add : adds)
+        if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
+            std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
+          throw JournalError(path.string() + ": cannot upgrade the " + table + " table: " + sqlite3_errmsg(db_));
+    };
+    add_columns("jobs", {"ALTER TABLE jobs ADD COLUMN resumed_from INTEGER", "ALTER TABLE jobs ADD COLUMN from_line INTEGER",
+                         "ALTER TABLE jobs ADD COLUMN planner_blocks INTEGER"});
     exec("CREATE TABLE IF NOT EXISTS progress ("
          " id INTEGER PRIMARY KEY AUTOINCREMENT, job_id INTEGER NOT NULL REFERENCES jobs(id),"
          " at TEXT NOT NULL, lines_ok INTEGER NOT NULL, last_line INTEGER NOT NULL, reason TEXT NOT NULL,"
          " units TEXT, distance TEXT, plane TEXT, wcs TEXT, motion TEXT, feed REAL, spindle_speed REAL,"
          " spindle TEXT, coolant TEXT, tool INTEGER, wco_x REAL, wco_y REAL, wco_z REAL)");
-    for (const char* add : {"ALTER TABLE progress ADD COLUMN status_x REAL", "ALTER TABLE progress ADD COLUMN status_y REAL",
-                            "ALTER TABLE progress ADD COLUMN status_z REAL",
-                            "ALTER TABLE progress ADD COLUMN status_line INTEGER",
-                            "ALTER TABLE progress ADD COLUMN machine_state TEXT"}) {
-      if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
-          std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
-        throw JournalError(path.string() + ": cannot upgrade the progress table: " + sqlite3_errmsg(db_));
-    }
+    add_columns("progress", {"ALTER TABLE progress ADD COLUMN status_x REAL", "ALTER TABLE progress ADD COLUMN status_y REAL",
+                             "ALTER TABLE progress ADD COLUMN status_z REAL",
+                             "ALTER TABLE progress ADD COLUMN status_line INTEGER",
+                             "ALTER TABLE progress ADD COLUMN machine_state TEXT"});
     exec("CREATE INDEX IF NOT EXISTS progress_job ON progress(job_id, id)");
     // Tool changes a job made: which tool is in the spindle after each and
     // whether its length is known (resume reads the last one).
@@ -149,14 +147,9 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " message TEXT NOT NULL DEFAULT '', created_at TEXT NOT NULL, started_at TEXT, ended_at TEXT,"
          " journal_id INTEGER, resumed_from INTEGER NOT NULL DEFAULT 0, from_line INTEGER NOT NULL DEFAULT 0,"
          " last_line INTEGER NOT NULL DEFAULT 0)");
-    // A job's own tool-change settings (its JSON as given, '' none): a column
-    // added to older queues; older programs name their columns and skip it.
-    bool has_tool_change = false;
-    {
-      Stmt s(db_, path_, "SELECT COUNT(*) FROM pragma_table_info('daemon_jobs') WHERE name = 'tool_change'");
-      if (s.step()) has_tool_change = s.i64(0) > 0;
-    }
-    if (!has_tool_change) exec("ALTER TABLE daemon_jobs ADD COLUMN tool_change TEXT NOT NULL DEFAULT ''");
+    // A job's own tool-change settings (its JSON as given, '' none); older
+    // programs name their columns and pass it over.
+    add_columns("daemon_jobs", {"ALTER TABLE daemon_jobs ADD COLUMN tool_change TEXT NOT NULL DEFAULT ''"});
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;
