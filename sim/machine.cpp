@@ -21,7 +21,6 @@ namespace {
 constexpr double kMmPerInch = 25.4;
 constexpr int kWcoRefreshBusy = 30, kWcoRefreshIdle = 10;
 constexpr int kOvrRefreshBusy = 20, kOvrRefreshIdle = 10;
-constexpr std::size_t kRxUsable = kRxBufferSize - 1;  // ring buffer keeps one slot free
 
 bool is_realtime(unsigned char c) {
   return c == '?' || c == '!' || c == '~' || c == 0x18 || c >= 0x80;
@@ -32,6 +31,10 @@ bool is_realtime(unsigned char c) {
 Machine::Machine(MachineOptions options)
     : options_(std::move(options)), queue_(cncstream::gcode::MotionLimits{}, options_.planner_blocks) {
   if (options_.store_path) store_ = load_store(*options_.store_path);
+  if (grblhal()) {
+    store_.settings.add_grblhal_settings();
+    rx_capacity_ = kGrblHalRxBufferSize;
+  }
   queue_.set_limits(store_.settings.motion_limits());
   parser_.coords = store_.coords;
   parser_.coord_system = store_.coords.wcs[0];
@@ -43,7 +46,7 @@ Machine::Machine(MachineOptions options)
     probes_.add(plane);
   }
   for (const ProbeFace& f : options_.probe_faces) probes_.add(f);
-  mounted_tool_ = options_.start_tool;
+  mounted_tool_ = current_tool_ = options_.start_tool;
   if (options_.start_position) {
     queue_.set_position(*options_.start_position);
     parser_.position = *options_.start_position;
@@ -173,7 +176,7 @@ std::string Machine::format_vec(const Vec3& v) const {
 
 void Machine::boot(bool power_on) {
   if (!vanished_) out_ += "\r\n";
-  emit(kBanner);
+  emit(grblhal() ? kGrblHalBanner : kBanner);
   const bool locked = state_ == MachineState::Alarm || state_ == MachineState::Sleep ||
                       (power_on && store_.settings.homing());
   if (locked) {
@@ -221,6 +224,7 @@ void Machine::soft_reset() {
   critical_lock_ = false;
   jog_cancel_ = false;
   paused_ = false;
+  reset_tool_change();
   spindle_stop_ = false;
   feed_ovr_ = rapid_ovr_ = spindle_ovr_ = 100;
   apply_overrides();
@@ -324,12 +328,12 @@ void Machine::receive_byte(unsigned char c) {
     realtime(c);
     return;
   }
-  if (rx_.size() >= kRxUsable) {
+  if (rx_.size() >= rx_capacity_ - 1) {  // the ring buffer keeps one slot free
     ++rx_dropped_;
     if (options_.strict) {
       throw RxOverflowError(fmt::format("RX buffer overflow: byte {} (0x{:02X}) from the host arrived while the {}-byte "
                                         "RX buffer was full and was dropped (line {}); the host must count characters",
-                                        bytes_received_, c, kRxBufferSize, lines_received_ + 1));
+                                        bytes_received_, c, rx_capacity_, lines_received_ + 1));
     }
     return;
   }
@@ -362,6 +366,9 @@ void Machine::realtime(unsigned char c) {
       }
       if (!queue_.empty()) queue_.hold();
       state_ = MachineState::Door;
+      break;
+    case 0xA3:  // grblHAL: the host acknowledges the Tool state
+      if (grblhal()) acknowledge_tool_change();
       break;
     case 0x85:  // jog cancel
       if (state_ == MachineState::Jog) {
@@ -426,6 +433,10 @@ void Machine::feed_hold() {
 }
 
 void Machine::cycle_start() {
+  if (state_ == MachineState::Tool) {
+    if (finish_tool_change()) pump();
+    return;
+  }
   if ((state_ == MachineState::Hold || state_ == MachineState::Door) && queue_.at_rest()) {
     paused_ = false;
     spindle_stop_ = false;
@@ -465,6 +476,8 @@ void Machine::pump() {
       popped_ = false;
       if (vanished_ || critical_lock_) return;
     }
+    // grblHAL after an M6: nothing more is read until the host's 0xA3.
+    if (tool_read_suspended_) return;
     // The line buffer takes characters until an end of line.
     std::optional<gc::CleanLine> line;
     while (!rx_.empty() && !line) {
@@ -487,7 +500,8 @@ bool Machine::run_front_step() {
         last_block_feed_ = !s.block.rapid;
         planned_lines_.push_back(s.block.tag);
         if (PendingLine* p = pending_line(s.block.tag)) ++p->blocks_left;
-        if (s.jog && (state_ == MachineState::Idle || state_ == MachineState::Jog)) state_ = MachineState::Jog;
+        if (s.jog && (state_ == MachineState::Idle || state_ == MachineState::Jog || state_ == MachineState::Tool))
+          state_ = MachineState::Jog;
         else if (state_ == MachineState::Idle) state_ = MachineState::Run;
       }
       return true;
@@ -595,15 +609,34 @@ void Machine::process_line(const gc::CleanLine& line) {
   process_gcode(line.text);
 }
 
-void Machine::process_gcode(const std::string& text) {
+void Machine::process_gcode(const std::string& line_text) {
+  auto reply_error = [&](int status) {
+    steps_.push_back({Step::Emit, {}, 0, "error:" + std::to_string(status), {}, false, 0});
+  };
+  // grblHAL takes M6 (GRBL 1.1's interpreter answers it with error:20).
+  std::string text = line_text;
+  const bool m6 = grblhal() && take_m6_word(text);
+  const int mode = tool_change_mode();
+  if (m6 && mode >= 1 && mode <= 3 && !homed_ && state_ != MachineState::Check)
+    return reply_error(kGrblHalHomingRequired);
   const gc::BlockResult r = gc::execute_block(parser_, text);
-  if (!r.ok()) {
-    steps_.push_back({Step::Emit, {}, 0, "error:" + std::to_string(r.status), {}, false, 0});
-    return;
-  }
+  if (!r.ok()) return reply_error(r.status);
+  // In the Tool state only jogging moves: grblHAL refuses a motion (G0-G3,
+  // G38.x, axis words) with error:40 until cycle start ends the change.
+  if (tool_change_)
+    for (const gc::Action& a : r.actions)
+      if (std::holds_alternative<gc::LinearMove>(a) || std::holds_alternative<gc::ArcMove>(a) ||
+          std::holds_alternative<gc::ProbeMove>(a))
+        return reply_error(kGrblHalToolChangePending);
   pending_lines_.back().n = r.state.line_number;
   queue_actions(r);
   if (critical_lock_) return;
+  // $341=4 ignores M6; a change to the tool in the spindle does nothing.
+  if (m6 && mode != 4 && state_ != MachineState::Check && parser_.tool != current_tool_) {
+    steps_.push_back({Step::Sync, {}, 0, {}, {}, false, 0});
+    steps_.push_back({Step::Apply, {}, 0, {}, [this] { enter_tool_change(); }, false, 0});
+  }
+  // The ok follows the Tool state: the firmware enters it inside the block.
   steps_.push_back({Step::Emit, {}, 0, "", {}, false, 0});
 }
 
@@ -773,7 +806,9 @@ void Machine::process_system(const std::string& line) {
   }
   const char c1 = line[1];
   if (c1 == 'J') {
-    if (state_ != MachineState::Idle && state_ != MachineState::Jog) return reply(grbl::kIdleError);
+    // grblHAL jogs in its Tool state too: the operator's way to the new tool.
+    if (state_ != MachineState::Idle && state_ != MachineState::Jog && state_ != MachineState::Tool)
+      return reply(grbl::kIdleError);
     if (line.size() < 3 || line[2] != '=') return reply(grbl::kInvalidStatement);
     const gc::BlockResult r = gc::execute_block(parser_, line, gc::BlockOptions{true});
     if (!r.ok()) return reply(r.status);
@@ -842,8 +877,14 @@ void Machine::process_system(const std::string& line) {
       return;
     case 'I':
       if (line.size() == 2) {
-        say("[VER:1.1h.20190830:" + store_.build_info + "]");
-        say("[OPT:VNM," + std::to_string(queue_.capacity()) + "," + std::to_string(kRxBufferSize) + "]");
+        say(std::string(grblhal() ? "[VER:1.1f.20240704:" : "[VER:1.1h.20190830:") + store_.build_info + "]");
+        say("[OPT:VNM," + std::to_string(queue_.capacity()) + "," + std::to_string(rx_capacity_) + (grblhal() ? ",3]" : "]"));
+        if (grblhal()) {
+          // TC: the firmware's own tool change is on ($341 1-3); M6 enters Tool at 0 too.
+          const int mode = tool_change_mode();
+          say(mode >= 1 && mode <= 3 ? "[NEWOPT:ENUMS,RT+,TC]" : "[NEWOPT:ENUMS,RT+]");
+          say("[FIRMWARE:grblHAL]");
+        }
         return reply(0);
       }
       if (line[2] != '=') return reply(grbl::kInvalidStatement);
@@ -897,7 +938,7 @@ void Machine::process_system(const std::string& line) {
       }
       double value = 0;
       if (!gc::read_grbl_number(line, pos, value)) return reply(grbl::kBadNumberFormat);
-      if (pos != line.size() || parameter > 255) return reply(grbl::kInvalidStatement);
+      if (pos != line.size() || parameter > (grblhal() ? 999 : 255)) return reply(grbl::kInvalidStatement);
       const int status = store_.settings.set(static_cast<int>(parameter), value);
       if (status == 0) {
         queue_.set_limits(store_.settings.motion_limits());
@@ -942,6 +983,7 @@ void Machine::start_homing() {
     queue_.set_position(home);
     parser_.position = home;
     state_ = MachineState::Idle;
+    homed_ = true;
   };
   steps_.push_back(h);
   steps_.push_back({Step::Emit, {}, 0, "", {}, false, 0});
@@ -1001,13 +1043,13 @@ void Machine::after_motion() {
       queue_.set_position(where);
       parser_.position = where;
       jog_cancel_ = false;
-      if (state_ == MachineState::Jog) state_ = MachineState::Idle;
+      if (state_ == MachineState::Jog) state_ = after_jog_state();
     }
   }
   if (queue_.empty()) {
     if (state_ == MachineState::Run) state_ = MachineState::Idle;
     if (state_ == MachineState::Jog) {
-      state_ = MachineState::Idle;
+      state_ = after_jog_state();
       parser_.position = queue_.position();
     }
   }
@@ -1082,6 +1124,7 @@ std::string Machine::state_name() const {
     case MachineState::Check: return "Check";
     case MachineState::Home: return "Home";
     case MachineState::Sleep: return "Sleep";
+    case MachineState::Tool: return "Tool";
   }
   return "Idle";
 }
@@ -1096,7 +1139,7 @@ std::string Machine::status_report() {
     r += "|WPos:" + format_vec(mpos - parser_.wco());
   }
   if (s.report_buffer_state()) {
-    r += "|Bf:" + std::to_string(queue_.capacity() - queue_.size()) + "," + std::to_string(kRxBufferSize - rx_.size());
+    r += "|Bf:" + std::to_string(queue_.capacity() - queue_.size()) + "," + std::to_string(rx_capacity_ - rx_.size());
   }
   if (const auto* b = queue_.current(); b && b->line_number > 0) r += "|Ln:" + std::to_string(b->line_number);
   {

@@ -163,6 +163,10 @@ int run(int argc, char** argv) {
   verify->add_option("--result", v_result, "height field written by --result")->required();
   verify->add_option("--tolerance", v_tol, "mm")->check(CLI::PositiveNumber);
   verify->add_option("--png", v_png, "write a deviation map");
+  std::string firmware_text = "grbl";
+  app.add_option("--firmware", firmware_text,
+                 "grbl (GRBL 1.1h) or grblhal (its banner, $I, 1024-byte RX buffer, $341 and the Tool state at M6)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -171,6 +175,7 @@ int run(int argc, char** argv) {
     cncsim::MachineOptions options;
     if (!settings_path.empty()) options.store_path = settings_path;
     options.strict = strict;
+    options.firmware = cncsim::parse_firmware(firmware_text);
     options.link_bytes_per_second = cncsim::link_bytes_per_second_for_baud(baud);
     options.starved_below_blocks = starved_below;
     options.faults.drop_every = drop_every;

@@ -14,7 +14,7 @@ namespace cncsim {
 namespace {
 
 // Settings the firmware prints as integers.
-constexpr std::array kIntegerSettings{0, 1, 2, 3, 4, 5, 6, 10, 13, 20, 21, 22, 23, 26, 30, 31, 32};
+constexpr std::array kIntegerSettings{0, 1, 2, 3, 4, 5, 6, 10, 13, 20, 21, 22, 23, 26, 30, 31, 32, 341};
 bool is_integer_setting(int n) {
   return std::find(kIntegerSettings.begin(), kIntegerSettings.end(), n) != kIntegerSettings.end();
 }
@@ -42,9 +42,14 @@ double Settings::get(int n) const {
   return it == values_.end() ? 0.0 : it->second;
 }
 
+void Settings::add_grblhal_settings() {
+  if (!values_.count(341)) values_[341] = 0;
+}
+
 int Settings::set(int n, double value) {
   if (!values_.count(n)) return 3;
   if (value < 0) return 4;
+  if (n == 341 && value > 4) return 3;  // grblHAL: ToolChange_Ignore is the last mode
   if (n == 0 && value < 3) return 6;
   if (n == 20 && value != 0 && !homing()) return 10;
   if (n >= 100 && n <= 102 && value * get(n + 10) > kMaxStepRateHz * 60) return 12;
@@ -97,6 +102,7 @@ PersistentStore load_store(const std::filesystem::path& path) {
       char* end = nullptr;
       const long n = std::strtol(key.c_str() + 1, &end, 10);
       const double v = std::strtod(value.c_str(), nullptr);
+      if (*end == 0 && n == 341) store.settings.add_grblhal_settings();  // a grblHAL simulator's file
       if (*end != 0 || !store.settings.has(static_cast<int>(n))) fail("unknown setting");
       // Stored values are trusted as the firmware trusts its EEPROM, but must be numbers.
       if (value.empty()) fail("missing value");

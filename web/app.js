@@ -338,6 +338,14 @@ function toolChangeSteps(tc) {
       { key: 'after', text: 'Back to the work: safe Z, XY, the spindle, then Z' },
     ];
   }
+  if (tc.method === 'controller') {
+    // grblHAL's own: the M6 goes to the controller; in its Tool state jogs work, probing does not (error:40).
+    return [
+      { key: 'before', text: 'Spindle and coolant off, up to the safe Z; M6 to the controller, which enters its Tool state' },
+      { key: 'zero_manually', text: `Mount ${t}, jog down, zero work Z here (Zero Z), then Continue` },
+      { key: 'after', text: 'Cycle start ends the Tool state; back to the work: safe Z, XY, the spindle, then Z' },
+    ];
+  }
   const where = tc.method === 'sensor' ? 'the tool-length sensor' : 'the touch plate';
   return [
     { key: 'before', text: `Spindle and coolant off, up to the safe Z, over ${where}; the tool in the spindle is measured if no reference is kept` },
@@ -378,7 +386,7 @@ function renderToolChange(rec, operatorTurn) {
   $('#tc-prompt').textContent = tc.prompt ? tc.prompt.text : '';
   $('#tc-confirm').disabled = !operatorTurn;
   $('#tc-decline').disabled = !operatorTurn;
-  $('#tc-probe').disabled = !operatorTurn || tc.step === 'question';
+  $('#tc-probe').disabled = !operatorTurn || tc.step === 'question' || tc.method === 'controller';
   $('#tc-zero-z').disabled = !operatorTurn || tc.step !== 'zero_manually';
   $('#tc-confirm').textContent = tc.step === 'question' ? 'Apply the measured length' : 'Continue';
   if (first) panel.scrollIntoView({ block: 'nearest' });

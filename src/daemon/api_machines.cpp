@@ -202,7 +202,7 @@ void Api::routine_routes() {
     } catch (const std::invalid_argument& e) {
       throw ApiError{409, "refused", e.what()};
     }
-    if (!cfg) throw ApiError{409, "refused", "tool_change.method is pause: give plate, sensor or manual"};
+    if (!cfg) throw ApiError{409, "refused", "tool_change.method is pause: give plate, sensor, manual or controller"};
     machines_.require_control(m, r.client_id);
     if (b.is_object() && b.contains("in_spindle"))
       if (auto set = m.session->set_tool_in_spindle(tool_number("in_spindle", -1)); !set)

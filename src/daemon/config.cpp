@@ -263,8 +263,8 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       Reader r{source, *t, "machine."};
       r.known({"name", "port", "baud", "profile", "reconnect_s", "sim_speed", "sim_verify", "sim_vanish_after",
                "sim_settings", "sim_resolution", "sim_tolerance", "sim_tool_table", "sim_tool_sensor",
-               "sim_probe_surface_z", "sim_stock", "sim_corner_plate", "sim_start", "tool_change", "capabilities",
-               "shop_claim"});
+               "sim_probe_surface_z", "sim_stock", "sim_corner_plate", "sim_start", "sim_firmware", "tool_change",
+               "capabilities", "shop_claim"});
       MachineConfig m;
       r.str("name", m.name);
       r.str("port", m.port);
@@ -275,6 +275,9 @@ DaemonConfig parse_config(std::string_view text, const std::string& source) {
       r.boolean("sim_verify", m.sim_verify);
       m.sim_vanish_after = static_cast<std::size_t>(r.number("sim_vanish_after", 0, 0, 1e9));
       r.str("sim_settings", m.sim_settings);
+      r.str("sim_firmware", m.sim_firmware);
+      if (m.sim_firmware != "grbl" && m.sim_firmware != "grblhal")
+        fail(source, *r.get("sim_firmware"), "machine.sim_firmware: '" + m.sim_firmware + "' is not grbl or grblhal");
       m.sim_resolution = r.number("sim_resolution", m.sim_resolution, 0.01, 10);
       m.sim_tolerance = r.number("sim_tolerance", m.sim_tolerance, 0.001, 10);
       r.str("sim_tool_table", m.sim_tool_table);

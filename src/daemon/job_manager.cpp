@@ -163,6 +163,14 @@ void JobManager::recover() {
     } catch (const std::exception&) {
       j->params = nullptr;
     }
+    // The job's own tool-change settings come back with it: a restart never
+    // runs its change with the machine's instead.
+    bool tool_change_lost = false;
+    try {
+      j->tool_change = row.tool_change_json.empty() ? json(nullptr) : json::parse(row.tool_change_json);
+    } catch (const std::exception&) {
+      tool_change_lost = true;
+    }
     j->cache_key = generation_key(row.file_id, j->params, row.machine);
     if (row.state == "running" || row.state == "held") {
       // The daemon died under a running job: the machine may have moved on
@@ -177,6 +185,12 @@ void JobManager::recover() {
         const auto rec = journal_.job(row.journal_id);
         if (rec && !rec->outcome) journal_.end_job(row.journal_id, "interrupted", j->row.message);
       }
+      journal_.update_daemon_job(j->row);
+    } else if (!is_final(row.state) && tool_change_lost) {
+      // Fail closed: without its own settings its change would run the machine's.
+      j->row.state = "failed";
+      j->row.ended_at = transport::Journal::now_iso8601();
+      j->row.message = "its tool_change settings could not be read back from the journal after a restart: create it again";
       journal_.update_daemon_job(j->row);
     } else if (!is_final(row.state)) {
       j->row.state = "queued";  // generated again below; never started by itself
@@ -383,6 +397,7 @@ json JobManager::create(const json& body) {
   r.file_name = info->name;
   r.kind = info->kind;
   r.params_json = j->params.is_null() ? "" : j->params.dump();
+  r.tool_change_json = j->tool_change.is_null() ? "" : j->tool_change.dump();
   r.state = "queued";
   std::int64_t pos = 0;
   for (auto* u : unfinished(machine)) pos = std::max(pos, u->row.position + 1);

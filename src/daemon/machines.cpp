@@ -138,6 +138,7 @@ Machines::Machines(boost::asio::io_context& io, boost::asio::thread_pool& pool, 
       so.speed = mc.sim_speed;
       so.baud = mc.baud;  // the simulator's wire is paced like the board's
       so.settings_file = mc.sim_settings;
+      so.firmware = cncsim::parse_firmware(mc.sim_firmware);
       so.resolution = mc.sim_resolution;
       so.tolerance = mc.sim_tolerance;
       session::parse_sim_speed(so.speed);  // a bad speed fails at start, naming it

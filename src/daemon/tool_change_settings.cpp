@@ -37,10 +37,10 @@ void apply_tool_change_json(ToolChangeSettings& s, const json& j, const std::str
     const std::string f = prefix + k;
     if (v.is_null()) continue;
     if (k == "method") {
-      if (!v.is_string()) bad(f, "expected plate, sensor, manual or pause");
+      if (!v.is_string()) bad(f, "expected plate, sensor, manual, controller or pause");
       const auto m = v.get<std::string>();
-      if (m != "plate" && m != "sensor" && m != "manual" && m != "pause")
-        bad(f, cat({"'", m.substr(0, 40), "' is not one of plate, sensor, manual, pause"}));
+      if (m != "plate" && m != "sensor" && m != "manual" && m != "controller" && m != "pause")
+        bad(f, cat({"'", m.substr(0, 40), "' is not one of plate, sensor, manual, controller, pause"}));
       s.method = m;
     } else if (k == "safe_z") {
       s.safe_z = finite(v, f, -1e4, 1e4);

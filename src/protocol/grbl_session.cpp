@@ -315,6 +315,7 @@ void GrblSession::on_status(const StatusReport& raw) {
     const bool still = (r.state == MachineState::Hold && r.substate == 0) || hold_unmoved ||
                        r.state == MachineState::Idle || r.state == MachineState::Alarm ||
                        r.state == MachineState::Check || r.state == MachineState::Sleep ||
+                       r.state == MachineState::Tool ||  // grblHAL's tool change: still, a hold is ignored there
                        (r.state == MachineState::Door && (r.substate == 0 || r.substate == 1));
     // Reset only once motion has stopped: a reset in motion raises ALARM:3
     // and loses the position; after Hold:0 it is clean.

@@ -20,7 +20,8 @@ std::string state_refusal(MachineState s) {
   switch (s) {
     case MachineState::Unknown:
     case MachineState::Idle:
-    case MachineState::Jog: return {};
+    case MachineState::Jog:
+    case MachineState::Tool: return {};  // grblHAL jogs in its tool-change state too
     case MachineState::Alarm: return "jog: the machine is in alarm; unlock or home it first";
     case MachineState::Check: return "jog: the controller is in check mode ($C); nothing would move";
     default: return std::string("jog: the machine is in ") + to_string(s) + "; jogs are accepted only when Idle";
@@ -220,7 +221,8 @@ void JogEngine::on_status(const StatusReport& r, double now) {
   }
   // Idle with nothing in flight: every answered step has ended (GRBL enters
   // Jog before it answers a jog line, so an Idle after the answer is the end).
-  if (r.state == MachineState::Idle && in_flight_.empty()) settled(now);
+  // grblHAL's Tool state is where a jog there ends.
+  if ((r.state == MachineState::Idle || r.state == MachineState::Tool) && in_flight_.empty()) settled(now);
 }
 
 void JogEngine::settled(double now) {

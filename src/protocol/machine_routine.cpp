@@ -78,9 +78,13 @@ void MachineRoutine::send(std::string line, bool probe, bool reports) {
   }
 }
 
-void MachineRoutine::wait_idle() {
-  wait_ = Wait::Idle;
-  idle_reports_ = 0;
+void MachineRoutine::wait_idle() { wait_state(MachineState::Idle); }
+
+void MachineRoutine::wait_state(MachineState state, std::string idle_fails) {
+  wait_ = Wait::State;
+  wait_for_ = state;
+  idle_fails_ = std::move(idle_fails);
+  idle_reports_ = other_idle_reports_ = 0;
 }
 
 void MachineRoutine::prompt(std::string text, PromptKind kind, int tool) {
@@ -95,6 +99,7 @@ void MachineRoutine::fail(const std::string& why) {
   wait_ = Wait::None;
   prompt_.reset();
   line_out_.reset();
+  realtime_out_.clear();
 }
 
 void MachineRoutine::abort(const std::string& why) { fail(why); }
@@ -158,9 +163,16 @@ void MachineRoutine::on_status(const StatusReport& r) {
     fail("the machine was held (" + r.state_text + "): stopped; nothing more is sent");
     return;
   }
-  if (wait_ != Wait::Idle) return;
+  if (wait_ != Wait::State) return;
   // Two reports in a row: the first may predate the last move's start.
-  idle_reports_ = r.state == MachineState::Idle ? idle_reports_ + 1 : 0;
+  idle_reports_ = r.state == wait_for_ ? idle_reports_ + 1 : 0;
+  if (wait_for_ != MachineState::Idle && !idle_fails_.empty()) {
+    other_idle_reports_ = r.state == MachineState::Idle ? other_idle_reports_ + 1 : 0;
+    if (other_idle_reports_ >= 3) {
+      fail(idle_fails_);
+      return;
+    }
+  }
   if (idle_reports_ >= 2) {
     wait_ = Wait::None;
     step();

@@ -12,6 +12,7 @@ const char* to_string(ToolChangeMethod m) {
     case ToolChangeMethod::Plate: return "plate";
     case ToolChangeMethod::Sensor: return "sensor";
     case ToolChangeMethod::Manual: return "manual";
+    case ToolChangeMethod::Controller: return "controller";
   }
   return "plate";
 }
@@ -20,7 +21,8 @@ ToolChangeMethod parse_tool_change_method(const std::string& text) {
   if (text == "plate") return ToolChangeMethod::Plate;
   if (text == "sensor") return ToolChangeMethod::Sensor;
   if (text == "manual") return ToolChangeMethod::Manual;
-  throw std::invalid_argument("tool-change method '" + text + "': expected plate, sensor or manual");
+  if (text == "controller") return ToolChangeMethod::Controller;
+  throw std::invalid_argument("tool-change method '" + text + "': expected plate, sensor, manual or controller");
 }
 
 ToolChangeRoutine::ToolChangeRoutine(ToolChangeConfig config, ToolChangeRequest request,
@@ -110,25 +112,73 @@ void ToolChangeRoutine::add_measure(double* trigger_out) {
   add([this] { send("G53 G0 Z" + routine_mm(cfg_.safe_z)); });
 }
 
-// The tool in the spindle (zeroed by the operator) measured with the work
-// offset it was zeroed with: every other tool's offset follows from them.
-void ToolChangeRoutine::add_reference_measure() {
-  add_measure(&old_trigger_);
-  add([this] { wait_idle(); });  // GRBL answers $# with error:8 while moving
+// $# (the machine idle), then the active work offset's Z to `use`; none reported fails.
+void ToolChangeRoutine::add_read_offset_z(std::function<void(double)> use) {
   add([this] { send("$#", false, true); });
-  add([this] {
+  add([this, use = std::move(use)] {
     const auto z = active_offset_z();
     if (!z) {
       fail("$# did not report G5" + std::to_string(4 + wcs_index()));
       return;
     }
-    reference_ = ToolLengthReference{req_.from_tool, old_trigger_, *z, cfg_.method};
+    use(*z);
+  });
+}
+
+// The tool in the spindle (zeroed by the operator) measured with the work
+// offset it was zeroed with: every other tool's offset follows from them.
+void ToolChangeRoutine::add_reference_measure() {
+  add_measure(&old_trigger_);
+  add([this] { wait_idle(); });  // GRBL answers $# with error:8 while moving
+  add_read_offset_z([this](double z) {
+    reference_ = ToolLengthReference{req_.from_tool, old_trigger_, z, cfg_.method};
     reference_->measured_tool = req_.from_tool;
     reference_->measured_trigger_z = old_trigger_;
   });
 }
 
+// grblHAL's own tool change ($341=0): the M6 goes to the controller, which
+// stops reading the program and enters its Tool state; 0xA3 acknowledges it
+// (the controller reads our lines again: jogs and G10 L20, not G0-G3 or
+// G38.x, error:40); the operator mounts, jogs down and zeroes Z; cycle start
+// ends it. Nothing is measured: the operator's zero is the length.
+void ToolChangeRoutine::add_controller_change(const std::string& what) {
+  add([this] { wait_idle(); });
+  add([this] { send(req_.to_tool > 0 ? fmt::format("M6 T{}", req_.to_tool) : std::string("M6")); });
+  add([this] {
+    wait_state(MachineState::Tool,
+               "the controller did not enter its Tool state after M6 ($341 must be 0; the tool may already be "
+               "the one it thinks is in the spindle)");
+  });
+  add([this] { send_realtime(Realtime::ToolChangeAck); });
+  add([this, what] {
+    mount_asked_ = true;
+    prompt("mount " + what +
+               ", then jog down and zero work Z on the work (the controller is in its Tool state: jogging works, "
+               "probing does not) and confirm",
+           PromptKind::ZeroManually, req_.to_tool);
+  });
+  add([this] { mounted_ = req_.to_tool; });
+  // Answered after the operator's lines (a jog, the zero): they are done.
+  add([this] { send("$G", false, true); });
+  add([this] {
+    wait_state(MachineState::Tool,
+               "the controller left its Tool state before the operator confirmed (a cycle start at the prompt?)");
+  });
+  add([this] { send_realtime(Realtime::CycleStart); });
+  add([this] { wait_idle(); });
+  add_read_offset_z([this](double z) {
+    offset_written_ = z;
+    mounted_ = req_.to_tool;
+    length_known_ = true;
+    reference_.reset();  // a re-zero: lengths measured before no longer apply
+    set_summary(fmt::format("the operator zeroed Z with T{} in the controller's Tool state; work Z offset now {}",
+                            req_.to_tool, routine_mm(z)));
+  });
+}
+
 void ToolChangeRoutine::add_change(const std::string& what) {
+  if (cfg_.method == ToolChangeMethod::Controller) return add_controller_change(what);
   if (cfg_.method == ToolChangeMethod::Manual) {
     add([this] { wait_idle(); });
     add([this, what] {
@@ -244,7 +294,7 @@ void ToolChangeRoutine::add_return() {
 }
 
 void ToolChangeRoutine::build() {
-  const bool measures = cfg_.method != ToolChangeMethod::Manual;
+  const bool measures = cfg_.method != ToolChangeMethod::Manual && cfg_.method != ToolChangeMethod::Controller;
   switch (req_.kind) {
     case ToolRoutineKind::Change:
       if (req_.to_tool != 0 && req_.to_tool == req_.from_tool) {

@@ -62,6 +62,38 @@ void MachineSession::feed_routine(MachineRoutine& r, std::string& line_in_flight
   }
 }
 
+std::optional<std::string> MachineSession::controller_tool_change_refusal(const ToolChangeConfig& config) const {
+  if (config.method != ToolChangeMethod::Controller) return std::nullopt;
+  if (profile_.family != "grblhal" || !profile_.realtime_byte(Realtime::ToolChangeAck))
+    return fmt::format("the tool-change method 'controller' is grblHAL's tool-change protocol (M6, its Tool state, "
+                       "0xA3), and this controller is {} ({}); choose plate, sensor or manual",
+                       profile_.id.empty() ? std::string("not identified") : profile_.id,
+                       profile_.family == "grbl" ? "GRBL 1.1 answers M6 with error:20" : "no tool-change protocol in its profile");
+  const auto it = settings_.find(341);
+  if (it == settings_.end())
+    return std::string("the tool-change method 'controller' needs grblHAL's $341 (tool-change mode), which the "
+                       "controller did not report in $$");
+  const int mode = static_cast<int>(it->second);
+  if (mode == 4) return std::string("$341=4: the controller ignores M6; set $341=0 for the method 'controller'");
+  if (mode != 0)
+    return fmt::format("$341={}: the controller moves and touches off by itself at M6 ($TPW, the G59.3 sensor), "
+                       "which this session does not drive; set $341=0 (the operator zeroes Z at our prompt) or "
+                       "choose plate, sensor or manual",
+                       mode);
+  return std::nullopt;
+}
+
+bool MachineSession::in_controller_tool_state() const {
+  const ToolChangeRoutine* r = routine_ ? routine_.get() : tool_routine_.get();
+  if (!r || r->config().method != ToolChangeMethod::Controller || !r->pending_prompt()) return false;
+  return true;
+}
+
+void MachineSession::send_routine_realtime(MachineRoutine& r) {
+  for (const Realtime rt : r.take_realtime())
+    if (!engine_->realtime(rt)) r.abort(fmt::format("{} has no real-time byte '{}'", profile_.id, realtime_key(rt)));
+}
+
 void MachineSession::send_routine_line(MachineRoutine& r, std::string& line_in_flight) {
   if (!line_in_flight.empty() || r.finished()) return;
   const auto line = r.take_line();
@@ -93,6 +125,7 @@ void MachineSession::pump_machine_routine() {
     emit(e);
     if (!machine_routine_ || !engine_) return;
   }
+  send_routine_realtime(*machine_routine_);
   send_routine_line(*machine_routine_, machine_routine_line_);
   if (machine_routine_->finished()) end_machine_routine("");
 }
@@ -134,6 +167,9 @@ MachineSession::ToolRoutineStart MachineSession::run_tool_routine(const ToolChan
   if (!(tolerance_mm > 0)) return {CommandResult::refused("check the tool: the tolerance must be above 0 mm"), nullptr};
   auto routine = std::make_shared<ToolChangeRoutine>(config, req, tool_reference_);
   if (machine_routine_) return {refuse_during_routine(routine->name()), nullptr};
+  if (engine_)
+    if (const auto why = controller_tool_change_refusal(config))
+      return {CommandResult::refused(std::string(routine->name()) + ": " + *why), nullptr};
   // Set first: a routine that fails at its start ends inside run_routine.
   tool_routine_ = routine;
   if (auto r = run_routine(routine); !r) {

@@ -404,6 +404,7 @@ void MachineSession::pump_tool_change() {
     emit(e);
     if (!routine_ || !engine_) return;
   }
+  send_routine_realtime(*routine_);
   send_routine_line(*routine_, routine_line_);
   if (routine_->finished()) end_tool_change("");
 }
@@ -548,7 +549,11 @@ CommandResult MachineSession::start_job(JobInput job, JobMode mode) {
   // Tool changes are ours to run (GRBL holds on M0 where nothing can be
   // jogged or probed, and refuses M6): the lines are marked, never sent.
   if (opt_.tool_change && !marlin_family(profile_)) {
-    for (const auto& c : gcode::find_tool_changes(job.lines)) program.lines[c.index].tool_change = c.tool;
+    const auto changes = gcode::find_tool_changes(job.lines);
+    if (!changes.empty() && mode != JobMode::Check)
+      if (const auto why = controller_tool_change_refusal(*opt_.tool_change))
+        return CommandResult::refused("start a job: " + job.file.string() + " changes tools: " + *why);
+    for (const auto& c : changes) program.lines[c.index].tool_change = c.tool;
     if (const int first = gcode::first_tool(job.lines); first > 0 && job.resumed_from == 0) {
       if (tool_in_spindle_ != first) tool_reference_.reset();
       tool_in_spindle_ = first;
@@ -724,6 +729,9 @@ CommandResult MachineSession::spindle(bool on) {
 CommandResult MachineSession::probe_z() {
   if (engine_ && marlin_family(profile_))
     return CommandResult::refused("probe Z: not supported on " + profile_.id + " (no G38.2 in its profile)");
+  if (in_controller_tool_state())
+    return CommandResult::refused(
+        "probe Z: grblHAL refuses G38.x in its Tool state (error:40); jog down to the work and zero Z");
   auto r = action("probe Z", [&] { return protocol::probe_z_lines(opt_.actions); });
   if (r) {
     probe_pending_ = true;

@@ -51,6 +51,7 @@ SimulatorPort::SimulatorPort(SimulatorOptions options) : opt_(std::move(options)
   cncsim::MachineOptions mo;
   if (!opt_.settings_file.empty()) mo.store_path = opt_.settings_file;
   mo.strict = opt_.strict;
+  mo.firmware = opt_.firmware;
   mo.faults = opt_.faults;
   mo.probe_surface_z = opt_.probe_surface_z;
   mo.start_position = opt_.start_position;

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <initializer_list>
 #include <ctime>
 #include <string>
 
@@ -114,26 +115,23 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " profile TEXT NOT NULL, port TEXT NOT NULL, mode TEXT NOT NULL, total_lines INTEGER NOT NULL,"
          " started_at TEXT NOT NULL, ended_at TEXT, outcome TEXT, message TEXT NOT NULL DEFAULT '')");
     // Columns added later: a journal from an older version gains them here.
-    for (const char* add : {"ALTER TABLE jobs ADD COLUMN resumed_from INTEGER",
-                            "ALTER TABLE jobs ADD COLUMN from_line INTEGER",
-                            "ALTER TABLE jobs ADD COLUMN planner_blocks INTEGER"}) {
-      if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
-          std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
-        throw JournalError(path.string() + ": cannot upgrade the jobs table: " + sqlite3_errmsg(db_));
-    }
+    const auto add_columns = [&](const char* table, std::initializer_list<const char*> adds) {
+      for (const char* add : adds)
+        if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
+            std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
+          throw JournalError(path.string() + ": cannot upgrade the " + table + " table: " + sqlite3_errmsg(db_));
+    };
+    add_columns("jobs", {"ALTER TABLE jobs ADD COLUMN resumed_from INTEGER", "ALTER TABLE jobs ADD COLUMN from_line INTEGER",
+                         "ALTER TABLE jobs ADD COLUMN planner_blocks INTEGER"});
     exec("CREATE TABLE IF NOT EXISTS progress ("
          " id INTEGER PRIMARY KEY AUTOINCREMENT, job_id INTEGER NOT NULL REFERENCES jobs(id),"
          " at TEXT NOT NULL, lines_ok INTEGER NOT NULL, last_line INTEGER NOT NULL, reason TEXT NOT NULL,"
          " units TEXT, distance TEXT, plane TEXT, wcs TEXT, motion TEXT, feed REAL, spindle_speed REAL,"
          " spindle TEXT, coolant TEXT, tool INTEGER, wco_x REAL, wco_y REAL, wco_z REAL)");
-    for (const char* add : {"ALTER TABLE progress ADD COLUMN status_x REAL", "ALTER TABLE progress ADD COLUMN status_y REAL",
-                            "ALTER TABLE progress ADD COLUMN status_z REAL",
-                            "ALTER TABLE progress ADD COLUMN status_line INTEGER",
-                            "ALTER TABLE progress ADD COLUMN machine_state TEXT"}) {
-      if (sqlite3_exec(db_, add, nullptr, nullptr, nullptr) != SQLITE_OK &&
-          std::string(sqlite3_errmsg(db_)).find("duplicate column") == std::string::npos)
-        throw JournalError(path.string() + ": cannot upgrade the progress table: " + sqlite3_errmsg(db_));
-    }
+    add_columns("progress", {"ALTER TABLE progress ADD COLUMN status_x REAL", "ALTER TABLE progress ADD COLUMN status_y REAL",
+                             "ALTER TABLE progress ADD COLUMN status_z REAL",
+                             "ALTER TABLE progress ADD COLUMN status_line INTEGER",
+                             "ALTER TABLE progress ADD COLUMN machine_state TEXT"});
     exec("CREATE INDEX IF NOT EXISTS progress_job ON progress(job_id, id)");
     // Tool changes a job made: which tool is in the spindle after each and
     // whether its length is known (resume reads the last one).
@@ -153,6 +151,9 @@ Journal::Journal(const std::filesystem::path& path) : path_(path) {
          " message TEXT NOT NULL DEFAULT '', created_at TEXT NOT NULL, started_at TEXT, ended_at TEXT,"
          " journal_id INTEGER, resumed_from INTEGER NOT NULL DEFAULT 0, from_line INTEGER NOT NULL DEFAULT 0,"
          " last_line INTEGER NOT NULL DEFAULT 0)");
+    // A job's own tool-change settings (its JSON as given, '' none); older
+    // programs name their columns and pass it over.
+    add_columns("daemon_jobs", {"ALTER TABLE daemon_jobs ADD COLUMN tool_change TEXT NOT NULL DEFAULT ''"});
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;
@@ -371,7 +372,7 @@ namespace {
 
 constexpr const char* kDaemonJobColumns =
     "id, machine, file_id, file_name, kind, params, state, position, message, created_at, started_at, ended_at,"
-    " journal_id, resumed_from, from_line, last_line";
+    " journal_id, resumed_from, from_line, last_line, tool_change";
 
 void bind_daemon_job(Stmt& s, const DaemonJobRow& r) {
   s.bind(1, r.machine).bind(2, r.file_id).bind(3, r.file_name).bind(4, r.kind).bind(5, r.params_json).bind(6, r.state);
@@ -382,7 +383,7 @@ void bind_daemon_job(Stmt& s, const DaemonJobRow& r) {
   else s.bind_null(11);
   if (r.journal_id) s.bind(12, r.journal_id);
   else s.bind_null(12);
-  s.bind(13, r.resumed_from).bind(14, r.from_line).bind(15, r.last_line);
+  s.bind(13, r.resumed_from).bind(14, r.from_line).bind(15, r.last_line).bind(16, r.tool_change_json);
 }
 
 }  // namespace
@@ -390,8 +391,8 @@ void bind_daemon_job(Stmt& s, const DaemonJobRow& r) {
 std::int64_t Journal::insert_daemon_job(const DaemonJobRow& r) {
   Stmt s(db_, path_,
          "INSERT INTO daemon_jobs (machine, file_id, file_name, kind, params, state, position, message, created_at,"
-         " started_at, ended_at, journal_id, resumed_from, from_line, last_line)"
-         " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)");
+         " started_at, ended_at, journal_id, resumed_from, from_line, last_line, tool_change)"
+         " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)");
   bind_daemon_job(s, r);
   s.step();
   return sqlite3_last_insert_rowid(db_);
@@ -401,9 +402,9 @@ void Journal::update_daemon_job(const DaemonJobRow& r) {
   Stmt s(db_, path_,
          "UPDATE daemon_jobs SET machine=?1, file_id=?2, file_name=?3, kind=?4, params=?5, state=?6, position=?7,"
          " message=?8, created_at=?9, started_at=?10, ended_at=?11, journal_id=?12, resumed_from=?13, from_line=?14,"
-         " last_line=?15 WHERE id=?16");
+         " last_line=?15, tool_change=?16 WHERE id=?17");
   bind_daemon_job(s, r);
-  s.bind(16, r.id);
+  s.bind(17, r.id);
   s.step();
 }
 
@@ -431,6 +432,7 @@ std::vector<DaemonJobRow> Journal::daemon_jobs(int limit) const {
     r.resumed_from = s.i64(13);
     r.from_line = s.i64(14);
     r.last_line = s.i64(15);
+    r.tool_change_json = s.text(16);
     out.push_back(std::move(r));
   }
   return out;

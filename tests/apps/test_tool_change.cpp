@@ -26,10 +26,11 @@ std::string v_groove_stl() {
 
 const char* kTools = "1=flat:6@30,2=ball:3@37.3";
 
-AppRun run_job(const std::string& method, const std::string& tools = kTools) {
+AppRun run_job(const std::string& method, const std::string& tools = kTools, const std::vector<std::string>& extra = {}) {
   std::vector<std::string> args{v_groove_stl(), "sim", "--tool", "ball:3", "--rough", "flat:6", "--stepover", "1",
                                 "--tolerance", "0.02", "--sim-resolution", "0.2", "--sim-tool-table", tools,
                                 "--tool-change-method", method, "--yes"};
+  args.insert(args.end(), extra.begin(), extra.end());
   return run_cncstream(args, 300);
 }
 
@@ -69,13 +70,18 @@ std::vector<cncstream::transport::ToolChangeRow> last_job_tool_changes() {
 // no gouge beyond the path's own (the V-groove's finishing at 0.02 mm
 // tolerance reaches 0.0001 mm below the design on the 0.2 mm grid), the
 // same material removed.
-void expect_same_cut_as_equal_lengths(const std::string& method) {
-  const auto equal = run_job(method, "1=flat:6@30,2=ball:3@30");
+// `operator_says`, `done_says`: what the simulated operator and the change's
+// end print (by default the measuring methods' texts).
+void expect_same_cut_as_equal_lengths(const std::string& method, const std::vector<std::string>& extra = {},
+                                      std::string operator_says = "(simulator: the operator mounts T2 and confirms)",
+                                      std::string done_says = {}) {
+  if (done_says.empty()) done_says = "tool change: T2 measured +7.300 mm from T1 (" + method + ")";
+  const auto equal = run_job(method, "1=flat:6@30,2=ball:3@30", extra);
   ASSERT_EQ(equal.code, 0) << equal.out;
-  const auto r = run_job(method);
+  const auto r = run_job(method, kTools, extra);
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_TRUE(r.has("(simulator: the operator mounts T2 and confirms)")) << r.out;
-  EXPECT_TRUE(r.has("tool change: T2 measured +7.300 mm from T1 (" + method + ")")) << r.out;
+  EXPECT_TRUE(r.has(operator_says)) << r.out;
+  EXPECT_TRUE(r.has(done_says)) << r.out;
   EXPECT_TRUE(r.has("outcome: completed")) << r.out;
   EXPECT_TRUE(r.has(": 0 gouged,")) << r.out;
   EXPECT_FALSE(r.has("PAUSED at line")) << "the M0 never reached the controller: " << r.out;
@@ -101,6 +107,29 @@ TEST(ToolChange, PlateMeasuresTheLongerFinishingToolAndCutsAsWithEqualLengths) {
 
 TEST(ToolChange, SensorMeasuresTheLongerFinishingToolAndCutsAsWithEqualLengths) {
   expect_same_cut_as_equal_lengths("sensor");
+}
+
+TEST(ToolChange, GrblHalsOwnChangeWithTheOperatorsZeroCutsAsWithEqualLengths) {
+  // The controller method on the simulated grblHAL ($341=0): the M6 goes to
+  // the controller, the simulated operator mounts T2 in its Tool state,
+  // touches the tip off on the work (Z zeroed there) and confirms.
+  expect_same_cut_as_equal_lengths("controller", {"--sim-firmware", "grblhal"},
+                                   "(simulator: the operator mounts T2, zeroes Z on the work and confirms)",
+                                   "tool change: the operator zeroed Z with T2 in the controller's Tool state; work Z "
+                                   "offset now 7.300");
+  const auto changes = last_job_tool_changes();
+  ASSERT_EQ(changes.size(), 1u);
+  EXPECT_EQ(changes[0].tool, 2);
+  EXPECT_EQ(changes[0].method, "controller");
+  EXPECT_TRUE(changes[0].length_known);
+  ASSERT_TRUE(changes[0].offset_z);
+  EXPECT_NEAR(*changes[0].offset_z, 7.3, 0.0015);
+}
+
+TEST(ToolChange, GrblHalsOwnChangeIsRefusedOnGrbl11) {
+  const auto r = run_job("controller", kTools, {"--sim-firmware", "grbl"});
+  EXPECT_NE(r.code, 0) << r.out;
+  EXPECT_TRUE(r.has("GRBL 1.1 answers M6 with error:20")) << r.out;
 }
 
 TEST(ToolChange, TheOldPauseWithoutMeasuringGougesByTheLengthDifference) {

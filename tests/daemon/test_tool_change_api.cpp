@@ -395,3 +395,90 @@ TEST(DaemonToolChange, RoutinesOutsideAJobMeasureChangeAndCheckWithTheMachinesRe
   d.shutdown();
   std::filesystem::remove_all(dir);
 }
+
+TEST(DaemonToolChange, AJobsOwnToolChangeSettingsSurviveARestart) {
+  // The machine measures with its sensor; the job asks for the plate without
+  // saying where it lies. Before and after a restart the job's own settings
+  // decide: its start is refused naming plate_at (the machine's sensor would
+  // have run the change with settings the job did not ask for).
+  const auto dir = temp_dir("toolchange-restart");
+  auto cfg = test_config(dir);
+  auto m = tool_machine("keep", "max", true);
+  m.tool_change.safe_z = 30;
+  cfg.machines = {m};
+  std::int64_t id = 0;
+  const json asked = {{"method", "plate"}, {"probe_travel", 20}};
+  {
+    RunningDaemon d(cfg);
+    const Http h = with_client(d.http);
+    ASSERT_TRUE(wait_for([&] { return ready(h, "keep"); }, 30));
+    const auto file = upload_text(h, kTwoTools, "two-tools.nc");
+    id = create(h, "keep", file, asked);
+    EXPECT_EQ(job(h, id)["tool_change"], asked);
+    d.shutdown();
+  }
+  RunningDaemon d2(cfg);
+  const Http h = with_client(d2.http);
+  ASSERT_TRUE(wait_for([&] { return ready(h, "keep"); }, 30));
+  ASSERT_TRUE(wait_for([&] { return job(h, id)["state"] == "ready"; }, 30)) << job(h, id).dump();
+  EXPECT_EQ(job(h, id)["tool_change"], asked) << job(h, id).dump();
+  ASSERT_EQ(h.post("/api/v1/machines/keep/control").status, 200);
+  const auto r = h.post("/api/v1/jobs/" + std::to_string(id) + "/start");
+  EXPECT_EQ(r.status, 409) << r.body;
+  EXPECT_NE(r.body.find("plate_at"), std::string::npos) << r.body;
+  d2.shutdown();
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DaemonToolChange, GrblHalsOwnChangeZeroedAtThePromptInItsToolState) {
+  // A machine simulating grblHAL ($341=0) with the method controller: the
+  // prompt comes with the controller in its Tool state; Probe Z is refused
+  // there (error:40), a jog and Zero Z are not; confirm ends the change.
+  const auto dir = temp_dir("toolchange-hal");
+  auto cfg = test_config(dir);
+  auto m = tool_machine("hal", "max", false);
+  m.sim_firmware = "grblhal";
+  m.tool_change.method = "controller";
+  m.tool_change.safe_z = 30;
+  cfg.machines = {m};
+  RunningDaemon d(cfg);
+  const Http h = with_client(d.http);
+  ASSERT_TRUE(wait_for([&] { return ready(h, "hal"); }, 30));
+  ASSERT_EQ(machine(h, "hal")["profile"], "grblhal");
+  ASSERT_EQ(h.post("/api/v1/machines/hal/control").status, 200);
+  const auto file = upload_text(h, kTwoTools, "two-tools.nc");
+  const auto id = create(h, "hal", file);
+  ASSERT_EQ(h.post("/api/v1/jobs/" + std::to_string(id) + "/start").status, 202);
+  ASSERT_TRUE(wait_for([&] {
+    const json tc = machine(h, "hal")["tool_change"];
+    return !tc.is_null() && tc["step"] == "zero_manually";
+  }, 60)) << machine(h, "hal").dump();
+  EXPECT_EQ(machine(h, "hal")["tool_change"]["method"], "controller");
+  EXPECT_EQ(machine(h, "hal")["status"]["state"], "Tool");
+  auto r = h.post("/api/v1/machines/hal/actions/probe_z");
+  EXPECT_EQ(r.status, 409) << r.body;
+  EXPECT_NE(r.body.find("error:40"), std::string::npos) << r.body;
+  const double z0 = machine(h, "hal")["status"]["mpos"][2].get<double>();
+  r = h.post("/api/v1/machines/hal/jog", {{"dir", {0, 0, -1}}, {"distance", 4}, {"feed", 1000}});
+  ASSERT_EQ(r.status, 202) << r.body;
+  ASSERT_TRUE(wait_for([&] {
+    const json s = machine(h, "hal");
+    return !s["jogging"].get<bool>() && s["status"]["state"] == "Tool" &&
+           std::abs(s["status"]["mpos"][2].get<double>() - (z0 - 4)) < 0.002;
+  }, 20)) << machine(h, "hal").dump();
+  r = h.post("/api/v1/machines/hal/actions/zero_axes", {{"axes", "Z"}});
+  ASSERT_EQ(r.status, 202) << r.body;
+  ASSERT_EQ(h.post("/api/v1/machines/hal/tool-change/confirm").status, 202);
+  ASSERT_TRUE(wait_for([&] { return job(h, id)["state"] == "done"; }, 60)) << job(h, id).dump();
+  EXPECT_EQ(machine(h, "hal")["tool_in_spindle"], 2);
+  const auto journal_id = job(h, id)["journal_id"].get<std::int64_t>();
+  d.shutdown();
+  cncstream::transport::Journal journal(cfg.journal);
+  const auto rows = journal.tool_changes(journal_id);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].method, "controller");
+  EXPECT_TRUE(rows[0].length_known);
+  ASSERT_TRUE(rows[0].offset_z);
+  EXPECT_NEAR(*rows[0].offset_z, z0 - 4, 0.002);
+  std::filesystem::remove_all(dir);
+}

@@ -136,6 +136,37 @@ TEST(Journal, AnOlderJournalGainsTheNewColumns) {
   EXPECT_EQ(j.last_progress(1)->status_line, 5);
 }
 
+TEST(Journal, AnOlderDaemonQueueGainsTheJobsToolChangeColumn) {
+  const auto path = temp_db("old_queue.sqlite");
+  {
+    // daemon_jobs as it was before a job's tool-change settings were kept.
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+    const char* old_schema =
+        "CREATE TABLE daemon_jobs (id INTEGER PRIMARY KEY AUTOINCREMENT, machine TEXT NOT NULL, file_id TEXT NOT NULL,"
+        " file_name TEXT NOT NULL, kind TEXT NOT NULL, params TEXT NOT NULL, state TEXT NOT NULL,"
+        " position INTEGER NOT NULL DEFAULT 0, message TEXT NOT NULL DEFAULT '', created_at TEXT NOT NULL,"
+        " started_at TEXT, ended_at TEXT, journal_id INTEGER, resumed_from INTEGER NOT NULL DEFAULT 0,"
+        " from_line INTEGER NOT NULL DEFAULT 0, last_line INTEGER NOT NULL DEFAULT 0);"
+        "INSERT INTO daemon_jobs(machine, file_id, file_name, kind, params, state, created_at)"
+        " VALUES('m', 'ab', 'a.nc', 'gcode', '', 'ready', '2026-01-01T00:00:00.000Z');";
+    ASSERT_EQ(sqlite3_exec(db, old_schema, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    sqlite3_close(db);
+  }
+  Journal j(path);
+  auto rows = j.daemon_jobs();
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].tool_change_json, "");
+  DaemonJobRow r = rows[0];
+  r.id = 0;
+  r.tool_change_json = R"({"method":"controller"})";
+  const auto id = j.insert_daemon_job(r);
+  rows[0].tool_change_json = R"({"method":"sensor"})";
+  j.update_daemon_job(rows[0]);
+  for (const auto& row : j.daemon_jobs())
+    EXPECT_EQ(row.tool_change_json, row.id == id ? R"({"method":"controller"})" : R"({"method":"sensor"})");
+}
+
 TEST(Journal, UnwritablePathNamesIt) {
   try {
     Journal j("/proc/cncstream/nope/journal.sqlite");

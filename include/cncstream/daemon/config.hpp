@@ -23,6 +23,7 @@ struct MachineConfig {
   bool sim_verify = true;            // STL jobs: cut a fresh stock and verify it against the part
   std::size_t sim_vanish_after = 0;  // fault for tests: the first simulator vanishes after N answers
   std::string sim_settings;          // persistent simulator settings file ("" : defaults)
+  std::string sim_firmware = "grbl";  // grbl or grblhal (its $341 and Tool state: docs/tool-change.md)
   double sim_resolution = 0.1;       // stock grid step of the verify, mm
   double sim_tolerance = 0.05;       // verify tolerance, mm
   // The simulated machine's tools and probes (docs/tool-change.md): stick-outs

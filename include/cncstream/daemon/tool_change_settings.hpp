@@ -16,7 +16,7 @@
 namespace cncstream::daemon {
 
 struct ToolChangeSettings {
-  std::string method = "manual";      // plate | sensor | manual | pause (the M0 goes to the controller)
+  std::string method = "manual";      // plate | sensor | manual | controller (grblHAL's own) | pause (the M0 goes to the controller)
   std::optional<double> safe_z;       // machine Z (G53) of every XY travel
   std::optional<std::array<double, 2>> plate_at;   // the touch plate's centre, WORK X,Y
   std::optional<std::array<double, 2>> sensor_at;  // the sensor's centre, MACHINE X,Y

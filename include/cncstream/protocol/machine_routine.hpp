@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "cncstream/geometry/vec3.hpp"
+#include "cncstream/protocol/firmware_profile.hpp"
 #include "cncstream/protocol/machine_actions.hpp"
 #include "cncstream/protocol/status_report.hpp"
 
@@ -71,6 +72,8 @@ class MachineRoutine {
   // Out: the next line to send (at most one is outstanding) and a prompt.
   std::optional<std::string> take_line() { return std::exchange(line_out_, std::nullopt); }
   std::optional<RoutinePrompt> take_prompt() { return std::exchange(prompt_out_, std::nullopt); }
+  // Real-time bytes to send now (grblHAL's tool-change acknowledge, cycle start).
+  std::vector<Realtime> take_realtime() { return std::exchange(realtime_out_, {}); }
   const std::optional<RoutinePrompt>& pending_prompt() const { return prompt_; }
 
   bool finished() const { return done_ || !failure_.empty(); }
@@ -88,6 +91,11 @@ class MachineRoutine {
   // `reports`: $# or $G, whose report lines are collected into offsets_/wcs_.
   void send(std::string line, bool probe = false, bool reports = false);
   void wait_idle();
+  // Two reports in a row in `state` (Idle: wait_idle). Waiting for another
+  // state than Idle, `idle_fails` fails the routine with its text when the
+  // machine reports Idle instead three times: it is not (or no longer) there.
+  void wait_state(MachineState state, std::string idle_fails = {});
+  void send_realtime(Realtime r) { realtime_out_.push_back(r); }
   void prompt(std::string text, PromptKind kind = PromptKind::Confirm, int tool = 0);
   void fail(const std::string& why);
   void set_summary(std::string s) { summary_ = std::move(s); }
@@ -101,14 +109,18 @@ class MachineRoutine {
   bool pin_active_ = false;                         // Pn:P in the last report
 
  private:
-  enum class Wait { None, Answer, Idle, Confirm };
+  enum class Wait { None, Answer, State, Confirm };
   void step();
 
   std::vector<std::function<void()>> ops_;
   std::size_t pc_ = 0;
   Wait wait_ = Wait::None;
   bool expect_probe_ = false, probe_seen_ = false, expect_reports_ = false;
-  int idle_reports_ = 0;
+  int idle_reports_ = 0;  // reports in a row in wait_for_
+  int other_idle_reports_ = 0;
+  MachineState wait_for_ = MachineState::Idle;
+  std::string idle_fails_;
+  std::vector<Realtime> realtime_out_;
   std::optional<std::string> line_out_;
   std::optional<RoutinePrompt> prompt_out_, prompt_;
   bool hold_ends_it_ = true;

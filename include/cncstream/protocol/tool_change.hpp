@@ -10,8 +10,11 @@
 // Methods: a touch plate on the work or a fixed tool-length sensor (the
 // tool in the spindle measured first as the reference unless the reference
 // is still valid, then the new tool; the work offset's Z moved by the
-// difference, written as an absolute G10 L2 and read back with $#), or
-// manual (the operator jogs, zeroes Z and confirms).
+// difference, written as an absolute G10 L2 and read back with $#), manual
+// (the operator jogs, zeroes Z and confirms), or the controller's own
+// (grblHAL with $341=0: the M6 goes to the controller, which enters its Tool
+// state; the routine acknowledges it with 0xA3, the operator jogs and zeroes
+// Z as with manual, cycle start ends it; G38.x is refused there, error:40).
 //
 // Motion that cannot hurt: spindle and coolant off first, every XY travel at
 // a G53 safe Z, the probe input checked clear before each probe, bounded
@@ -33,9 +36,9 @@
 
 namespace cncstream::protocol {
 
-enum class ToolChangeMethod { Plate, Sensor, Manual };
+enum class ToolChangeMethod { Plate, Sensor, Manual, Controller };
 const char* to_string(ToolChangeMethod m);
-// "plate", "sensor", "manual"; throws std::invalid_argument naming the text.
+// "plate", "sensor", "manual", "controller"; throws std::invalid_argument naming the text.
 ToolChangeMethod parse_tool_change_method(const std::string& text);
 
 struct ToolChangeConfig {
@@ -113,6 +116,7 @@ class ToolChangeRoutine final : public MachineRoutine {
   // The tool in the spindle as far as the routine knows.
   int mounted_tool() const { return mounted_; }
   const ToolChangeRequest& request() const { return req_; }
+  const ToolChangeConfig& config() const { return cfg_; }
   // CheckLength: the new trigger minus the recorded one, once measured.
   const std::optional<double>& length_difference() const { return check_diff_; }
 
@@ -123,6 +127,8 @@ class ToolChangeRoutine final : public MachineRoutine {
   void add_measure(double* trigger_out);
   void add_reference_measure();
   void add_change(const std::string& what);
+  void add_controller_change(const std::string& what);
+  void add_read_offset_z(std::function<void(double)> use);
   void add_check();
   void add_return();
   int wcs_index() const;

@@ -199,6 +199,13 @@ class MachineSession {
   void pump_tool_change();
   void end_tool_change(const std::string& why);
   void forget_tool_reference(const char* why);
+  // Why the method cannot run on this controller (nullopt: it can): the
+  // controller's own needs grblHAL's tool-change protocol (its profile's
+  // 0xA3) with $341=0 read from `$$`.
+  std::optional<std::string> controller_tool_change_refusal(const protocol::ToolChangeConfig& config) const;
+  // A routine of the controller method waits in grblHAL's Tool state.
+  bool in_controller_tool_state() const;
+  void send_routine_realtime(protocol::MachineRoutine& r);
   bool operator_turn() const;
   // A tool routine outside a job waits for the operator: jogs, the machine
   // actions (zero Z) and console lines are accepted, as at a job's change.

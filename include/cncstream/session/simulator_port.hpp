@@ -26,6 +26,7 @@ struct SimulatorOptions {
   double baud = 115200;       // the link's rate in virtual time (bytes/s = baud / 10); 0: unthrottled
   bool strict = true;         // an RX overflow stops the simulator (a streamer bug)
   std::string settings_file;  // persistent $$ / offsets; empty: defaults
+  cncsim::Firmware firmware = cncsim::Firmware::Grbl11;  // grblHAL: $341, the Tool state at M6, 0xA3
   cncsim::Faults faults;
   // Verification: the design in machine coordinates (the sim's G54 is zero,
   // so machine = work coordinates) and the cutter that cuts it.

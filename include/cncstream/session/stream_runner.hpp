@@ -78,6 +78,9 @@ class StreamRunner {
   void request_realtime(protocol::Realtime r);
   // The operator's answer at a tool change's prompt.
   void request_tool_change_answer(bool confirm);
+  // Anything else the operator does on the session (a console line at a
+  // tool change's prompt), on its thread, in order with the requests above.
+  void request_on_session(std::function<void(MachineSession&)> fn) { post(std::move(fn)); }
 
  private:
   void post(std::function<void(MachineSession&)> fn);

@@ -105,6 +105,7 @@ struct DaemonJobRow {
   std::int64_t resumed_from = 0;
   std::int64_t from_line = 0;
   std::int64_t last_line = 0;
+  std::string tool_change_json;  // the job's own tool-change settings as given ("" none)
 };
 
 class Journal {

@@ -32,8 +32,21 @@ namespace cncsim {
 inline constexpr std::size_t kRxBufferSize = 128;  // GRBL RX_BUFFER_SIZE (127 usable)
 inline constexpr std::size_t kPlannerBlocks = 15;
 inline constexpr const char* kBanner = "Grbl 1.1h ['$' for help]";
+// grblHAL's: a 1024-byte RX buffer and 35 planner blocks by default.
+inline constexpr const char* kGrblHalBanner = "GrblHAL 1.1f ['$' or '$HELP' for help]";
+inline constexpr std::size_t kGrblHalRxBufferSize = 1024;
+// grblHAL's status codes beyond GRBL 1.1's table (its errors.h).
+inline constexpr int kGrblHalToolChangePending = 40;  // motion (not a jog) in the Tool state
+inline constexpr int kGrblHalHomingRequired = 46;     // $341 1-3 need the machine homed
 
-enum class MachineState { Idle, Run, Hold, Jog, Alarm, Door, Check, Home, Sleep };
+// Which firmware the simulator answers as. GrblHal adds grblHAL's manual
+// tool change ($341, the Tool state, 0xA3); everything else is GRBL 1.1h's.
+enum class Firmware { Grbl11, GrblHal };
+// "grbl" or "grblhal"; throws std::invalid_argument naming the text.
+Firmware parse_firmware(const std::string& text);
+
+// Tool: grblHAL only, after an M6 (its tool-change state).
+enum class MachineState { Idle, Run, Hold, Jog, Alarm, Door, Check, Home, Sleep, Tool };
 
 // Which byte of a line a wire fault hits: by its offset (0-based, real-time
 // bytes not counted), the first byte equal to a letter, or the end of line
@@ -117,6 +130,9 @@ struct MachineOptions {
   std::size_t planner_blocks = kPlannerBlocks;
   // The planner counts as starved below this many blocks (see LinkStats).
   std::size_t starved_below_blocks = 8;
+  // grblHAL: its banner, $I, a 1024-byte RX buffer, `$341` and the Tool
+  // state at an M6 (machine_tool_change.cpp).
+  Firmware firmware = Firmware::Grbl11;
 };
 
 // Baud (8-N-1: a start bit, 8 data bits, a stop bit) to bytes per second.
@@ -191,6 +207,9 @@ class Machine {
   const PersistentStore& store() const { return store_; }
   std::size_t rx_bytes_dropped() const { return rx_dropped_; }
   std::size_t rx_used() const { return rx_.size(); }
+  std::size_t rx_capacity() const { return rx_capacity_; }
+  // grblHAL: an M6 is in progress (the Tool state, or a jog inside it).
+  bool tool_change_pending() const { return tool_change_; }
   std::size_t planner_blocks() const { return queue_.size(); }
   std::size_t lines_received() const { return lines_received_; }
   std::size_t lines_answered() const { return lines_answered_; }
@@ -263,6 +282,16 @@ class Machine {
   void start_homing();
   void feed_hold();
   void cycle_start();
+  // grblHAL's manual tool change (machine_tool_change.cpp): an M6 word
+  // taken off a line, the Tool state entered and left, what it refuses.
+  bool grblhal() const { return options_.firmware == Firmware::GrblHal; }
+  bool take_m6_word(std::string& text) const;
+  int tool_change_mode() const;
+  void enter_tool_change();
+  void acknowledge_tool_change();
+  bool finish_tool_change();  // false: the mode keeps the machine in Tool
+  void reset_tool_change();
+  MachineState after_jog_state() const { return tool_change_ ? MachineState::Tool : MachineState::Idle; }
   // Execution accounting (lines_executed): the lines between arrival and
   // their end, oldest first.
   struct PendingLine {
@@ -325,6 +354,16 @@ class Machine {
   };
   MountRequest mount_request_;
   bool probe_succeeded_ = false;
+
+  std::size_t rx_capacity_ = kRxBufferSize;
+  bool homed_ = false;  // a $H succeeded since power-on
+  // grblHAL's tool change: gc_state.tool_change, the input stream suspended
+  // until 0xA3, the lines that arrived meanwhile (kept aside until cycle
+  // start) and the tool the last M6 mounted.
+  bool tool_change_ = false;
+  bool tool_read_suspended_ = false;
+  std::deque<char> tool_backup_;
+  int current_tool_ = 0;
 
   std::size_t bytes_received_ = 0;
   std::size_t rx_dropped_ = 0;

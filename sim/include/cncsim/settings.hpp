@@ -16,6 +16,9 @@ namespace cncsim {
 class Settings {
  public:
   static Settings defaults();  // GRBL's DEFAULTS_GENERIC
+  // grblHAL's settings the simulator models beyond GRBL's: $341 (the
+  // tool-change mode, 0-4, default 0).
+  void add_grblhal_settings();
 
   double get(int n) const;
   bool has(int n) const { return values_.count(n) != 0; }

@@ -131,8 +131,10 @@ void add_tool_change_options(CLI::App* sub, ConnectionOptions& o) {
   const char* tc = "Tool change";
   sub->add_option("--tool-change-method", o.tool_change_method,
                   "plate (touch plate on the work), sensor (fixed tool-length sensor), manual (the operator zeroes Z), "
-                  "or pause (the M0 goes to the controller: no re-measure); default plate on sim, manual on a machine")
-      ->check(CLI::IsMember({"plate", "sensor", "manual", "pause"}))
+                  "controller (grblHAL's own with $341=0: M6 to the controller, its Tool state, the operator zeroes "
+                  "Z), or pause (the M0 goes to the controller: no re-measure); default plate on sim, manual on a "
+                  "machine")
+      ->check(CLI::IsMember({"plate", "sensor", "manual", "controller", "pause"}))
       ->group(tc);
   sub->add_option("--tool-change-safe-z", o.tool_change_safe_z,
                   "Machine Z (G53) for every XY travel of a tool change (needed for plate and sensor)")
@@ -159,6 +161,10 @@ void add_sim_machine_options(CLI::App* sub, SimCliOptions& o) {
       ->capture_default_str();
   sub->add_flag("--sim-lenient", o.lenient, "Drop overflowing RX bytes like the firmware instead of failing")->group(g);
   sub->add_option("--sim-settings", o.settings, "Simulator settings file ($$, offsets) kept across runs")->group(g);
+  sub->add_option("--sim-firmware", o.firmware,
+                  "grbl (GRBL 1.1h) or grblhal (grblHAL: $341, the Tool state at M6, 0xA3)")
+      ->check(CLI::IsMember({"grbl", "grblhal"}))
+      ->group(g);
   sub->add_option("--sim-drop-every", o.drop_every, "Fault: drop every Nth byte received")->group(g);
   sub->add_option("--sim-corrupt-every", o.corrupt_every, "Fault: flip a bit in every Nth byte received")->group(g);
   sub->add_option("--sim-error-at", o.error_at, "Fault LINE:E: answer received line LINE with error:E")->group(g);
@@ -196,6 +202,7 @@ session::SimulatorOptions simulator_options(const SimCliOptions& s) {
   so.baud = s.baud;
   so.strict = !s.lenient;
   so.settings_file = s.settings;
+  so.firmware = cncsim::parse_firmware(s.firmware);
   so.faults.drop_every = s.drop_every;
   so.faults.corrupt_every = s.corrupt_every;
   so.faults.vanish_after = s.vanish_after;
@@ -274,6 +281,7 @@ bool confirm(const std::string& question, bool yes) {
 int run_session(const ConnectionOptions& c, const SimCliOptions& s, const session::JobInput& job,
                 std::optional<VerifyTarget> verify, std::optional<EtaEstimator> precomputed) {
   std::shared_ptr<session::SimulatorPort> sim;
+  cncsim::StickOuts so_stick_outs;  // the simulated operator's tools (T -> stick-out)
   session::RunnerOptions ro;
   const bool changes_tools = !gcode::find_tool_changes(job.lines).empty();
   if (c.port == "sim") {
@@ -304,9 +312,10 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     std::optional<geometry::Box3> stock = so.stock;
     if (!stock && so.design) stock = so.design->bounds();
     ro.tool_change = tool_change_config(c, changes_tools, &so, stock);
+    so_stick_outs = so.stick_outs;
     sim = std::make_shared<session::SimulatorPort>(so);
     ro.machine_port = sim;
-    std::cerr << "simulator: GRBL 1.1h on " << sim->path() << " (speed " << s.speed << ", "
+    std::cerr << "simulator: " << (s.firmware == "grblhal" ? "grblHAL" : "GRBL 1.1h") << " on " << sim->path() << " (speed " << s.speed << ", "
               << (s.lenient ? "lenient" : "strict") << " RX buffer)\n";
   } else {
     const auto device = device_path(c.port);
@@ -421,6 +430,22 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
       panel.message("TOOL CHANGE: " + p.text + "\n  (simulator: the operator mounts T" + std::to_string(p.tool) +
                     " and confirms)");
       sim->operator_mount(p.tool);
+      runner_ptr->request_tool_change_answer(true);
+    } else if (sim && c.yes && p.kind == protocol::PromptKind::ZeroManually && !so_stick_outs.empty()) {
+      // The simulated operator mounts the tool and touches its tip off where
+      // the first tool's was (a gauge on the work: the sim's G54 is zero,
+      // machine = work coordinates), zeroes Z there, and confirms.
+      const auto out = so_stick_outs.find(p.tool);
+      const double drop = out == so_stick_outs.end() ? 0.0 : out->second - so_stick_outs.begin()->second;
+      panel.message("TOOL CHANGE: " + p.text + "\n  (simulator: the operator mounts T" + std::to_string(p.tool) +
+                    ", zeroes Z on the work and confirms)");
+      sim->operator_mount(p.tool);
+      runner_ptr->request_on_session([drop](session::MachineSession& s) {
+        const auto st = s.status();
+        if (!st || !st->mpos) return;  // no position: nothing zeroed, the routine's $# tells
+        const auto r = s.console(fmt::format("G10 L20 P0 Z{:.3f}", (*st->mpos)[2] - drop));
+        (void)r;
+      });
       runner_ptr->request_tool_change_answer(true);
     } else if (interactive) {
       panel.message("TOOL CHANGE: " + p.text + "\n  (c confirms, x declines and stops the job)");

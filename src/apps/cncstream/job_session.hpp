@@ -54,6 +54,7 @@ struct SimCliOptions {
   std::vector<std::string> error_at, alarm_at, stall_at;
   std::string touch_plate;  // X,Y,THICKNESS on the stock (machine mm); default at the tool-change plate position
   std::string tool_sensor;  // X,Y,Z (machine mm)
+  std::string firmware = "grbl";  // the simulator's: grbl or grblhal
 };
 
 // Options after the positional FILE/JOB and PORT.
