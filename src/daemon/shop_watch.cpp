@@ -81,7 +81,12 @@ void ShopWatch::start_read() {
   }
   in_flight_ = true;
   ++reads_;
-  view_.submit([changed](shop::PgConnection& db) -> std::optional<nlohmann::json> { return shop::view_changes(db, changed); },
+  // The read's own copy: the answer's callback takes `changed` itself (the
+  // two arguments are built in no set order).
+  shop::ShopViewReader::Read read = [payloads = changed](shop::PgConnection& db) -> std::optional<nlohmann::json> {
+    return shop::view_changes(db, payloads);
+  };
+  view_.submit(std::move(read),
                [this, &io = io_, alive = alive_, changed = std::move(changed), resync](shop::ViewAnswer a) mutable {
                  boost::asio::post(io, [this, alive, a = std::move(a), changed = std::move(changed), resync]() mutable {
                    if (*alive) read_done(std::move(a), std::move(changed), resync);

@@ -543,6 +543,26 @@ LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
                       WHERE j.id = ANY (coalesce(p_jobs, '{}'))), '[]'::jsonb))
 $f$;
 
+-- A claim whose answer never reached its PC (the hub fell silent after it
+-- committed, the PC gave up waiting): the PC, finding at a heartbeat a job
+-- assigned to its machine that it never received, reports it "released"
+-- through its outbox, and the job goes back to the queue as it was. Only
+-- an assigned job (never a program loaded, never a line cut). The earlier
+-- apply_event does the rest, unchanged.
+ALTER FUNCTION shop.apply_event(bigint, bigint, text, jsonb) RENAME TO apply_event_4;
+CREATE FUNCTION shop.apply_event(p_machine_id bigint, p_job bigint, p_kind text, p_body jsonb)
+RETURNS void LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+BEGIN
+  IF p_kind = 'job' AND p_job IS NOT NULL AND p_body->>'state' = 'released' THEN
+    UPDATE shop.jobs SET status = 'pending', machine_id = NULL, claimed_at = NULL, lease_until = NULL,
+      message = coalesce(p_body->>'message', 'its claim never reached the machine; back in the queue')
+    WHERE id = p_job AND machine_id = p_machine_id AND status = 'assigned';
+    RETURN;
+  END IF;
+  PERFORM shop.apply_event_4(p_machine_id, p_job, p_kind, p_body);
+END $f$;
+
+REVOKE ALL ON FUNCTION shop.apply_event(bigint, bigint, text, jsonb) FROM PUBLIC;
 REVOKE ALL ON FUNCTION shop.machine_json(shop.machines), shop.view_changes(text[], bigint[]) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION shop.view_changes(text[], bigint[]) TO cncstream_pc, cncstream_operator, cncstream_reader;
 )SQL";

@@ -287,9 +287,33 @@ void ShopClient::serve(Hub& hub) {
       for (const auto& [name, info] : infos_) beats.emplace_back(info, states_[name]);
     }
     std::vector<std::int64_t> cancelled;
+    std::vector<std::pair<std::string, std::int64_t>> unknown;  // assigned here, never received
     for (const auto& [info, st] : beats)
-      for (const auto& j : hub.heartbeat(info, st, settings_.lease_s))
+      for (const auto& j : hub.heartbeat(info, st, settings_.lease_s)) {
         if (j.status == "cancelled") cancelled.push_back(j.id);
+        if (j.status == "assigned" && !received_.count(j.id) && !released_.count(j.id))
+          unknown.emplace_back(info.name, j.id);
+      }
+    // A claim the hub committed whose answer never came (it fell silent, the
+    // call timed out): released through the outbox, back to the queue,
+    // unless this daemon holds it after all (an earlier run's claim).
+    for (const auto& [machine, id] : unknown) {
+      released_.insert(id);
+      boost::asio::post(io_, [this, machine = machine, id = id, alive = alive_] {
+        if (!*alive) return;
+        try {
+          if (outbox_.local_job_of(id)) return;
+        } catch (const std::exception& e) {
+          spdlog::warn("shop: {}", e.what());
+          return;
+        }
+        spdlog::warn("shop: shop job {} is assigned to {} but its claim never arrived; released to the queue", id, machine);
+        append(machine, "job", id,
+               nlohmann::json{{"state", "released"},
+                              {"message", "its claim's answer never reached " + machine + " (the hub did not answer in time); "
+                                          "back in the queue"}}.dump());
+      });
+    }
     registered_ = true;
     // Jobs cancelled on the hub (the shop view, an operator) after this PC
     // claimed them leave the local queue; each once.
@@ -335,6 +359,7 @@ void ShopClient::serve(Hub& hub) {
       throw;
     }
     talked = true;
+    if (job) received_.insert(job->id);
     boost::asio::post(io_, [this, machine, job = std::move(job), alive = alive_]() mutable {
       if (!*alive) return;
       Reporter* r = nullptr;

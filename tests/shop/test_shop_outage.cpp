@@ -78,7 +78,9 @@ TEST(ShopOutage, AHubThatFallsSilentWithoutClosingIsReportedDownWithinSecondsAnd
   ASSERT_TRUE(dtest::wait_for([&] { return shop_info()["hub_up"] == true; }, 15)) << "the daemon never came back";
   EXPECT_TRUE(dtest::wait_for([&] {
     return admin.exec("SELECT status FROM shop.jobs WHERE id = $1", {std::to_string(id)}).text(0, 0) == "awaiting_operator";
-  }, 10)) << "claiming did not resume";
+  }, 10)) << "claiming did not resume: the job is "
+           << admin.exec("SELECT status FROM shop.jobs WHERE id = $1", {std::to_string(id)}).text(0, 0) << "; locally "
+           << shoptest::on_loop(d.daemon(), [&] { return d.daemon().jobs().list(std::nullopt, std::nullopt); }).dump();
   EXPECT_TRUE(dtest::wait_for([&] { return watch->listening(); }, 10)) << "the listener did not come back";
   EXPECT_TRUE(dtest::wait_for([&] { return d.http.get("/api/v1/shop/machines").status == 200; }, 10));
   EXPECT_LE(since(t1), 12.0);

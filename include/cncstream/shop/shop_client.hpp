@@ -127,6 +127,8 @@ class ShopClient {
   // The worker's own: when the next heartbeats are due.
   double next_heartbeat_ = 0;
   double last_talk_ = 0;  // when the hub last answered
+  std::set<std::int64_t> received_;  // shop jobs whose claim this process received
+  std::set<std::int64_t> released_;  // shop jobs assigned here whose claim never arrived, released
   bool registered_ = false;
   // A claimed job being added (event loop only): its state changes belong to it.
   std::optional<std::pair<std::string, std::int64_t>> adding_;
