@@ -12,7 +12,7 @@
 
 namespace cncsim {
 
-using cncstream::Vec3;
+using cncstream::geometry::Vec3;
 namespace gc = cncstream::gcode;
 namespace grbl = cncstream::grbl;
 

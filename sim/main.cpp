@@ -51,7 +51,7 @@ void parse_byte_faults(const std::vector<std::string>& specs, const char* flag,
   }
 }
 
-cncstream::Vec3 parse_position(const std::string& text) {
+cncstream::geometry::Vec3 parse_position(const std::string& text) {
   const auto p = cncsim::vec3_from(text);
   if (!p) throw std::invalid_argument("--position '" + text + "': expected X,Y,Z (mm, machine coordinates)");
   return *p;
@@ -81,17 +81,17 @@ struct NumberedTally {
 
 int run_verify(const std::string& design_path, const std::string& result_path, double tolerance,
                const std::string& png) {
-  auto design = cncstream::load_stl(design_path).mesh;
-  const auto field = cncstream::read_height_field(result_path);
+  auto design = cncstream::geometry::load_stl(design_path).mesh;
+  const auto field = cncstream::cam::read_height_field(result_path);
   // A cut in work coordinates that says where the model sat: the design goes there.
   if (field.work_offset) design.translate(*field.work_offset);
   const auto stock = cncsim::stock_from_heights(field.grid, field.z);
-  const auto heights = cncstream::design_heights(design, field.grid);
-  const auto result = cncstream::compare_to_design(stock, heights, tolerance);
+  const auto heights = cncstream::cam::design_heights(design, field.grid);
+  const auto result = cncstream::cam::compare_to_design(stock, heights, tolerance);
   std::cout << result.stats.summary() << "\n";
   if (!png.empty())
     cncsim::write_whole(png, [&](const std::filesystem::path& file) {
-      cncstream::write_deviation_png(file, result, "cncsim verify", design_path);
+      cncstream::cam::write_deviation_png(file, result, "cncsim verify", design_path);
     });
   return result.stats.gouged == 0 ? 0 : 3;
 }
@@ -197,12 +197,12 @@ int run(int argc, char** argv) {
     }
 
     std::unique_ptr<cncsim::MaterialRemoval> removal;
-    std::optional<cncstream::Mesh> design;
-    if (!design_path.empty()) design = cncstream::load_stl(design_path).mesh;
+    std::optional<cncstream::geometry::Mesh> design;
+    if (!design_path.empty()) design = cncstream::geometry::load_stl(design_path).mesh;
     if (!stock_from.empty()) {
       // A saved state: the surface an earlier run left is the stock.
       if (!stock_text.empty()) throw std::invalid_argument("--stock-from and --stock: give one");
-      auto field = cncstream::read_height_field(stock_from);
+      auto field = cncstream::cam::read_height_field(stock_from);
       if (field.work_origin) {
         // Saved in work coordinates with its work zero's machine position: back to machine coordinates.
         field.grid.x0 += field.work_origin->x;
@@ -210,11 +210,11 @@ int run(int argc, char** argv) {
         for (float& z : field.z) z = static_cast<float>(static_cast<double>(z) + field.work_origin->z);
       }
       removal = std::make_unique<cncsim::MaterialRemoval>(cncsim::stock_from_heights(field.grid, field.z),
-                                                          cncstream::parse_cutter_spec(tool_spec));
+                                                          cncstream::cam::parse_cutter_spec(tool_spec));
       if (!tool_table_text.empty()) removal->set_tool_table(cncsim::parse_tool_table(tool_table_text));
       if (!options.probe_surface_z) options.probe_surface_z = removal->stock().top();
     } else if (!stock_text.empty() || design) {
-      const cncstream::Cutter cutter = cncstream::parse_cutter_spec(tool_spec);
+      const cncstream::cam::Cutter cutter = cncstream::cam::parse_cutter_spec(tool_spec);
       const cncsim::StockBox box = !stock_text.empty() ? cncsim::parse_stock_box(stock_text, resolution)
                                                        : cncsim::stock_box_for(*design, resolution);
       removal = std::make_unique<cncsim::MaterialRemoval>(box, cutter);
@@ -295,12 +295,12 @@ int run(int argc, char** argv) {
     }
     if (removal && design) {
       // The end-of-run verify: the machined stock against the design.
-      const auto heights = cncstream::design_heights(*design, removal->stock().grid());
-      const auto result = cncstream::compare_to_design(removal->stock(), heights, tolerance);
+      const auto heights = cncstream::cam::design_heights(*design, removal->stock().grid());
+      const auto result = cncstream::cam::compare_to_design(removal->stock(), heights, tolerance);
       std::cerr << "cncsim verify against " << design_path << ":\n" << result.stats.summary() << std::endl;
       if (!png_path.empty()) {
         cncsim::write_whole(png_path, [&](const std::filesystem::path& file) {
-          cncstream::write_deviation_png(file, result, "cncsim verify", design_path);
+          cncstream::cam::write_deviation_png(file, result, "cncsim verify", design_path);
         });
         std::cerr << "cncsim: deviation map written to " << png_path << "\n";
       }

@@ -8,7 +8,7 @@
 
 namespace cncsim {
 
-using cncstream::Vec3;
+using cncstream::geometry::Vec3;
 
 namespace {
 
@@ -32,7 +32,7 @@ ProbeFace probe_face_square(std::string name, double x, double y, double side, d
 }
 
 // The cutter's horizontal reach at `h` above its tip (negative below the tip).
-double cutter_reach_at(const cncstream::Cutter& c, double h) {
+double cutter_reach_at(const cncstream::cam::Cutter& c, double h) {
   if (h < -kProbeFaceEps) return -1;
   const double rk = c.corner_radius;
   if (h >= rk) return c.radius;

@@ -15,7 +15,7 @@
 
 namespace cncsim {
 
-using cncstream::Vec3;
+using cncstream::geometry::Vec3;
 
 StockBox parse_stock_box(const std::string& text, double resolution) {
   const auto colon = text.find(':');
@@ -31,19 +31,19 @@ StockBox parse_stock_box(const std::string& text, double resolution) {
   return box;
 }
 
-StockBox stock_box_for(const cncstream::Mesh& design, double resolution) {
-  const cncstream::Box3 b = design.bounds();
+StockBox stock_box_for(const cncstream::geometry::Mesh& design, double resolution) {
+  const cncstream::geometry::Box3 b = design.bounds();
   if (b.empty()) throw std::invalid_argument("the design mesh is empty");
   return {b.lo, b.hi, resolution};
 }
 
-MaterialRemoval::MaterialRemoval(const StockBox& box, const cncstream::Cutter& cutter)
-    : stock_(cncstream::GridSpec::covering(box.lo.x, box.lo.y, box.hi.x, box.hi.y, box.resolution, box.resolution),
+MaterialRemoval::MaterialRemoval(const StockBox& box, const cncstream::cam::Cutter& cutter)
+    : stock_(cncstream::cam::GridSpec::covering(box.lo.x, box.lo.y, box.hi.x, box.hi.y, box.resolution, box.resolution),
              box.hi.z),
       cutter_(cutter),
       bottom_(box.lo.z) {}
 
-MaterialRemoval::MaterialRemoval(cncstream::HeightFieldStock stock, const cncstream::Cutter& cutter)
+MaterialRemoval::MaterialRemoval(cncstream::cam::HeightFieldStock stock, const cncstream::cam::Cutter& cutter)
     : stock_(std::move(stock)), cutter_(cutter), bottom_(stock_.top()) {
   for (double z : stock_.heights()) bottom_ = std::min(bottom_, z - 1.0);
 }
@@ -78,7 +78,7 @@ std::pair<ToolTable, StickOuts> parse_tool_entries(const std::string& text) {
       spec = trim(spec.substr(0, at));
     }
     try {
-      table[tool] = cncstream::parse_cutter_spec(spec);
+      table[tool] = cncstream::cam::parse_cutter_spec(spec);
     } catch (const std::exception& e) {
       throw std::invalid_argument(where + "tool " + std::to_string(tool) + ": " + e.what());
     }
@@ -132,10 +132,10 @@ void MaterialRemoval::cut(const Vec3& from, const Vec3& to) {
 }
 
 std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path& path,
-                                                   std::optional<cncstream::Vec3> work_offset,
-                                                   std::optional<cncstream::Vec3> work_origin) const {
+                                                   std::optional<cncstream::geometry::Vec3> work_offset,
+                                                   std::optional<cncstream::geometry::Vec3> work_origin) const {
   // In work coordinates when the work zero is known: machine − origin.
-  cncstream::GridSpec grid = stock_.grid();
+  cncstream::cam::GridSpec grid = stock_.grid();
   std::vector<double> heights = stock_.heights();
   if (work_origin) {
     grid.x0 -= work_origin->x;
@@ -144,8 +144,8 @@ std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path&
   }
   // Each file whole or not at all; the sidecar is in place before its data file.
   write_whole(path, [&](const std::filesystem::path& file) {
-    cncstream::write_height_field(file, grid, heights, work_offset, work_origin);
-    std::filesystem::rename(cncstream::height_field_sidecar(file), cncstream::height_field_sidecar(path));
+    cncstream::cam::write_height_field(file, grid, heights, work_offset, work_origin);
+    std::filesystem::rename(cncstream::cam::height_field_sidecar(file), cncstream::cam::height_field_sidecar(path));
   });
   auto stl = path;
   stl.replace_extension(".stl");
@@ -153,18 +153,18 @@ std::filesystem::path MaterialRemoval::write_result(const std::filesystem::path&
   double bottom = bottom_;
   for (double z : stock_.heights()) bottom = std::min(bottom, z - 1.0);
   write_whole(stl, [&](const std::filesystem::path& file) {
-    cncstream::write_height_field_stl(file, grid, heights, bottom - (work_origin ? work_origin->z : 0.0));
+    cncstream::cam::write_height_field_stl(file, grid, heights, bottom - (work_origin ? work_origin->z : 0.0));
   });
   return stl;
 }
 
-cncstream::HeightFieldStock stock_from_heights(const cncstream::GridSpec& grid, const std::vector<float>& heights) {
+cncstream::cam::HeightFieldStock stock_from_heights(const cncstream::cam::GridSpec& grid, const std::vector<float>& heights) {
   if (heights.size() != grid.size()) throw std::invalid_argument("height field size does not match its grid");
   double top = -HUGE_VAL;
   for (float z : heights)
     if (std::isfinite(z)) top = std::max(top, static_cast<double>(z));
   if (!std::isfinite(top)) throw std::invalid_argument("height field has no values");
-  return cncstream::HeightFieldStock(grid, top, std::vector<double>(heights.begin(), heights.end()));
+  return cncstream::cam::HeightFieldStock(grid, top, std::vector<double>(heights.begin(), heights.end()));
 }
 
 }  // namespace cncsim

@@ -123,7 +123,7 @@ void save_store(const std::filesystem::path& path, const PersistentStore& store)
   std::ostringstream out;
   out << "# cncsim EEPROM image: GRBL settings, coordinate systems, startup lines\n";
   for (const auto& [n, v] : store.settings.values()) out << "$" << n << "=" << v << "\n";
-  auto vec = [&](const char* key, const cncstream::Vec3& v) {
+  auto vec = [&](const char* key, const cncstream::geometry::Vec3& v) {
     out << fmt::format("{}={:.17g},{:.17g},{:.17g}\n", key, v.x, v.y, v.z);
   };
   const char* names[] = {"G54", "G55", "G56", "G57", "G58", "G59"};

@@ -44,8 +44,8 @@ double now() {
 // A dense, welded height field over 120 x 100 mm: smooth waves (ridges and
 // valleys), a raised plateau with vertical-ish walls and a groove, so every
 // primitive kind matters. 2 * nx * ny facets.
-Mesh synthetic_relief(std::size_t nx, std::size_t ny) {
-  Mesh m;
+geometry::Mesh synthetic_relief(std::size_t nx, std::size_t ny) {
+  geometry::Mesh m;
   const double W = 120, H = 100;
   m.vertices.reserve((nx + 1) * (ny + 1));
   for (std::size_t j = 0; j <= ny; ++j)
@@ -68,56 +68,56 @@ Mesh synthetic_relief(std::size_t nx, std::size_t ny) {
 }
 
 // Fit a unit-less or metre mesh to about `size` mm across in XY, base at z = 0.
-void fit(Mesh& m, double size) {
-  Box3 b = m.bounds();
-  const Vec3 s = b.size();
+void fit(geometry::Mesh& m, double size) {
+  geometry::Box3 b = m.bounds();
+  const geometry::Vec3 s = b.size();
   m.scale(size / std::fmax(s.x, s.y));
   b = m.bounds();
   m.translate({-b.lo.x, -b.lo.y, -b.lo.z});
 }
 
-Mesh load_named(const std::string& name, double scale) {
+geometry::Mesh load_named(const std::string& name, double scale) {
   const std::string shared = CNCSTREAM_SOURCE_DIR "/../shared/meshes/";
   if (name == "synthetic600k") return synthetic_relief(600, 500);
-  if (name == "plaque") return load_stl(CNCSTREAM_SOURCE_DIR "/examples/plaque.stl").mesh;
+  if (name == "plaque") return geometry::load_stl(CNCSTREAM_SOURCE_DIR "/examples/plaque.stl").mesh;
   if (name == "lion") {
-    Mesh m = load_stl(shared + "lion_head_relief.stl").mesh;
+    geometry::Mesh m = geometry::load_stl(shared + "lion_head_relief.stl").mesh;
     fit(m, 120);
     return m;
   }
   if (name == "housing") {
-    Mesh m = load_stl(shared + "tr12j_housing_occt.stl").mesh;
+    geometry::Mesh m = geometry::load_stl(shared + "tr12j_housing_occt.stl").mesh;
     fit(m, 120);
     return m;
   }
-  Mesh m = load_stl(name).mesh;
+  geometry::Mesh m = geometry::load_stl(name).mesh;
   if (scale != 1) m.scale(scale);
   return m;
 }
 
-void run_case(const std::string& mesh_name, const Mesh& mesh, const std::string& cutter_spec, double step,
+void run_case(const std::string& mesh_name, const geometry::Mesh& mesh, const std::string& cutter_spec, double step,
               unsigned threads, int repeat) {
-  const Cutter cutter = parse_cutter_spec(cutter_spec);
-  ClOptions opt;
+  const cam::Cutter cutter = cam::parse_cutter_spec(cutter_spec);
+  cam::ClOptions opt;
   opt.threads = threads;
   const double t0 = now();
-  const ClEngine engine(mesh, cutter, opt);
+  const cam::ClEngine engine(mesh, cutter, opt);
   const double t_setup = now() - t0;
-  const Box3 b = mesh.bounds();
-  const GridSpec spec = GridSpec::covering(b.lo.x, b.lo.y, b.hi.x, b.hi.y, step, step);
+  const geometry::Box3 b = mesh.bounds();
+  const cam::GridSpec spec = cam::GridSpec::covering(b.lo.x, b.lo.y, b.hi.x, b.hi.y, step, step);
   double best = HUGE_VAL, best_cpu = HUGE_VAL;
   std::size_t touched = 0;
   for (int r = 0; r < repeat; ++r) {
     const double t1 = now(), c1 = cpu_seconds();
-    const ClGrid g = engine.compute(spec);
+    const cam::ClGrid g = engine.compute(spec);
     best = std::fmin(best, now() - t1);
     best_cpu = std::fmin(best_cpu, cpu_seconds() - c1);
     touched = 0;
     for (auto f : g.on_floor) touched += f == 0;
   }
-  const double mesh_mb = static_cast<double>(mesh.vertices.size() * sizeof(Vec3) + mesh.triangles.size() * 12) / 1048576.0;
+  const double mesh_mb = static_cast<double>(mesh.vertices.size() * sizeof(geometry::Vec3) + mesh.triangles.size() * 12) / 1048576.0;
   const double grid_mb = static_cast<double>(spec.size() * 9) / 1048576.0;
-  const ClEngineStats& s = engine.stats();
+  const cam::ClEngineStats& s = engine.stats();
   std::printf("%-14s %-10s %5.2f %8zu %9zu %7.3f %7.3f %7.3f %9.2f %8.1f %8.1f  edges %zu/%zu verts %zu/%zu touched %zu\n",
               mesh_name.c_str(), cutter_spec.c_str(), step, mesh.triangles.size(), spec.size(), t_setup, best, best_cpu,
               static_cast<double>(spec.size()) / best / 1e6, peak_mb(), 2 * (mesh_mb + grid_mb) + 50, s.edges_drawn,
@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
     const std::vector<std::string> meshes =
         mesh_name.empty() ? std::vector<std::string>{"plaque", "lion", "synthetic600k"} : std::vector<std::string>{mesh_name};
     for (const auto& name : meshes) {
-      const Mesh mesh = load_named(name, scale);
+      const geometry::Mesh mesh = load_named(name, scale);
       for (const auto& c : cutters) run_case(name, mesh, c, step, threads, repeat);
     }
   } catch (const std::exception& e) {

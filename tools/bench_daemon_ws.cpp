@@ -112,7 +112,7 @@ struct RunFigures {
 
 // A height field of n x n cells, two facets each: 2 n^2 facets.
 void write_big_mesh(const fs::path& p, int n) {
-  cncstream::Mesh m;
+  cncstream::geometry::Mesh m;
   const double s = 100.0 / n;
   for (int y = 0; y <= n; ++y)
     for (int x = 0; x <= n; ++x)
@@ -123,7 +123,7 @@ void write_big_mesh(const fs::path& p, int n) {
       m.triangles.push_back({v(x, y), v(x + 1, y), v(x + 1, y + 1)});
       m.triangles.push_back({v(x, y), v(x + 1, y + 1), v(x, y + 1)});
     }
-  cncstream::write_stl_binary(p, m);
+  cncstream::geometry::write_stl_binary(p, m);
 }
 
 }  // namespace

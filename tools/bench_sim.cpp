@@ -90,7 +90,7 @@ void BM_PtyLinesWithRemoval(benchmark::State& state) {
   options.instant_waits = true;
   cncsim::Machine machine(options);
   machine.take_output();  // the banner: the host does not wait for it here
-  cncsim::MaterialRemoval removal({{0, 0, -5}, {120, 100, 0}, 0.1}, cncstream::parse_cutter_spec("ball:3.175"));
+  cncsim::MaterialRemoval removal({{0, 0, -5}, {120, 100, 0}, 0.1}, cncstream::cam::parse_cutter_spec("ball:3.175"));
   removal.attach(machine);
   // Start at depth so every line cuts.
   machine.receive("G0X1Y1\nG1Z-0.5F3000\n");

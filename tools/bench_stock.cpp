@@ -15,12 +15,12 @@ namespace {
 
 constexpr double kW = 120, kH = 100, kStep = 0.1;
 
-GridSpec stock_grid() { return GridSpec::covering(0, 0, kW, kH, kStep, kStep); }
+cam::GridSpec stock_grid() { return cam::GridSpec::covering(0, 0, kW, kH, kStep, kStep); }
 
 // A raster finishing path over a wavy surface: moves of `seg` mm along x,
 // rows `stepover` apart, the tip following z = -3 + 1.5 sin(x/9) cos(y/7).
-std::vector<Vec3> raster_path(double seg, double stepover, bool wavy) {
-  std::vector<Vec3> p;
+std::vector<geometry::Vec3> raster_path(double seg, double stepover, bool wavy) {
+  std::vector<geometry::Vec3> p;
   bool right = true;
   for (double y = 2; y <= kH - 2; y += stepover) {
     const int n = static_cast<int>((kW - 4) / seg);
@@ -34,15 +34,15 @@ std::vector<Vec3> raster_path(double seg, double stepover, bool wavy) {
   return p;
 }
 
-void run_path(benchmark::State& state, const std::vector<Vec3>& path, const Cutter& cutter) {
-  auto stock = std::make_unique<HeightFieldStock>(stock_grid(), 0.0);
+void run_path(benchmark::State& state, const std::vector<geometry::Vec3>& path, const cam::Cutter& cutter) {
+  auto stock = std::make_unique<cam::HeightFieldStock>(stock_grid(), 0.0);
   std::size_t k = 0;
   double removed = 0;
   for (auto _ : state) {
     if (k + 1 >= path.size()) {
       // A whole pass done: start again on fresh stock so every move cuts.
       state.PauseTiming();
-      stock = std::make_unique<HeightFieldStock>(stock_grid(), 0.0);
+      stock = std::make_unique<cam::HeightFieldStock>(stock_grid(), 0.0);
       k = 0;
       state.ResumeTiming();
     }
@@ -55,23 +55,23 @@ void run_path(benchmark::State& state, const std::vector<Vec3>& path, const Cutt
 
 void BM_BallFinish05(benchmark::State& state) {
   static const auto path = raster_path(0.5, 0.3, true);
-  run_path(state, path, Cutter::ball(3.175));
+  run_path(state, path, cam::Cutter::ball(3.175));
 }
 void BM_BallFinish02(benchmark::State& state) {
   static const auto path = raster_path(0.2, 0.3, true);
-  run_path(state, path, Cutter::ball(3.175));
+  run_path(state, path, cam::Cutter::ball(3.175));
 }
 void BM_BallLevel1(benchmark::State& state) {
   static const auto path = raster_path(1.0, 1.0, false);
-  run_path(state, path, Cutter::ball(3.175));
+  run_path(state, path, cam::Cutter::ball(3.175));
 }
 void BM_BullFinish05(benchmark::State& state) {
   static const auto path = raster_path(0.5, 0.3, true);
-  run_path(state, path, Cutter::bull(6, 1));
+  run_path(state, path, cam::Cutter::bull(6, 1));
 }
 void BM_FlatLevel1(benchmark::State& state) {
   static const auto path = raster_path(1.0, 2.0, false);
-  run_path(state, path, Cutter::flat(6));
+  run_path(state, path, cam::Cutter::flat(6));
 }
 
 }  // namespace

@@ -54,10 +54,10 @@ struct Errors {
 // that the exact surface drops to within the cap's sliver width, is a
 // boundary node (beside a vertical part of the exact surface): counted, not
 // in the maxima. With `classify` false every node counts (the trimmed runs).
-Errors compare(const ClEngine& engine, const ClGrid& exact, const ClGrid& g, double tol, double eps, double snap,
+Errors compare(const cam::ClEngine& engine, const cam::ClGrid& exact, const cam::ClGrid& g, double tol, double eps, double snap,
                double sliver, bool classify) {
   Errors e;
-  const GridSpec& s = exact.spec;
+  const cam::GridSpec& s = exact.spec;
   for (std::size_t k = 0; k < exact.z.size(); ++k) {
     const double d = g.z[k] - exact.z[k];
     const double x = s.x(k % s.nx), y = s.y(k / s.nx);
@@ -123,8 +123,8 @@ int main(int argc, char** argv) {
       path = arg.substr(0, at);
       scale = std::stod(arg.substr(at + 1));
     }
-    Mesh mesh = load_stl(path).mesh;
-    const Box3 b0 = mesh.bounds();
+    geometry::Mesh mesh = geometry::load_stl(path).mesh;
+    const geometry::Box3 b0 = mesh.bounds();
     if (scale == 0) scale = std::max(b0.size().x, b0.size().y) < 10 ? 100 / std::max(b0.size().x, b0.size().y) : 1;
     if (scale != 1) mesh.scale(scale);
     std::string name = path.substr(path.find_last_of('/') + 1);
@@ -134,14 +134,14 @@ int main(int argc, char** argv) {
       name.append(buf);
     }
     for (const std::string& tool : tools) {
-      const Cutter cutter = parse_cutter_spec(tool);
-      const XYBounds xb = default_bounds(mesh, cutter);
-      const GridSpec spec = GridSpec::covering(xb.x0, xb.y0, xb.x1, xb.y1, step, step);
+      const cam::Cutter cutter = cam::parse_cutter_spec(tool);
+      const cam::XYBounds xb = cam::default_bounds(mesh, cutter);
+      const cam::GridSpec spec = cam::GridSpec::covering(xb.x0, xb.y0, xb.x1, xb.y1, step, step);
       auto t0 = std::chrono::steady_clock::now();
-      ClOptions clo;
+      cam::ClOptions clo;
       clo.threads = threads;
-      const ClEngine engine(mesh, cutter, clo);
-      const ClGrid exact = engine.compute(spec);
+      const cam::ClEngine engine(mesh, cutter, clo);
+      const cam::ClGrid exact = engine.compute(spec);
       const double t_exact = seconds_since(t0);
       for (double tol : tols) {
         gl::GlClOptions o;
@@ -149,7 +149,7 @@ int main(int argc, char** argv) {
         o.floor = engine.floor();
         gl::GlClStats st;
         t0 = std::chrono::steady_clock::now();
-        const ClGrid g = gl::compute_cl_grid_gl(mesh, cutter, spec, o, &st);
+        const cam::ClGrid g = gl::compute_cl_grid_gl(mesh, cutter, spec, o, &st);
         const double t_gl = seconds_since(t0);
         const double eps = 2e-3, snap = std::hypot(spec.dx, spec.dy) / 256;
         const Errors e = compare(engine, exact, g, tol, eps, snap, st.sliver_width, true);
@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
         if (trim) {
           o.trim = true;
           t0 = std::chrono::steady_clock::now();
-          const ClGrid gt = gl::compute_cl_grid_gl(mesh, cutter, spec, o);
+          const cam::ClGrid gt = gl::compute_cl_grid_gl(mesh, cutter, spec, o);
           const double t_trim = seconds_since(t0);
           const Errors et = compare(engine, exact, gt, tol, eps, snap, st.sliver_width, false);
           char buf[128];

@@ -3,23 +3,23 @@
 #include <algorithm>
 #include <cmath>
 
-namespace cncstream::cl_detail {
+namespace cncstream::cam::cl_detail {
 
-Vec3 upward_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
-  const Vec3 n = cross(p1 - p0, p2 - p0);
+geometry::Vec3 upward_normal(const geometry::Vec3& p0, const geometry::Vec3& p1, const geometry::Vec3& p2) {
+  const geometry::Vec3 n = cross(p1 - p0, p2 - p0);
   const double len = norm(n);
   if (!(len > 0)) return {};
-  const Vec3 u = n / len;
+  const geometry::Vec3 u = n / len;
   return u.z < 0 ? -u : u;
 }
 
-FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const CutterShape& cutter) {
+FaceOffset face_offset(const geometry::Vec3& p0, const geometry::Vec3& p1, const geometry::Vec3& p2, const CutterShape& cutter) {
   FaceOffset f;
-  const Vec3 e1 = p1 - p0, e2 = p2 - p0;
-  const Vec3 nn = cross(e1, e2);
+  const geometry::Vec3 e1 = p1 - p0, e2 = p2 - p0;
+  const geometry::Vec3 nn = cross(e1, e2);
   const double len = norm(nn);
   if (!(len > 0) || !std::isfinite(len)) return f;
-  Vec3 n = nn / len;
+  geometry::Vec3 n = nn / len;
   if (n.z < 0) n = -n;
   if (n.z < kVerticalNz) return f;
   const double nxy = std::sqrt(n.x * n.x + n.y * n.y);
@@ -43,7 +43,7 @@ FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cut
     sx += cutter.rc * n.x / nxy;
     sy += cutter.rc * n.y / nxy;
   }
-  const Vec3* p[3] = {&p0, &p1, &p2};
+  const geometry::Vec3* p[3] = {&p0, &p1, &p2};
   for (int k = 0; k < 3; ++k) {
     f.qx[k] = p[k]->x + sx;
     f.qy[k] = p[k]->y + sy;
@@ -86,7 +86,7 @@ FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cut
   // their slope would turn it into a height error (their edges are drawn).
   if (n.z >= kSteepNz) {
     double scale = 1.0;
-    for (const Vec3* q : p) scale = std::fmax(scale, std::fmax(std::fabs(q->x), std::fmax(std::fabs(q->y), std::fabs(q->z))));
+    for (const geometry::Vec3* q : p) scale = std::fmax(scale, std::fmax(std::fabs(q->x), std::fmax(std::fabs(q->y), std::fabs(q->z))));
     const double eps_n = 4e-16 * scale * (norm(e1) + norm(e2)) / len;
     f.tol = 1e-12 * scale + 100.0 * cutter.R * eps_n;
     if (!f.horizontal && cutter.rc > 0) f.tol += 100.0 * (cutter.general ? pc.rho : cutter.rc) * eps_n / nxy;
@@ -95,7 +95,7 @@ FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cut
   return f;
 }
 
-EdgeGeom make_edge(const Vec3& a, const Vec3& b) {
+EdgeGeom make_edge(const geometry::Vec3& a, const geometry::Vec3& b) {
   EdgeGeom e;
   e.ax = a.x;
   e.ay = a.y;
@@ -298,4 +298,4 @@ double rect_segment_distance(const EdgeGeom& e, double x0, double y0, double x1,
   return std::sqrt(best);
 }
 
-}  // namespace cncstream::cl_detail
+}  // namespace cncstream::cam::cl_detail

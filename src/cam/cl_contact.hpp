@@ -17,7 +17,7 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
-namespace cncstream::cl_detail {
+namespace cncstream::cam::cl_detail {
 
 inline constexpr double kNoContact = -std::numeric_limits<double>::infinity();
 
@@ -128,10 +128,10 @@ inline constexpr double kSteepNz = 0.01;
 // cutter's contact direction (n_xy / |n_xy|, ill-defined there) is not used.
 inline constexpr double kHorizontalNxy = 1e-9;
 
-FaceOffset face_offset(const Vec3& p0, const Vec3& p1, const Vec3& p2, const CutterShape& cutter);
+FaceOffset face_offset(const geometry::Vec3& p0, const geometry::Vec3& p1, const geometry::Vec3& p2, const CutterShape& cutter);
 
 // Upward unit normal (n_z >= 0) of a triangle; zero vector if degenerate.
-Vec3 upward_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2);
+geometry::Vec3 upward_normal(const geometry::Vec3& p0, const geometry::Vec3& p1, const geometry::Vec3& p2);
 
 // A mesh edge prepared for repeated drop queries.
 struct EdgeGeom {
@@ -144,7 +144,7 @@ struct EdgeGeom {
   double zmax = 0;                // max(a.z, b.z)
   double xmin = 0, xmax = 0, ymin = 0, ymax = 0;  // xy bounds of the segment
 };
-EdgeGeom make_edge(const Vec3& a, const Vec3& b);
+EdgeGeom make_edge(const geometry::Vec3& a, const geometry::Vec3& b);
 
 // Drop height of the cutter at (x, y) against the closed segment; kNoContact
 // if no point of it lies within R, or (for speed) if a bound shows the
@@ -163,14 +163,14 @@ inline double edge_drop_above(const EdgeGeom& e, const CutterShape& c, double x,
   return edge_drop(e, c, x, y, current);
 }
 
-inline double vertex_drop(const Vec3& v, const CutterShape& cutter, double x, double y) {
+inline double vertex_drop(const geometry::Vec3& v, const CutterShape& cutter, double x, double y) {
   const double ddx = v.x - x, ddy = v.y - y;
   const double rho2 = ddx * ddx + ddy * ddy;
   if (rho2 > cutter.R * cutter.R) return kNoContact;
   return v.z - cutter.h(std::sqrt(rho2));
 }
 
-inline double vertex_drop_above(const Vec3& v, const CutterShape& cutter, double x, double y, double current) {
+inline double vertex_drop_above(const geometry::Vec3& v, const CutterShape& cutter, double x, double y, double current) {
   const double ddx = v.x - x, ddy = v.y - y;
   const double rho2 = ddx * ddx + ddy * ddy;
   if (rho2 > cutter.R * cutter.R || !profile_below(cutter, rho2, v.z - current)) return kNoContact;
@@ -190,4 +190,4 @@ inline double rect_segment_distance_lb(const EdgeGeom& e, double x0, double y0, 
   return std::max(0.0, std::sqrt(qx * qx + qy * qy) - half_diag);
 }
 
-}  // namespace cncstream::cl_detail
+}  // namespace cncstream::cam::cl_detail

@@ -12,12 +12,12 @@
 #include "cl_raster.hpp"
 #include "cncstream/cam/thread_limit.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 using cl_detail::kNoContact;
 
 struct ClEngine::Impl {
-  const Mesh* mesh;
+  const geometry::Mesh* mesh;
   Cutter cutter;
   cl_detail::CutterShape shape;
   ClOptions options;
@@ -27,7 +27,7 @@ struct ClEngine::Impl {
   mutable std::once_flag index_once;
   mutable std::unique_ptr<cl_detail::PointIndex> index;
 
-  Impl(const Mesh& m, const Cutter& c, ClOptions o) : mesh(&m), cutter(c), shape(c), options(o) {}
+  Impl(const geometry::Mesh& m, const Cutter& c, ClOptions o) : mesh(&m), cutter(c), shape(c), options(o) {}
 
   void rows(const GridSpec& spec, std::size_t j0, std::size_t j1, double* z, std::uint8_t* on_floor,
             const Checkpoint& checkpoint) const {
@@ -59,9 +59,9 @@ void validate_cutter(const Cutter& c) {
   }
 }
 
-void validate_mesh(const Mesh& m) {
+void validate_mesh(const geometry::Mesh& m) {
   for (std::size_t v = 0; v < m.vertices.size(); ++v) {
-    const Vec3& p = m.vertices[v];
+    const geometry::Vec3& p = m.vertices[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       throw std::invalid_argument("CL engine: mesh vertex " + std::to_string(v) + " has a non-finite coordinate");
   }
@@ -85,7 +85,7 @@ void validate_spec(const GridSpec& s) {
 
 }  // namespace
 
-ClEngine::ClEngine(const Mesh& mesh, const Cutter& cutter, ClOptions options) {
+ClEngine::ClEngine(const geometry::Mesh& mesh, const Cutter& cutter, ClOptions options) {
   validate_cutter(cutter);
   validate_mesh(mesh);
   impl_ = std::make_unique<Impl>(mesh, cutter, options);
@@ -94,7 +94,7 @@ ClEngine::ClEngine(const Mesh& mesh, const Cutter& cutter, ClOptions options) {
     if (!std::isfinite(*d.options.floor)) throw std::invalid_argument("CL engine: floor must be finite");
     d.floor = *d.options.floor;
   } else {
-    const Box3 b = mesh.bounds();
+    const geometry::Box3 b = mesh.bounds();
     d.floor = b.empty() ? 0.0 : b.lo.z;
   }
   d.prims = cl_detail::select_primitives(mesh, d.shape, d.options.skip_concave_edges);
@@ -162,4 +162,4 @@ double ClEngine::height_at(double x, double y) const {
   return height_at(x, y, on_floor);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

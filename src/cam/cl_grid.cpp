@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 GridSpec GridSpec::covering(double x0, double y0, double x1, double y1, double dx, double dy) {
   if (!(dx > 0) || !(dy > 0)) throw std::invalid_argument("grid step must be positive");
@@ -18,4 +18,4 @@ GridSpec GridSpec::covering(double x0, double y0, double x1, double y1, double d
   return g;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

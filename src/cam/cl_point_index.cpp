@@ -8,7 +8,7 @@
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
-namespace cncstream::cl_detail {
+namespace cncstream::cam::cl_detail {
 
 namespace {
 
@@ -48,7 +48,7 @@ double PointIndex::evaluate(std::uint32_t item, double x, double y, double best)
   }
 }
 
-PointIndex::PointIndex(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter)
+PointIndex::PointIndex(const geometry::Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter)
     : mesh_(mesh), prims_(prims), cutter_(cutter) {
   const double R = cutter.R;
   faces_.reserve(prims.faces.size());
@@ -69,12 +69,12 @@ PointIndex::PointIndex(const Mesh& mesh, const ClPrimitives& prims, const Cutter
         break;
       }
       case kEdge: {
-        const Vec3 p = mesh.vertices[prims.edges[id][0]], q = mesh.vertices[prims.edges[id][1]];
+        const geometry::Vec3 p = mesh.vertices[prims.edges[id][0]], q = mesh.vertices[prims.edges[id][1]];
         b = {std::fmin(p.x, q.x) - R, std::fmin(p.y, q.y) - R, std::fmax(p.x, q.x) + R, std::fmax(p.y, q.y) + R};
         break;
       }
       default: {
-        const Vec3 v = mesh.vertices[prims.vertices[id]];
+        const geometry::Vec3 v = mesh.vertices[prims.vertices[id]];
         b = {v.x - R, v.y - R, v.x + R, v.y + R};
       }
     }
@@ -158,7 +158,7 @@ PointIndex::PointIndex(const Mesh& mesh, const ClPrimitives& prims, const Cutter
         d = rect_segment_distance(edges_[id], xa, ya, xb, yb);
         break;
       default: {
-        const Vec3 v = mesh_.vertices[prims_.vertices[id]];
+        const geometry::Vec3 v = mesh_.vertices[prims_.vertices[id]];
         const double ddx = std::fmax(0.0, std::fmax(xa - v.x, v.x - xb)), ddy = std::fmax(0.0, std::fmax(ya - v.y, v.y - yb));
         z = v.z;
         d = std::sqrt(ddx * ddx + ddy * ddy);
@@ -227,4 +227,4 @@ double PointIndex::drop(double x, double y) const {
   return best;
 }
 
-}  // namespace cncstream::cl_detail
+}  // namespace cncstream::cam::cl_detail

@@ -11,11 +11,11 @@
 #include "cl_primitives.hpp"
 #include "cncstream/geometry/mesh.hpp"
 
-namespace cncstream::cl_detail {
+namespace cncstream::cam::cl_detail {
 
 class PointIndex {
  public:
-  PointIndex(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter);
+  PointIndex(const geometry::Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter);
   // Max drop height at (x, y), or kNoContact.
   double drop(double x, double y) const;
   std::size_t entries() const { return entries_.size(); }
@@ -26,7 +26,7 @@ class PointIndex {
   double top(std::uint32_t item) const;
   double evaluate(std::uint32_t item, double x, double y, double best) const;
 
-  const Mesh& mesh_;
+  const geometry::Mesh& mesh_;
   const ClPrimitives& prims_;
   CutterShape cutter_;
   double x0_ = 0, y0_ = 0, cell_ = 1;
@@ -45,4 +45,4 @@ class PointIndex {
   std::vector<EdgeGeom> edges_;
 };
 
-}  // namespace cncstream::cl_detail
+}  // namespace cncstream::cam::cl_detail

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numeric>
 
-namespace cncstream::cl_detail {
+namespace cncstream::cam::cl_detail {
 
 namespace {
 
@@ -26,12 +26,12 @@ struct FacetSlot {
 // value near q -- a contradiction. Steep facets are excluded because their
 // interior contact is reported without tolerance; mixed horizontal /
 // non-horizontal pairs because their contact points are shifted differently.
-bool edge_is_redundant(const Mesh& mesh, const CutterShape& cutter, std::uint32_t a, std::uint32_t b,
+bool edge_is_redundant(const geometry::Mesh& mesh, const CutterShape& cutter, std::uint32_t a, std::uint32_t b,
                        const FacetSlot& slot) {
   if (slot.count != 2 || slot.facet[0] == slot.facet[1]) return false;
-  const Vec3 pa = mesh.vertices[a], pb = mesh.vertices[b];
-  const Vec3 oa = mesh.vertices[slot.opposite[0]], ob = mesh.vertices[slot.opposite[1]];
-  const Vec3 na = upward_normal(pa, pb, oa), nb = upward_normal(pa, pb, ob);
+  const geometry::Vec3 pa = mesh.vertices[a], pb = mesh.vertices[b];
+  const geometry::Vec3 oa = mesh.vertices[slot.opposite[0]], ob = mesh.vertices[slot.opposite[1]];
+  const geometry::Vec3 na = upward_normal(pa, pb, oa), nb = upward_normal(pa, pb, ob);
   if (na.z < kSteepNz || nb.z < kSteepNz) return false;
   auto facet_offset = [&](std::uint32_t t) {
     const auto& tri = mesh.triangles[t];
@@ -50,10 +50,10 @@ bool edge_is_redundant(const Mesh& mesh, const CutterShape& cutter, std::uint32_
 }
 
 // A convex (ridge) edge: each facet's far vertex lies below the other's plane.
-bool edge_is_convex(const Mesh& mesh, std::uint32_t a, std::uint32_t b, const FacetSlot& slot, Vec3& na, Vec3& nb) {
+bool edge_is_convex(const geometry::Mesh& mesh, std::uint32_t a, std::uint32_t b, const FacetSlot& slot, geometry::Vec3& na, geometry::Vec3& nb) {
   if (slot.count != 2 || slot.facet[0] == slot.facet[1]) return false;
-  const Vec3 pa = mesh.vertices[a], pb = mesh.vertices[b];
-  const Vec3 oa = mesh.vertices[slot.opposite[0]], ob = mesh.vertices[slot.opposite[1]];
+  const geometry::Vec3 pa = mesh.vertices[a], pb = mesh.vertices[b];
+  const geometry::Vec3 oa = mesh.vertices[slot.opposite[0]], ob = mesh.vertices[slot.opposite[1]];
   na = upward_normal(pa, pb, oa);
   nb = upward_normal(pa, pb, ob);
   if (na.z < kSteepNz || nb.z < kSteepNz) return false;
@@ -62,7 +62,7 @@ bool edge_is_convex(const Mesh& mesh, std::uint32_t a, std::uint32_t b, const Fa
 
 }  // namespace
 
-EdgeBand edge_band(const Vec3& a, const Vec3& b, const Vec3& na, const Vec3& nb, const CutterShape& c) {
+EdgeBand edge_band(const geometry::Vec3& a, const geometry::Vec3& b, const geometry::Vec3& na, const geometry::Vec3& nb, const CutterShape& c) {
   const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
   const double L = std::sqrt(dx * dx + dy * dy), len = std::sqrt(L * L + dz * dz);
   if (!(L > 1e-12 * (1 + len))) return {};  // (near) vertical edge: no band
@@ -72,7 +72,7 @@ EdgeBand edge_band(const Vec3& a, const Vec3& b, const Vec3& na, const Vec3& nb,
   // In the plane normal to the edge: w horizontal (the direction of d), bv
   // the upward direction. A contact normal at angle phi from bv has
   // w-component sin(phi), and the node lies at d = g(sin phi) from the line.
-  const Vec3 w{uy, -ux, 0}, bv{-sin_b * ux, -sin_b * uy, cos_b};
+  const geometry::Vec3 w{uy, -ux, 0}, bv{-sin_b * ux, -sin_b * uy, cos_b};
   const double pa = std::atan2(dot(na, w), dot(na, bv)), pb = std::atan2(dot(nb, w), dot(nb, bv));
   // A little wider than exact: at the band's ends the edge and facet contacts agree.
   const double margin = 1e-7;
@@ -92,7 +92,7 @@ EdgeBand edge_band(const Vec3& a, const Vec3& b, const Vec3& na, const Vec3& nb,
   return band;
 }
 
-ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool skip_concave) {
+ClPrimitives select_primitives(const geometry::Mesh& mesh, const CutterShape& cutter, bool skip_concave) {
   ClPrimitives out;
   const std::size_t nv = mesh.vertices.size();
   std::vector<std::uint8_t> used(nv, 0);
@@ -104,7 +104,7 @@ ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool
   }
   out.vertices_total = static_cast<std::size_t>(std::count(used.begin(), used.end(), 1));
 
-  std::vector<MeshEdge> all = unique_edges(mesh);  // sorted by (a, b)
+  std::vector<geometry::MeshEdge> all = geometry::unique_edges(mesh);  // sorted by (a, b)
   out.edges_total = all.size();
   std::vector<std::uint8_t> drawn(all.size(), 1);
   std::vector<EdgeBand> bands;
@@ -139,7 +139,7 @@ ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool
         drawn[e] = 0;
         continue;
       }
-      Vec3 na, nb;
+      geometry::Vec3 na, nb;
       if (edge_is_convex(mesh, all[e].a, all[e].b, slots[e], na, nb))
         bands[e] = edge_band(mesh.vertices[all[e].a], mesh.vertices[all[e].b], na, nb, cutter);
     }
@@ -184,4 +184,4 @@ ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool
   return out;
 }
 
-}  // namespace cncstream::cl_detail
+}  // namespace cncstream::cam::cl_detail

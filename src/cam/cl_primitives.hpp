@@ -11,7 +11,7 @@
 #include "cl_contact.hpp"
 #include "cncstream/geometry/mesh.hpp"
 
-namespace cncstream::cl_detail {
+namespace cncstream::cam::cl_detail {
 
 // Where a drawn edge can set the envelope with a contact inside the edge: the
 // signed XY distance d of the node from the edge's line (d = (node - a) .
@@ -26,7 +26,7 @@ struct EdgeBand {
 
 // The band of a convex manifold edge a-b between facets with upward unit
 // normals na and nb (both non-steep), for this cutter.
-EdgeBand edge_band(const Vec3& a, const Vec3& b, const Vec3& na, const Vec3& nb, const CutterShape& cutter);
+EdgeBand edge_band(const geometry::Vec3& a, const geometry::Vec3& b, const geometry::Vec3& na, const geometry::Vec3& nb, const CutterShape& cutter);
 
 struct ClPrimitives {
   std::vector<std::uint32_t> faces;                    // facets with an interior contact
@@ -39,6 +39,6 @@ struct ClPrimitives {
 
 // skip_concave: leave out manifold edges whose two facets meet in a valley or
 // are coplanar (and vertices left with no drawn edge are drawn instead).
-ClPrimitives select_primitives(const Mesh& mesh, const CutterShape& cutter, bool skip_concave);
+ClPrimitives select_primitives(const geometry::Mesh& mesh, const CutterShape& cutter, bool skip_concave);
 
-}  // namespace cncstream::cl_detail
+}  // namespace cncstream::cam::cl_detail

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <vector>
 
-namespace cncstream::cl_detail {
+namespace cncstream::cam::cl_detail {
 
 namespace {
 
@@ -80,7 +80,7 @@ Bins make_bins(const Layout& L, std::size_t n, Footprint footprint) {
 }
 
 struct Context {
-  const Mesh& mesh;
+  const geometry::Mesh& mesh;
   const ClPrimitives& prims;
   const CutterShape& cutter;
   const GridSpec& spec;
@@ -213,7 +213,7 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
 
   for (const std::uint32_t* p = c.edges.begin(tile); p != c.edges.end(tile); ++p) {
     const auto& ab = c.prims.edges[*p];
-    const Vec3 va = c.mesh.vertices[ab[0]], vb = c.mesh.vertices[ab[1]];
+    const geometry::Vec3 va = c.mesh.vertices[ab[0]], vb = c.mesh.vertices[ab[1]];
     const EdgeGeom e = make_edge(va, vb);
     const EdgeBand band = c.prims.edge_bands[*p];
     auto range_x = node_range(e.xmin - R, e.xmax + R, g.x0, g.dx, g.nx);
@@ -230,7 +230,7 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
     // end points (see EdgeBand). Blocks wholly outside the band are bounded by
     // their distance to the end points.
     auto side = [&](double x, double y) { return (x - e.ax) * e.uy - (y - e.ay) * e.ux; };
-    auto point_rect = [](const Vec3& v, double xa, double ya, double xb, double yb) {
+    auto point_rect = [](const geometry::Vec3& v, double xa, double ya, double xb, double yb) {
       const double dx = std::max(0.0, std::max(xa - v.x, v.x - xb)), dy = std::max(0.0, std::max(ya - v.y, v.y - yb));
       return std::sqrt(dx * dx + dy * dy);
     };
@@ -249,7 +249,7 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
          });
   }
   for (const std::uint32_t* p = c.vertices.begin(tile); p != c.vertices.end(tile); ++p) {
-    const Vec3 v = c.mesh.vertices[c.prims.vertices[*p]];
+    const geometry::Vec3 v = c.mesh.vertices[c.prims.vertices[*p]];
     const EdgeGeom point = make_edge(v, v);
     draw(node_range(v.x - R, v.x + R, g.x0, g.dx, g.nx), node_range(v.y - R, v.y + R, g.y0, g.dy, g.ny), v.z,
          [&](double xa, double ya, double xb, double yb, bool exact) {
@@ -264,7 +264,7 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
 
 }  // namespace
 
-void rasterize_rows(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter, const GridSpec& spec,
+void rasterize_rows(const geometry::Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter, const GridSpec& spec,
                     std::size_t j0, std::size_t j1, double* z, const Checkpoint& checkpoint) {
   if (j1 <= j0 || spec.nx == 0) return;
   const Layout layout{&spec, j0, j1, (spec.nx + kTile - 1) / kTile, (j1 - j0 + kTile - 1) / kTile};
@@ -279,13 +279,13 @@ void rasterize_rows(const Mesh& mesh, const ClPrimitives& prims, const CutterSha
     return true;
   });
   c.edges = make_bins(layout, prims.edges.size(), [&](std::size_t id, Range& rx, Range& ry) {
-    const Vec3 a = mesh.vertices[prims.edges[id][0]], b = mesh.vertices[prims.edges[id][1]];
+    const geometry::Vec3 a = mesh.vertices[prims.edges[id][0]], b = mesh.vertices[prims.edges[id][1]];
     rx = node_range(std::fmin(a.x, b.x) - R, std::fmax(a.x, b.x) + R, spec.x0, spec.dx, spec.nx);
     ry = node_range(std::fmin(a.y, b.y) - R, std::fmax(a.y, b.y) + R, spec.y0, spec.dy, spec.ny);
     return true;
   });
   c.vertices = make_bins(layout, prims.vertices.size(), [&](std::size_t id, Range& rx, Range& ry) {
-    const Vec3 v = mesh.vertices[prims.vertices[id]];
+    const geometry::Vec3 v = mesh.vertices[prims.vertices[id]];
     rx = node_range(v.x - R, v.x + R, spec.x0, spec.dx, spec.nx);
     ry = node_range(v.y - R, v.y + R, spec.y0, spec.dy, spec.ny);
     return true;
@@ -305,4 +305,4 @@ void rasterize_rows(const Mesh& mesh, const ClPrimitives& prims, const CutterSha
   });
 }
 
-}  // namespace cncstream::cl_detail
+}  // namespace cncstream::cam::cl_detail

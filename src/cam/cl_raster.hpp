@@ -10,12 +10,12 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/geometry/mesh.hpp"
 
-namespace cncstream::cl_detail {
+namespace cncstream::cam::cl_detail {
 
 // Rows [j0, j1) of `spec` into z (row-major, (j1 - j0) * spec.nx values).
 // A node no primitive touches gets kNoContact. Tiles run as oneTBB tasks in
 // the caller's task arena; `checkpoint` is called after each tile.
-void rasterize_rows(const Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter, const GridSpec& spec,
+void rasterize_rows(const geometry::Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter, const GridSpec& spec,
                     std::size_t j0, std::size_t j1, double* z, const Checkpoint& checkpoint = {});
 
-}  // namespace cncstream::cl_detail
+}  // namespace cncstream::cam::cl_detail

@@ -4,17 +4,17 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
 // The part of polyline `pl` whose along-coordinate lies in [a, b] (a < b),
 // in the polyline's own order; end points interpolated on the chords.
 Polyline clip_along(const Polyline& pl, double a, double b, bool along_x) {
-  auto u = [&](const Vec3& p) { return along_x ? p.x : p.y; };
+  auto u = [&](const geometry::Vec3& p) { return along_x ? p.x : p.y; };
   Polyline out;
   for (std::size_t k = 0; k + 1 < pl.size(); ++k) {
-    const Vec3 p = pl[k], q = pl[k + 1];
+    const geometry::Vec3 p = pl[k], q = pl[k + 1];
     const double up = u(p), uq = u(q);
     const double lo = std::min(up, uq), hi = std::max(up, uq);
     if (hi < a || lo > b) continue;
@@ -23,8 +23,8 @@ Polyline clip_along(const Polyline& pl, double a, double b, bool along_x) {
       const double t = std::clamp((uu - up) / (uq - up), 0.0, 1.0);
       return p + (q - p) * t;
     };
-    const Vec3 s = (up >= a && up <= b) ? p : at(up < a ? a : b);
-    const Vec3 e = (uq >= a && uq <= b) ? q : at(uq < a ? a : b);
+    const geometry::Vec3 s = (up >= a && up <= b) ? p : at(up < a ? a : b);
+    const geometry::Vec3 e = (uq >= a && uq <= b) ? q : at(uq < a ? a : b);
     if (out.empty() || !(out.back().x == s.x && out.back().y == s.y && out.back().z == s.z)) out.push_back(s);
     out.push_back(e);
   }
@@ -82,4 +82,4 @@ std::vector<Polyline> cleanup_pieces(const RasterPath& path, const GridSpec& g, 
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 double ProfileBand::h(double rho) const {
   if (kind == Kind::Cone) return h0 + slope * (rho - rho0);
@@ -361,4 +361,4 @@ Cutter parse_cutter_spec(std::string_view spec) {
   return Cutter::bull(d, r);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

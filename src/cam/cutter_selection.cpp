@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -143,4 +143,4 @@ double scallop_2d(const Cutter& cutter, double s, double slope) {
   return std::isfinite(cusp) ? cusp : HUGE_VAL;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

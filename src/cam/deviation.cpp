@@ -7,9 +7,9 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace cncstream {
+namespace cncstream::cam {
 
-DesignHeights design_heights(const Mesh& design, const GridSpec& g) {
+DesignHeights design_heights(const geometry::Mesh& design, const GridSpec& g) {
   if (g.nx == 0 || g.ny == 0) throw std::invalid_argument("design heights: the grid is empty");
   if (!(g.dx > 0) || !(g.dy > 0)) throw std::invalid_argument("design heights: grid step must be positive");
   DesignHeights out;
@@ -18,7 +18,7 @@ DesignHeights design_heights(const Mesh& design, const GridSpec& g) {
   // Every triangle hands its height to the nodes its XY shadow covers: the
   // same as casting every node's ray at every triangle, without the waste.
   for (std::size_t t = 0; t < design.size(); ++t) {
-    const Vec3 a = design.corner(t, 0), b = design.corner(t, 1), c = design.corner(t, 2);
+    const geometry::Vec3 a = design.corner(t, 0), b = design.corner(t, 1), c = design.corner(t, 2);
     const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);  // twice the signed XY area
     const double span = std::max({std::fabs(b.x - a.x), std::fabs(c.x - a.x), std::fabs(b.y - a.y), std::fabs(c.y - a.y)});
     if (std::fabs(area) <= 1e-14 * span * span) continue;  // edge-on from above
@@ -134,20 +134,20 @@ std::string DeviationStats::summary() const {
   return o.str();
 }
 
-RgbImage render_deviation(const DeviationResult& r, const std::string& title, const std::string& subtitle,
+image::RgbImage render_deviation(const DeviationResult& r, const std::string& title, const std::string& subtitle,
                           int max_map_pixels) {
-  const MapGrid mg{r.grid.nx, r.grid.ny, r.grid.dx, r.grid.dy, r.grid.x0, r.grid.y0};
-  DeviationMapOptions o;
+  const image::MapGrid mg{r.grid.nx, r.grid.ny, r.grid.dx, r.grid.dy, r.grid.x0, r.grid.y0};
+  image::DeviationMapOptions o;
   o.title = title;
   o.subtitle = subtitle;
   o.tolerance = r.stats.tolerance;
   o.max_map_pixels = max_map_pixels;
-  return render_deviation_map(mg, r.deviation, r.off_part, o);
+  return image::render_deviation_map(mg, r.deviation, r.off_part, o);
 }
 
 void write_deviation_png(const std::filesystem::path& path, const DeviationResult& result, const std::string& title,
                          const std::string& subtitle) {
-  write_png(path, render_deviation(result, title, subtitle));
+  image::write_png(path, render_deviation(result, title, subtitle));
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

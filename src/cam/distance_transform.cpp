@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -86,4 +86,4 @@ std::vector<double> distance_to_outside(const GridSpec& g, const std::vector<std
   return f;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -14,7 +14,7 @@
 #include <string>
 #include <system_error>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -40,7 +40,7 @@ std::filesystem::path height_field_sidecar(const std::filesystem::path& data_pat
 }
 
 HeightFieldWriter::HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid,
-                                     std::optional<Vec3> work_offset, std::optional<Vec3> work_origin)
+                                     std::optional<geometry::Vec3> work_offset, std::optional<geometry::Vec3> work_origin)
     : path_(data_path),
       grid_(grid),
       work_offset_(work_offset),
@@ -82,7 +82,7 @@ void HeightFieldWriter::finish() {
 }
 
 void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z,
-                        std::optional<Vec3> work_offset, std::optional<Vec3> work_origin) {
+                        std::optional<geometry::Vec3> work_offset, std::optional<geometry::Vec3> work_origin) {
   if (z.size() != grid.size())
     throw std::invalid_argument("height field: " + std::to_string(z.size()) + " values for a grid of " +
                                 std::to_string(grid.size()) + " nodes");
@@ -139,12 +139,12 @@ HeightFieldData read_height_field(const std::filesystem::path& data_path) {
   out.grid.dy = v["dy"];
   const int offsets = static_cast<int>(v.count("work_offset_x") + v.count("work_offset_y") + v.count("work_offset_z"));
   if (offsets == 3) {
-    out.work_offset = Vec3{v["work_offset_x"], v["work_offset_y"], v["work_offset_z"]};
+    out.work_offset = geometry::Vec3{v["work_offset_x"], v["work_offset_y"], v["work_offset_z"]};
   } else if (offsets != 0) {
     throw err("work_offset_x, work_offset_y and work_offset_z go together");
   }
   const int origins = static_cast<int>(v.count("work_origin_x") + v.count("work_origin_y") + v.count("work_origin_z"));
-  if (origins == 3) out.work_origin = Vec3{v["work_origin_x"], v["work_origin_y"], v["work_origin_z"]};
+  if (origins == 3) out.work_origin = geometry::Vec3{v["work_origin_x"], v["work_origin_y"], v["work_origin_z"]};
   else if (origins != 0) throw err("work_origin_x, work_origin_y and work_origin_z go together");
   if (!(out.grid.dx > 0) || !(out.grid.dy > 0)) throw err("dx and dy must be positive");
   if (out.grid.size() > (std::size_t{1} << 32)) throw err("grid is too large");
@@ -166,4 +166,4 @@ HeightFieldData read_height_field(const std::filesystem::path& data_path) {
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

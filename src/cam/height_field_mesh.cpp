@@ -8,9 +8,9 @@
 
 #include "cncstream/geometry/stl.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
-Mesh height_field_solid(const GridSpec& g, std::span<const double> z, double bottom) {
+geometry::Mesh height_field_solid(const GridSpec& g, std::span<const double> z, double bottom) {
   if (g.nx < 2 || g.ny < 2) throw std::invalid_argument("height field solid needs at least 2 x 2 nodes");
   if (z.size() != g.size())
     throw std::invalid_argument("height field solid: " + std::to_string(z.size()) + " values for a grid of " +
@@ -23,7 +23,7 @@ Mesh height_field_solid(const GridSpec& g, std::span<const double> z, double bot
       throw std::invalid_argument("height field solid: bottom " + std::to_string(bottom) +
                                   " is not below node " + std::to_string(k) + " at " + std::to_string(z[k]));
   }
-  Mesh m;
+  geometry::Mesh m;
   const auto top = [&](std::size_t i, std::size_t j) { return static_cast<std::uint32_t>(j * g.nx + i); };
   for (std::size_t j = 0; j < g.ny; ++j)
     for (std::size_t i = 0; i < g.nx; ++i) m.vertices.push_back({g.x(i), g.y(j), z[j * g.nx + i]});
@@ -58,7 +58,7 @@ Mesh height_field_solid(const GridSpec& g, std::span<const double> z, double bot
 
 void write_height_field_stl(const std::filesystem::path& path, const GridSpec& grid, std::span<const double> z,
                             double bottom) {
-  write_stl_binary(path, height_field_solid(grid, z, bottom), "cncstream machined stock");
+  geometry::write_stl_binary(path, height_field_solid(grid, z, bottom), "cncstream machined stock");
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

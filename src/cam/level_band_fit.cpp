@@ -7,7 +7,7 @@
 #include <optional>
 #include <stdexcept>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // Named: a unity build puts this file beside polyline_simplify.cpp.
 namespace level_band {
@@ -60,14 +60,14 @@ Reach reach_level(const Polyline& p, std::size_t first, std::size_t end, const F
 
 // The vertex above point j on the line from the anchor at angle t: the
 // foot of the perpendicular from p[j] (so p[j] is right of it by at most tol).
-Vec3 vertex_on(const Frame& f, double t, const Vec3& pj) {
+geometry::Vec3 vertex_on(const Frame& f, double t, const geometry::Vec3& pj) {
   const double c = std::cos(t), s = std::sin(t);
   const double dx = f.rx * c - f.ry * s, dy = f.rx * s + f.ry * c;
   const double along = (pj.x - f.ax) * dx + (pj.y - f.ay) * dy;
   return {f.ax + along * dx, f.ay + along * dy, pj.z};
 }
 
-Frame frame_at(const Vec3& a, const Vec3& toward) {
+Frame frame_at(const geometry::Vec3& a, const geometry::Vec3& toward) {
   const double dx = toward.x - a.x, dy = toward.y - a.y;
   const double len = std::hypot(dx, dy);
   return {a.x, a.y, len > 0 ? dx / len : 1.0, len > 0 ? dy / len : 0.0};
@@ -75,7 +75,7 @@ Frame frame_at(const Vec3& a, const Vec3& toward) {
 
 // Every point strictly between i and j right of the move a -> b and at most
 // tol from it.
-bool move_in_band(const Polyline& p, std::size_t i, std::size_t j, const Vec3& a, const Vec3& b, double tol) {
+bool move_in_band(const Polyline& p, std::size_t i, std::size_t j, const geometry::Vec3& a, const geometry::Vec3& b, double tol) {
   const double len = std::hypot(b.x - a.x, b.y - a.y);
   if (!(len > 0)) return false;
   for (std::size_t k = i + 1; k < j; ++k) {
@@ -91,17 +91,17 @@ bool move_in_band(const Polyline& p, std::size_t i, std::size_t j, const Vec3& a
 // four lattice points around it that keeps p[a+1..j] right of the move
 // from `at` and within the tolerance; q itself if none does (rounding it
 // then moves it by at most half a lattice step).
-Vec3 on_lattice_in_band(const Polyline& p, std::size_t a, std::size_t j, const Vec3& at, const Vec3& q, double tol,
+geometry::Vec3 on_lattice_in_band(const Polyline& p, std::size_t a, std::size_t j, const geometry::Vec3& at, const geometry::Vec3& q, double tol,
                         const std::optional<XYLattice>& lat) {
   if (!lat || !(lat->step > 0)) return q;
   const double s = lat->step;
   const double i0 = std::floor((q.x - lat->x0) / s), j0 = std::floor((q.y - lat->y0) / s);
-  Vec3 cands[4];
+  geometry::Vec3 cands[4];
   for (int c = 0; c < 4; ++c) cands[c] = {lat->x0 + (i0 + (c & 1)) * s, lat->y0 + (j0 + (c >> 1)) * s, q.z};
-  std::sort(std::begin(cands), std::end(cands), [&](const Vec3& u, const Vec3& w) {
+  std::sort(std::begin(cands), std::end(cands), [&](const geometry::Vec3& u, const geometry::Vec3& w) {
     return std::hypot(u.x - q.x, u.y - q.y) < std::hypot(w.x - q.x, w.y - q.y);
   });
-  for (const Vec3& c : cands) {
+  for (const geometry::Vec3& c : cands) {
     // p[j] itself: right of the move's line, and within the tolerance of the vertex.
     const double len = std::hypot(c.x - at.x, c.y - at.y);
     if (!(len > 0)) continue;
@@ -116,16 +116,16 @@ void fit_stretch(const Polyline& p, std::size_t b, std::size_t e, double tol, co
                  const LevelMoveCheck& clear, Polyline& out) {
   struct Placed {
     std::size_t index;
-    Vec3 at;
+    geometry::Vec3 at;
   };
   std::vector<Placed> v{{b, p[b]}};
   std::size_t a = b;
-  Vec3 at = p[b];
+  geometry::Vec3 at = p[b];
   // Half a lattice step's diagonal, where the band is wide enough to spare it.
   const double margin = lat && lat->step > 0 && tol > 4 * lat->step ? 0.75 * lat->step : 0.0;
   Frame f = frame_at(at, p[a + 1]);
   Reach r = reach_level(p, a + 1, e + 1, f, tol, margin);
-  auto moved = [&](const Vec3& q, std::size_t k) { return q.x != p[k].x || q.y != p[k].y; };
+  auto moved = [&](const geometry::Vec3& q, std::size_t k) { return q.x != p[k].x || q.y != p[k].y; };
   // Where no move out from the run is clear of the part (left of a point is
   // not free where the free side narrows to a slot), the run's own points
   // from the last vertex on, as they were.
@@ -142,7 +142,7 @@ void fit_stretch(const Polyline& p, std::size_t b, std::size_t e, double tol, co
     constexpr int kCandidates = 5;
     constexpr int kOrder[kCandidates] = {2, 1, 3, 0, 4};
     struct Candidate {
-      Vec3 at;
+      geometry::Vec3 at;
       Reach next;
       Frame f;
     };
@@ -150,7 +150,7 @@ void fit_stretch(const Polyline& p, std::size_t b, std::size_t e, double tol, co
     int n = 0;
     for (int c : kOrder) {
       const double t = r.lo + (r.hi - r.lo) * double(c) / double(kCandidates - 1);
-      const Vec3 q = on_lattice_in_band(p, a, j, at, vertex_on(f, t, p[j]), tol, lat);
+      const geometry::Vec3 q = on_lattice_in_band(p, a, j, at, vertex_on(f, t, p[j]), tol, lat);
       if (r.hi - r.lo <= 0 && c != kOrder[0]) break;  // one slope: one candidate
       const Frame nf = frame_at(q, p[j + 1]);
       cands[n++] = {q, reach_level(p, j + 1, e + 1, nf, tol, margin), nf};
@@ -159,12 +159,12 @@ void fit_stretch(const Polyline& p, std::size_t b, std::size_t e, double tol, co
     // on ties): the geometry first, the exact check (the costly part) only
     // until one passes.
     std::stable_sort(cands, cands + n, [](const Candidate& u, const Candidate& w) { return u.next.last > w.next.last; });
-    Vec3 best_at;
+    geometry::Vec3 best_at;
     Reach best{};
     Frame best_f{};
     bool have = false;
     for (int c = 0; c < n && !have; ++c) {
-      const Vec3& q = cands[c].at;
+      const geometry::Vec3& q = cands[c].at;
       if (clear && (moved(q, j) || moved(at, a)) && !clear(at, q)) continue;
       best = cands[c].next, best_at = q, best_f = cands[c].f, have = true;
     }
@@ -224,4 +224,4 @@ Polyline fit_level_run_in_band(const Polyline& run, double tolerance, const std:
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

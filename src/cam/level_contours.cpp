@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -20,13 +20,13 @@ struct Tracer {
   const PointQuery& exact;
   const ContourOptions& opt;
   std::size_t queries = 0;
-  std::vector<Vec3> crossing;        // per edge id, valid where computed
+  std::vector<geometry::Vec3> crossing;        // per edge id, valid where computed
   std::vector<std::uint8_t> done;
 
   // Edge ids: 2 * node for the edge to the +x neighbour, 2 * node + 1 to +y.
   std::size_t node(std::size_t i, std::size_t j) const { return j * g.nx + i; }
 
-  Vec3 place(std::size_t edge) {
+  geometry::Vec3 place(std::size_t edge) {
     if (done[edge]) return crossing[edge];
     const std::size_t n0 = edge / 2;
     const std::size_t i0 = n0 % g.nx, j0 = n0 / g.nx;
@@ -34,8 +34,8 @@ struct Tracer {
     const std::size_t i1 = n1 % g.nx, j1 = n1 / g.nx;
     // From the inside node p (t = 0) to the outside node q (t = 1).
     const bool in0 = inside(v[n0], level);
-    const Vec3 p = in0 ? Vec3{g.x(i0), g.y(j0), level} : Vec3{g.x(i1), g.y(j1), level};
-    const Vec3 q = in0 ? Vec3{g.x(i1), g.y(j1), level} : Vec3{g.x(i0), g.y(j0), level};
+    const geometry::Vec3 p = in0 ? geometry::Vec3{g.x(i0), g.y(j0), level} : geometry::Vec3{g.x(i1), g.y(j1), level};
+    const geometry::Vec3 q = in0 ? geometry::Vec3{g.x(i1), g.y(j1), level} : geometry::Vec3{g.x(i0), g.y(j0), level};
     double fa = (in0 ? v[n0] : v[n1]) - level, fb = (in0 ? v[n1] : v[n0]) - level;
     double t;
     if (!exact) {
@@ -49,7 +49,7 @@ struct Tracer {
   }
 
   // Safeguarded regula falsi (Illinois) on [0, 1], keeping an inside end.
-  double refine(const Vec3& p, const Vec3& q, double fa, double fb) {
+  double refine(const geometry::Vec3& p, const geometry::Vec3& q, double fa, double fb) {
     const double len = norm(q - p);
     double ta = 0, tb = 1;
     int side = 0, n = 0;
@@ -58,7 +58,7 @@ struct Tracer {
       // Halvings fixed by the edge alone, so every level sees the same points.
       while ((tb - ta) * len > opt.xy_tolerance && n < opt.max_queries) {
         const double t = (ta + tb) / 2;
-        const Vec3 at = p + (q - p) * t;
+        const geometry::Vec3 at = p + (q - p) * t;
         (inside(exact(at.x, at.y), level) ? ta : tb) = t;
         ++n;
       }
@@ -72,7 +72,7 @@ struct Tracer {
       double t = ta + width / 2;
       if (!bisect && std::isfinite(fb) && fb > fa) t = ta + width * (-fa) / (fb - fa);
       t = std::clamp(t, ta + width * 1e-3, tb - width * 1e-3);
-      const Vec3 at = p + (q - p) * t;
+      const geometry::Vec3 at = p + (q - p) * t;
       const double ft = exact(at.x, at.y) - level;
       ++n;
       if (ft <= 0) {  // inside (a NaN is outside)
@@ -98,19 +98,19 @@ double cross2(double ax, double ay, double bx, double by) { return ax * by - ay 
 // Corners of the region that chords cut off: between b and c of a, b, c, d
 // where a-b and c-d turn left by a corner's angle and meet beyond b-c.
 Polyline add_corners(const Polyline& pts, double level, const PointQuery& exact, const ContourOptions& opt,
-                     double max_chord, std::size_t& queries, std::vector<Vec3>& corners) {
+                     double max_chord, std::size_t& queries, std::vector<geometry::Vec3>& corners) {
   const std::size_t n = pts.size();
   if (n < 4) return pts;
   const double min_sin = std::sin(opt.corner_angle_deg * 3.14159265358979323846 / 180);
   Polyline out;
   out.reserve(n + 8);
   for (std::size_t k = 0; k < n; ++k) {
-    const Vec3& a = pts[(k + n - 1) % n];
-    const Vec3& b = pts[k];
-    const Vec3& c = pts[(k + 1) % n];
-    const Vec3& d = pts[(k + 2) % n];
+    const geometry::Vec3& a = pts[(k + n - 1) % n];
+    const geometry::Vec3& b = pts[k];
+    const geometry::Vec3& c = pts[(k + 1) % n];
+    const geometry::Vec3& d = pts[(k + 2) % n];
     out.push_back(b);
-    const Vec3 u = b - a, v = d - c, w = c - b;
+    const geometry::Vec3 u = b - a, v = d - c, w = c - b;
     const double lu = std::hypot(u.x, u.y), lv = std::hypot(v.x, v.y), lw = std::hypot(w.x, w.y);
     if (lu <= 0 || lv <= 0 || lw <= 0 || lw > max_chord) continue;
     const double turn = cross2(u.x, u.y, v.x, v.y);
@@ -118,9 +118,9 @@ Polyline add_corners(const Polyline& pts, double level, const PointQuery& exact,
     // X = b + s u = c + t v.
     const double sb = cross2(c.x - b.x, c.y - b.y, v.x, v.y) / turn;
     if (!(sb > 0)) continue;
-    const Vec3 x{b.x + sb * u.x, b.y + sb * u.y, level};
+    const geometry::Vec3 x{b.x + sb * u.x, b.y + sb * u.y, level};
     if (cross2(w.x, w.y, x.x - b.x, x.y - b.y) >= 0) continue;  // not beyond the chord
-    const Vec3 m = (b + c) * 0.5;
+    const geometry::Vec3 m = (b + c) * 0.5;
     if (std::hypot(x.x - m.x, x.y - m.y) > max_chord) continue;
     // The farthest point from m towards x that is inside (fixed halvings).
     double lo = 0, hi = 1;
@@ -146,8 +146,8 @@ Polyline add_corners(const Polyline& pts, double level, const PointQuery& exact,
 double signed_area2(const Polyline& loop) {
   double a = 0;
   for (std::size_t k = 0, n = loop.size(); k < n; ++k) {
-    const Vec3& p = loop[k];
-    const Vec3& q = loop[(k + 1) % n];
+    const geometry::Vec3& p = loop[k];
+    const geometry::Vec3& q = loop[(k + 1) % n];
     a += p.x * q.y - q.x * p.y;
   }
   return a;
@@ -161,7 +161,7 @@ LevelContours level_contours(const GridSpec& g, const std::vector<double>& v, do
   if (g.nx < 2 || g.ny < 2) throw std::invalid_argument("level contours need a grid of at least 2 x 2 nodes");
   if (!std::isfinite(level)) throw std::invalid_argument("level contours: the level must be finite");
 
-  Tracer tr{g, v, level, exact, opt, 0, std::vector<Vec3>(2 * g.size()), std::vector<std::uint8_t>(2 * g.size(), 0)};
+  Tracer tr{g, v, level, exact, opt, 0, std::vector<geometry::Vec3>(2 * g.size()), std::vector<std::uint8_t>(2 * g.size(), 0)};
   struct Segment {
     std::size_t from, to;  // edge ids
   };
@@ -244,4 +244,4 @@ LevelContours level_contours(const ClGrid& grid, double level, const PointQuery&
   return level_contours(grid.spec, grid.z, level, exact, options);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -8,7 +8,7 @@
 
 #include "cncstream/cam/path_machining.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 double stock_height_at(const HeightFieldStock& stock, double x, double y) {
   const GridSpec& g = stock.grid();
@@ -36,7 +36,7 @@ Cutter inner_cutter(const Cutter& cutter, double rim) {
 
 // Notes a move's depth: the deepest, and the points along it when too deep.
 void note(PassDepth& out, const MoveCut& m, double limit, double spacing) {
-  const Vec3& low = m.a.z <= m.b.z ? m.a : m.b;
+  const geometry::Vec3& low = m.a.z <= m.b.z ? m.a : m.b;
   if (m.depth > out.deepest) out.deepest = m.depth, out.at = low;
   if (!(m.depth > limit)) {
     out.deepest_within = std::max(out.deepest_within, m.depth);
@@ -100,4 +100,4 @@ PassDepth pass_depth_bound(const HeightFieldStock& lower, const PassDepth& befor
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

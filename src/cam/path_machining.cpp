@@ -11,7 +11,7 @@
 
 #include "cncstream/cam/stock.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -41,10 +41,10 @@ std::vector<double> machine(const GridSpec& grid, std::vector<double> heights, c
   for (double z : heights) top = std::max(top, z);
   // The moves in order, as segments.
   struct Move {
-    Vec3 a, b;
+    geometry::Vec3 a, b;
   };
   std::vector<Move> moves;
-  const Vec3* last = nullptr;
+  const geometry::Vec3* last = nullptr;
   for (const auto& pl : pieces)
     for (const auto& p : pl) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
@@ -106,4 +106,4 @@ std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heigh
   return machine(grid, std::move(heights), pieces, cutter, &cuts, checkpoint);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

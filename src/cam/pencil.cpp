@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -21,11 +21,11 @@ bool valley(double before, double at, double after, double h, double min_turn) {
 Polyline merged(const ClEngine& engine, const Polyline& p, const PencilOptions& o) {
   if (p.size() < 3) return p;
   constexpr std::size_t kWindow = 200;
-  auto straight = [&](const Vec3& a, const Vec3& b) {
+  auto straight = [&](const geometry::Vec3& a, const geometry::Vec3& b) {
     const double len = std::hypot(b.x - a.x, b.y - a.y);
     const auto n = std::max<std::size_t>(1, std::size_t(std::ceil(len / o.sample_step)));
     for (std::size_t s = 1; s < n; ++s) {
-      const Vec3 q = a + (b - a) * (double(s) / double(n));
+      const geometry::Vec3 q = a + (b - a) * (double(s) / double(n));
       const double cl = engine.height_at(q.x, q.y);
       if (cl > q.z + 1e-6 || q.z - cl > o.tolerance) return false;
     }
@@ -85,7 +85,7 @@ std::vector<Polyline> pencil_passes(const ClEngine& engine, const XYBounds& b, c
       }
     return best;
   };
-  auto point = [&](std::size_t k) { return Vec3{spec.x(k % nx), spec.y(k / nx), 0}; };
+  auto point = [&](std::size_t k) { return geometry::Vec3{spec.x(k % nx), spec.y(k / nx), 0}; };
   for (std::size_t start = 0; start < spec.size(); ++start) {
     if (!crease[start] || used[start]) continue;
     used[start] = 1;
@@ -108,7 +108,7 @@ std::vector<Polyline> pencil_passes(const ClEngine& engine, const XYBounds& b, c
     nodes.insert(nodes.end(), fwd.begin(), fwd.end());
     if (double(nodes.size() - 1) * o.step < o.min_length) continue;
     // Tip points on the exact CL (on the lattice), every move checked.
-    auto on_cl = [&](Vec3 p) {
+    auto on_cl = [&](geometry::Vec3 p) {
       if (o.lattice) {
         const double s = o.lattice->step;
         p.x = o.lattice->x0 + std::round((p.x - o.lattice->x0) / s) * s;
@@ -119,12 +119,12 @@ std::vector<Polyline> pencil_passes(const ClEngine& engine, const XYBounds& b, c
     };
     Polyline pl{on_cl(point(nodes.front()))};
     for (std::size_t n = 1; n < nodes.size(); ++n) {
-      const Vec3 a = pl.back(), b = on_cl(point(nodes[n]));
+      const geometry::Vec3 a = pl.back(), b = on_cl(point(nodes[n]));
       const double len = std::hypot(b.x - a.x, b.y - a.y);
       const auto steps = std::max<std::size_t>(1, std::size_t(std::ceil(len / o.sample_step)));
       // Samples on the CL; where one stands above the move between the
       // kept ones, the highest goes in and both halves are looked at again.
-      std::vector<Vec3> q(steps + 1);
+      std::vector<geometry::Vec3> q(steps + 1);
       q.front() = a;
       q.back() = b;
       for (std::size_t s = 1; s < steps; ++s)
@@ -159,4 +159,4 @@ std::vector<Polyline> pencil_passes(const ClEngine& engine, const XYBounds& b, c
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -5,7 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 // Floating-point slack so that exactly collinear samples merge.
@@ -137,4 +137,4 @@ std::vector<BandVertex> fit_profile_in_band(const std::vector<double>& s, const 
   return kept;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

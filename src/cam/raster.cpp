@@ -12,10 +12,10 @@
 
 #include "cncstream/cam/polyline_simplify.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
-XYBounds default_bounds(const Mesh& mesh, const Cutter& cutter) {
-  const Box3 b = mesh.bounds();
+XYBounds default_bounds(const geometry::Mesh& mesh, const Cutter& cutter) {
+  const geometry::Box3 b = mesh.bounds();
   if (b.empty()) throw std::invalid_argument("mesh has no facets");
   return {b.lo.x - cutter.radius, b.lo.y - cutter.radius, b.hi.x + cutter.radius, b.hi.y + cutter.radius};
 }
@@ -308,9 +308,9 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   path.step = du * o.check_subdivisions;
   path.samples = nu * nrows;
 
-  auto point = [&](double u, double v, double z) { return along_x ? Vec3{u, v, z} : Vec3{v, u, z}; };
+  auto point = [&](double u, double v, double z) { return along_x ? geometry::Vec3{u, v, z} : geometry::Vec3{v, u, z}; };
   auto query = [&](double u, double v) {
-    const Vec3 p = point(u, v, 0);
+    const geometry::Vec3 p = point(u, v, 0);
     return engine.height_at(p.x, p.y);
   };
   const StepRefiner refiner{engine, engine.cutter().corner_radius, lat};
@@ -372,7 +372,7 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   // queries at the check step and refined like the rows.
   const double dl = du > 0 ? du : step / o.check_subdivisions;
   for (std::size_t r = 0; r + 1 < nrows; ++r) {
-    const Vec3 a = path.rows[r].back();
+    const geometry::Vec3 a = path.rows[r].back();
     const double u = along_x ? a.x : a.y;
     const double va = row_v[r];
     auto at = [&](double s) { return query(u, va + s); };
@@ -388,4 +388,4 @@ RasterPath build_raster(const ClEngine& engine, const XYBounds& b, const RasterO
   return path;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

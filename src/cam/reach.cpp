@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -133,4 +133,4 @@ std::vector<double> reach_heights(const ClGrid& cl, const Cutter& cutter, const 
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

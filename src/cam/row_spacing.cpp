@@ -5,7 +5,7 @@
 #include <numbers>
 #include <stdexcept>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 RowSpacing::RowSpacing(const ClGrid& g, bool along_x, double widest, double max_angle)
     : v0_(along_x ? g.spec.y0 : g.spec.x0),
@@ -41,4 +41,4 @@ double RowSpacing::gap(double va, double vb) const {
   return std::cos(std::min(a, max_angle_)) * widest_;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -5,7 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 ScallopStats scallop_stats(const std::vector<double>& values) {
   ScallopStats s;
@@ -93,4 +93,4 @@ ScallopMap scallops_from_cut(const GridSpec& g, const std::vector<double>& machi
   return m;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 SlopeMap::SlopeMap(const ClGrid& g) : spec_(g.spec) {
   const std::size_t nx = spec_.nx, ny = spec_.ny;
@@ -44,4 +44,4 @@ double SlopeMap::min_near(double x, double y) const {
   return near_cell(spec_, angle_, x, y, [](double p, double q) { return std::min(p, q); });
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdint>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -33,7 +33,7 @@ SteepSkip skip_steep(const std::vector<Polyline>& pieces, const SlopeMap& slope,
     std::vector<std::uint8_t> real;
     for (std::size_t k = 0; k < p.size(); ++k) {
       if (k > 0) {
-        const Vec3 a = p[k - 1], b = p[k];
+        const geometry::Vec3 a = p[k - 1], b = p[k];
         const auto n = static_cast<std::size_t>(std::ceil(std::hypot(b.x - a.x, b.y - a.y) / spacing));
         for (std::size_t m = 1; m < n; ++m) {
           d.push_back(a + (b - a) * (double(m) / double(n)));
@@ -76,8 +76,8 @@ SteepSkip skip_steep(const std::vector<Polyline>& pieces, const SlopeMap& slope,
       if (q.empty() || !(q.back() == d[c])) q.push_back(d[c]);
       double top = -HUGE_VAL;
       for (std::size_t m = c; m <= e; ++m) top = std::max(top, d[m].z);
-      const Vec3& a = d[c];
-      const Vec3& b = d[e];
+      const geometry::Vec3& a = d[c];
+      const geometry::Vec3& b = d[e];
       if (top > a.z) q.push_back({a.x, a.y, top});
       if (top > b.z) q.push_back({b.x, b.y, top});
       ++out.bridges;
@@ -90,4 +90,4 @@ SteepSkip skip_steep(const std::vector<Polyline>& pieces, const SlopeMap& slope,
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

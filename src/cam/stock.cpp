@@ -8,7 +8,7 @@
 
 #include "swept_cutter.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -20,7 +20,7 @@ void check_cutter(const Cutter& c) {
                                 " is outside 0..R = " + std::to_string(c.radius));
 }
 
-void check_point(const Vec3& p, const char* which) {
+void check_point(const geometry::Vec3& p, const char* which) {
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
     throw std::invalid_argument(std::string("cut_segment: point ") + which + " is not finite");
 }
@@ -36,10 +36,10 @@ struct Span {
 
 // x-range of the row y inside the capsule {p : dist(p, segment) <= R}. The
 // capsule is convex, so the hull of its two end disks and its band is exact.
-Span capsule_row(const detail::SweptCutter& sw, const Vec3& a, const Vec3& b, double y) {
+Span capsule_row(const detail::SweptCutter& sw, const geometry::Vec3& a, const geometry::Vec3& b, double y) {
   const double R = sw.radius();
   Span s;
-  for (const Vec3* p : {&a, &b}) {
+  for (const geometry::Vec3* p : {&a, &b}) {
     const double dy = y - p->y;
     if (std::fabs(dy) <= R) {
       const double half = std::sqrt(R * R - dy * dy);
@@ -101,7 +101,7 @@ HeightFieldStock HeightFieldStock::band(const GridSpec& grid, std::size_t first_
   return s;
 }
 
-double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter& cutter) {
+double HeightFieldStock::cut_segment(const geometry::Vec3& a, const geometry::Vec3& b, const Cutter& cutter) {
   check_cutter(cutter);
   check_point(a, "a");
   check_point(b, "b");
@@ -154,11 +154,11 @@ double HeightFieldStock::cut_segment(const Vec3& a, const Vec3& b, const Cutter&
   return volume;
 }
 
-double swept_lowest_height(const Vec3& a, const Vec3& b, const Cutter& cutter, double x, double y) {
+double swept_lowest_height(const geometry::Vec3& a, const geometry::Vec3& b, const Cutter& cutter, double x, double y) {
   check_cutter(cutter);
   check_point(a, "a");
   check_point(b, "b");
   return detail::SweptCutter(a, b, cutter).lowest_at(x, y);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -22,13 +22,13 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
-namespace cncstream::detail {
+namespace cncstream::cam::detail {
 
 class SweptCutter {
  public:
   enum class Shape { Flat, Ball, Bull, General };
 
-  SweptCutter(const Vec3& a, const Vec3& b, const Cutter& c) : a_(a) {
+  SweptCutter(const geometry::Vec3& a, const geometry::Vec3& b, const Cutter& c) : a_(a) {
     R_ = c.radius;
     rk_ = std::clamp(c.corner_radius, 0.0, R_);
     rc_ = R_ - rk_;
@@ -58,7 +58,7 @@ class SweptCutter {
   double ux() const { return ux_; }
   double uy() const { return uy_; }
   double length() const { return L_; }
-  const Vec3& start() const { return a_; }
+  const geometry::Vec3& start() const { return a_; }
 
   // Height of the cutter surface's profile at distance rho (rho <= R).
   double h(double rho) const {
@@ -171,7 +171,7 @@ class SweptCutter {
     return s;
   }
 
-  Vec3 a_;
+  geometry::Vec3 a_;
   double R_ = 0, rk_ = 0, rc_ = 0;
   Shape shape_ = Shape::Ball;
   CutterProfile prof_;  // General
@@ -179,4 +179,4 @@ class SweptCutter {
   bool vertical_ = false, level_ = true;
 };
 
-}  // namespace cncstream::detail
+}  // namespace cncstream::cam::detail

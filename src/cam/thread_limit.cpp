@@ -5,7 +5,7 @@
 
 #include <algorithm>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 void run_with_thread_limit(unsigned threads, const std::function<void()>& work) {
   if (threads == 0) {
@@ -17,4 +17,4 @@ void run_with_thread_limit(unsigned threads, const std::function<void()>& work) 
   arena.execute(work);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -14,7 +14,7 @@
 #include "cncstream/cam/level_contours.hpp"
 #include "cncstream/cam/polyline_simplify.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -29,7 +29,7 @@ constexpr double kClearSlack = 2e-5;
 
 // (x, y) on the lattice: the nearest lattice point where the CL allows the
 // point's height, else the nearest one lifted onto the CL there.
-Vec3 on_lattice(const ClEngine& engine, const std::optional<XYLattice>& lat, Vec3 p, std::size_t& queries) {
+geometry::Vec3 on_lattice(const ClEngine& engine, const std::optional<XYLattice>& lat, geometry::Vec3 p, std::size_t& queries) {
   if (!lat) return p;
   const double s = lat->step;
   const double i0 = std::round((p.x - lat->x0) / s), j0 = std::round((p.y - lat->y0) / s);
@@ -82,14 +82,14 @@ double free_offset(const ClEngine& engine, double x, double y, double nx, double
 // chord as a raster's row is (within `tolerance` above them, never below):
 // a move between two vertices passes over the samples between, and over the
 // samples left at the level, which lie under the level.
-void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, const Vec3& a, const Vec3& b,
+void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, const geometry::Vec3& a, const geometry::Vec3& b,
                    double level, double step, double tolerance, Polyline& out, std::size_t& queries) {
   const double len = xy_dist(a, b);
   const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / step)));
   Polyline chord{a};
   for (std::size_t k = 1; k < n; ++k) {
     const double t = double(k) / double(n);
-    Vec3 p{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, level};
+    geometry::Vec3 p{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, level};
     const double cl = engine.height_at(p.x, p.y);
     ++queries;
     if (cl > p.z) {
@@ -106,8 +106,8 @@ void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, 
         const double limit = cl - level < kSmallSag ? step : std::max(step, 0.25 * len);
         const double d = free_offset(engine, p.x, p.y, nx, ny, level, 0, limit, queries);
         if (std::isfinite(d)) {
-          const Vec3 q = on_lattice(engine, lat, {p.x + d * nx, p.y + d * ny, level}, queries);
-          const Vec3& before = chord.back();
+          const geometry::Vec3 q = on_lattice(engine, lat, {p.x + d * nx, p.y + d * ny, level}, queries);
+          const geometry::Vec3& before = chord.back();
           ++queries;
           if (q.z == level && (cl - level < kSmallSag || before.z != level ||
                                engine.height_at(0.5 * (q.x + before.x), 0.5 * (q.y + before.y)) <= level)) {
@@ -142,7 +142,7 @@ void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, 
 
 // How far the chord a -> b must move to its left (the free side) for the CL
 // to stay at or below the level at every sample; 0 if it does already.
-double push_needed(const ClEngine& engine, const Vec3& a, const Vec3& b, double level, double step,
+double push_needed(const ClEngine& engine, const geometry::Vec3& a, const geometry::Vec3& b, double level, double step,
                    std::size_t& queries) {
   const double len = xy_dist(a, b);
   if (!(len > 0)) return 0;
@@ -197,7 +197,7 @@ Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat,
       const double dp = has_prev ? need[cp] : 0, dn = has_next ? need[cn] : 0;
       if (!(std::max(dp, dn) > 0)) continue;
       auto normal = [&](std::size_t c) {
-        const Vec3 &a = pts[c], &b = pts[(c + 1) % n];
+        const geometry::Vec3 &a = pts[c], &b = pts[(c + 1) % n];
         const double len = xy_dist(a, b);
         return len > 0 ? std::pair{-(b.y - a.y) / len, (b.x - a.x) / len} : std::pair{0.0, 0.0};
       };
@@ -220,7 +220,7 @@ Polyline keep_level(const ClEngine& engine, const std::optional<XYLattice>& lat,
   // Whatever still dips into the CL is lifted onto it, checked five times
   // as densely: where the CL has a cliff (an overhang of the part seen from
   // above) a chord can clip its corner between the samples above.
-  for (Vec3& p : pts) p = on_lattice(engine, lat, p, queries);
+  for (geometry::Vec3& p : pts) p = on_lattice(engine, lat, p, queries);
   Polyline out{pts.front()};
   for (std::size_t c = 0; c < chords; ++c)
     append_lifted(engine, lat, pts[c], pts[(c + 1) % n], level, step / 5, tolerance, out, queries);
@@ -355,7 +355,7 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
         // chord too; the loop then repeats its first point at its end).
         // A fitted move with a vertex moved off the contour is checked
         // against the exact CL as densely as the lifts are.
-        const LevelMoveCheck clear = [&](const Vec3& a, const Vec3& b) {
+        const LevelMoveCheck clear = [&](const geometry::Vec3& a, const geometry::Vec3& b) {
           const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(xy_dist(a, b) / (o.sample_step / 5))));
           for (std::size_t k = 0; k <= n; ++k) {
             const double t = double(k) / double(n);
@@ -376,7 +376,7 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
   // Nearest first within a level, top level first; close pieces bridged.
   const double bridge_max = o.bridge_max > 0 ? o.bridge_max : 4 * engine.cutter().radius;
   bool have = false;
-  Vec3 at;
+  geometry::Vec3 at;
   for (LevelPieces& lp : levels) {
     out.contours += lp.contours;
     out.point_queries += lp.queries;
@@ -409,7 +409,7 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
       }
       if (have && xy_dist(at, piece.front()) <= bridge_max && !out.pieces.empty()) {
         // Up, across, down, above every CL sample under the bridge.
-        const Vec3 from = at, to = piece.front();
+        const geometry::Vec3 from = at, to = piece.front();
         double zb = std::max(from.z, to.z);
         const double len = xy_dist(from, to);
         const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / o.sample_step)));
@@ -441,4 +441,4 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -6,7 +6,7 @@
 
 #include "cncstream/cam/zlevel_roughing.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 LevelPlan plan_levels(const std::vector<double>& tips, const std::vector<double>& flat_tips, double cell_area,
                       double stock_top, const RoughingParams& p, double min_flat_area) {
@@ -68,4 +68,4 @@ LevelPlan plan_levels(const std::vector<double>& tips, const std::vector<double>
   return plan;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

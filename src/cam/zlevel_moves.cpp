@@ -3,19 +3,19 @@
 
 #include <algorithm>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 Polyline roughing_moves(const RoughingPath& path) {
   Polyline out;
   for (const auto& lv : path.levels)
     for (const auto& ps : lv.passes) {
       if (ps.points.empty()) continue;
-      const Vec3& first = ps.points.front();
+      const geometry::Vec3& first = ps.points.front();
       if (out.empty()) {
         out.push_back({first.x, first.y, path.clearance_z});
       } else if (ps.lift_before) {
         // As the G-code lifts: up unless already higher, across, down.
-        const Vec3 at = out.back();
+        const geometry::Vec3 at = out.back();
         const double over = std::max(at.z, ps.lift_z);
         out.push_back({at.x, at.y, over});
         out.push_back({first.x, first.y, over});
@@ -26,4 +26,4 @@ Polyline roughing_moves(const RoughingPath& path) {
   return out;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

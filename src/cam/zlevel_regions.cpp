@@ -7,11 +7,11 @@
 
 #include "cncstream/cam/distance_transform.hpp"
 
-namespace cncstream::detail {
+namespace cncstream::cam::detail {
 
 namespace {
 
-double seg_dist(const Vec3& p, const Vec3& a, const Vec3& b) {
+double seg_dist(const geometry::Vec3& p, const geometry::Vec3& a, const geometry::Vec3& b) {
   const double ux = b.x - a.x, uy = b.y - a.y, l2 = ux * ux + uy * uy;
   double t = l2 > 0 ? ((p.x - a.x) * ux + (p.y - a.y) * uy) / l2 : 0;
   t = std::clamp(t, 0.0, 1.0);
@@ -70,7 +70,7 @@ std::vector<std::uint32_t> label_components(const GridSpec& g, const std::vector
 
 // The component of the inside corner of the cell holding p (every corner of
 // a cell is 8-adjacent to the others, so any inside one names it).
-std::size_t component_at(const GridSpec& g, const std::vector<std::uint32_t>& label, const Vec3& p) {
+std::size_t component_at(const GridSpec& g, const std::vector<std::uint32_t>& label, const geometry::Vec3& p) {
   const double fi = std::floor((p.x - g.x0) / g.dx), fj = std::floor((p.y - g.y0) / g.dy);
   const long i = std::clamp(static_cast<long>(fi), 0L, static_cast<long>(g.nx) - 2);
   const long j = std::clamp(static_cast<long>(fj), 0L, static_cast<long>(g.ny) - 2);
@@ -84,12 +84,12 @@ std::size_t component_at(const GridSpec& g, const std::vector<std::uint32_t>& la
 
 }  // namespace
 
-bool inside_loops(const Vec3& p, const std::vector<Polyline>& loops) {
+bool inside_loops(const geometry::Vec3& p, const std::vector<Polyline>& loops) {
   int winding = 0;
   for (const Polyline& l : loops)
     for (std::size_t k = 0; k < l.size(); ++k) {
-      const Vec3& a = l[k];
-      const Vec3& b = l[(k + 1) % l.size()];
+      const geometry::Vec3& a = l[k];
+      const geometry::Vec3& b = l[(k + 1) % l.size()];
       if (seg_dist(p, a, b) <= 1e-9) return true;
       const double side = (b.x - a.x) * (p.y - a.y) - (p.x - a.x) * (b.y - a.y);
       if (a.y <= p.y) {
@@ -102,17 +102,17 @@ bool inside_loops(const Vec3& p, const std::vector<Polyline>& loops) {
 }
 
 std::size_t settle_boundary(LevelRegion& region, const std::vector<Polyline>* above) {
-  std::vector<Vec3> out;
+  std::vector<geometry::Vec3> out;
   if (above)
-    for (const Vec3& c : region.corners)
+    for (const geometry::Vec3& c : region.corners)
       if (!inside_loops(c, *above)) out.push_back(c);
   std::size_t dropped = 0;
   for (RegionLoop& l : region.loops) {
     if (l.offset != 0) continue;
     const std::size_t before = l.points.size();
     if (!out.empty())
-      std::erase_if(l.points, [&](const Vec3& v) {
-        return std::any_of(out.begin(), out.end(), [&](const Vec3& c) { return c.x == v.x && c.y == v.y; });
+      std::erase_if(l.points, [&](const geometry::Vec3& v) {
+        return std::any_of(out.begin(), out.end(), [&](const geometry::Vec3& c) { return c.x == v.x && c.y == v.y; });
       });
     dropped += before - l.points.size();
     // Then only exactly collinear points go (a corner lies on the lines of
@@ -126,8 +126,8 @@ std::size_t settle_boundary(LevelRegion& region, const std::vector<Polyline>* ab
 double closed_length(const Polyline& loop) {
   double l = 0;
   for (std::size_t k = 0; k < loop.size(); ++k) {
-    const Vec3& a = loop[k];
-    const Vec3& b = loop[(k + 1) % loop.size()];
+    const geometry::Vec3& a = loop[k];
+    const geometry::Vec3& b = loop[(k + 1) % loop.size()];
     l += std::hypot(b.x - a.x, b.y - a.y);
   }
   return l;
@@ -205,4 +205,4 @@ LevelRegion level_region(const RegionInput& in) {
   return out;
 }
 
-}  // namespace cncstream::detail
+}  // namespace cncstream::cam::detail

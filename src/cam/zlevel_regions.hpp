@@ -10,7 +10,7 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/level_contours.hpp"
 
-namespace cncstream::detail {
+namespace cncstream::cam::detail {
 
 struct RegionLoop {
   Polyline points;        // closed (first point not repeated), region on the left
@@ -24,7 +24,7 @@ struct LevelRegion {
   std::size_t components = 0;
   std::size_t queries = 0;
   std::vector<std::uint8_t> inside;  // per node: 1 where phi <= 0
-  std::vector<Vec3> corners;         // boundary points added at sharp corners
+  std::vector<geometry::Vec3> corners;         // boundary points added at sharp corners
 };
 
 struct RegionInput {
@@ -51,7 +51,7 @@ std::size_t settle_boundary(LevelRegion& region, const std::vector<Polyline>* ab
 
 // Whether p is inside closed loops with the region on their left (winding
 // number), or within 1e-9 of one.
-bool inside_loops(const Vec3& p, const std::vector<Polyline>& loops);
+bool inside_loops(const geometry::Vec3& p, const std::vector<Polyline>& loops);
 
 // Length of a closed loop.
 double closed_length(const Polyline& loop);
@@ -60,4 +60,4 @@ double closed_length(const Polyline& loop);
 // `tolerance` of the kept chords.
 Polyline simplify_closed(const Polyline& loop, double tolerance);
 
-}  // namespace cncstream::detail
+}  // namespace cncstream::cam::detail

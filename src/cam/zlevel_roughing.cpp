@@ -16,7 +16,7 @@
 #include "zlevel_regions.hpp"
 #include "zlevel_stock.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 namespace {
 
@@ -52,7 +52,7 @@ void check(const Cutter& cutter, const ClEngine& grown, const StockBlock& s, con
 }
 
 // The loop rotated to start at its vertex nearest to `from`.
-Polyline rotated_near(const Polyline& loop, const Vec3& from) {
+Polyline rotated_near(const Polyline& loop, const geometry::Vec3& from) {
   std::size_t best = 0;
   double d = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < loop.size(); ++k)
@@ -104,7 +104,7 @@ struct Builder {
   // grid saw it (`mask`, of loops inside `cleared`), near the ends inside
   // `cleared` itself - not in a sliver of the region too thin for the grid,
   // which no loop visited.
-  bool segment_inside(const Vec3& a, const Vec3& b, double z, const std::vector<std::uint8_t>& mask,
+  bool segment_inside(const geometry::Vec3& a, const geometry::Vec3& b, double z, const std::vector<std::uint8_t>& mask,
                       const std::vector<Polyline>* cleared) {
     const GridSpec& g = path.grid;
     const double len = xy_dist(a, b);
@@ -132,7 +132,7 @@ struct Builder {
 
   // A new pass from `from` (if any) to the loop, lifted, ramping down along
   // the loop from just above z_above to z, then the loop at z.
-  RoughingPass entry(const std::optional<Vec3>& from, const Polyline& loop, double length, double z, double z_above) {
+  RoughingPass entry(const std::optional<geometry::Vec3>& from, const Polyline& loop, double length, double z, double z_above) {
     RoughingPass pass;
     pass.lift_before = true;
     pass.lift_z = clearance_z;
@@ -177,16 +177,16 @@ struct Builder {
     };
     double s = 0;
     std::size_t k = 0;
-    Vec3 down = loop.front();
+    geometry::Vec3 down = loop.front();
     bool back_to_down = true;  // the lap closes at `down` (else at its chord's end)
     for (;;) {
       const std::size_t next = n > 2 && need > 0 ? chord_end(k) : k + 1;
-      const Vec3& a = loop[k % n];
-      const Vec3& b = loop[next % n];
+      const geometry::Vec3& a = loop[k % n];
+      const geometry::Vec3& b = loop[next % n];
       const double seg = xy_dist(a, b);
       if (s + seg >= need || (k + 1 >= n && s + seg <= 1e-9)) {
         const double t = seg > 0 ? std::clamp((need - s) / seg, 0.0, 1.0) : 1.0;
-        down = t >= 1 ? Vec3{b.x, b.y, z} : Vec3{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, z};
+        down = t >= 1 ? geometry::Vec3{b.x, b.y, z} : geometry::Vec3{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, z};
         pass.points.push_back(down);
         if (t < 1 && next > k + 1) {
           // Down inside a chord: on along it to its end, where the lap starts.
@@ -203,7 +203,7 @@ struct Builder {
     pass.entry_points = pass.points.size() - 1 - (back_to_down ? 0 : 1);
     // The lap: the vertices after `down` (or its chord's end) round to it.
     for (std::size_t m = 1; m <= n; ++m) {
-      const Vec3& v = loop[(k + m) % n];
+      const geometry::Vec3& v = loop[(k + m) % n];
       pass.points.push_back({v.x, v.y, z});
     }
     if (back_to_down && (pass.points.back().x != down.x || pass.points.back().y != down.y)) pass.points.push_back(down);
@@ -212,13 +212,13 @@ struct Builder {
 
   static void append_loop(Polyline& out, const Polyline& loop, double z, bool with_start) {
     for (std::size_t k = with_start ? 0 : 1; k <= loop.size(); ++k) {
-      const Vec3& v = loop[k % loop.size()];
+      const geometry::Vec3& v = loop[k % loop.size()];
       out.push_back({v.x, v.y, z});
     }
   }
 
   void level(const detail::LevelRegion& region, double z, double z_above, RoughingLevel& out,
-             std::optional<Vec3>& at) {
+             std::optional<geometry::Vec3>& at) {
     // Loops per component, in cutting order.
     std::vector<std::vector<const detail::RegionLoop*>> parts(region.components);
     for (const auto& l : region.loops) parts[l.component].push_back(&l);
@@ -241,12 +241,12 @@ struct Builder {
       std::stable_sort(loops.begin(), loops.end(),
                        [&](const auto* a, const auto* b) { return rank(a->offset) > rank(b->offset); });
       // Nearest neighbour within each offset.
-      Vec3 cursor = at ? *at : loops.front()->points.front();
+      geometry::Vec3 cursor = at ? *at : loops.front()->points.front();
       for (std::size_t k = 0; k < loops.size(); ++k) {
         std::size_t best_k = k;
         double bd = std::numeric_limits<double>::infinity();
         for (std::size_t m = k; m < loops.size() && loops[m]->offset == loops[k]->offset; ++m)
-          for (const Vec3& v : loops[m]->points)
+          for (const geometry::Vec3& v : loops[m]->points)
             if (const double d = xy_dist(v, cursor); d < bd) bd = d, best_k = m;
         std::swap(loops[k], loops[best_k]);
         cursor = rotated_near(loops[k]->points, cursor).front();
@@ -307,7 +307,7 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     // Only what reaches the window: a tip in it, its cutter, and the
     // material under the cutter (the clearance height is above all of it).
     double nx0 = HUGE_VAL, ny0 = HUGE_VAL, nx1 = -HUGE_VAL, ny1 = -HUGE_VAL;
-    for (const Vec3& v : p.near) {
+    for (const geometry::Vec3& v : p.near) {
       if (!std::isfinite(v.x) || !std::isfinite(v.y)) throw std::invalid_argument("roughing: a point to clear near is not finite");
       nx0 = std::min(nx0, v.x), ny0 = std::min(ny0, v.y), nx1 = std::max(nx1, v.x), ny1 = std::max(ny1, v.y);
     }
@@ -322,7 +322,7 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     // The corners of each point's cell, and the window a cell wider than
     // asked (a point is within a cell diagonal of its nearest corner).
     std::vector<double> seed(g.size(), 0.0);
-    for (const Vec3& v : p.near) {
+    for (const geometry::Vec3& v : p.near) {
       const double fx = (v.x - g.x0) / g.dx, fy = (v.y - g.y0) / g.dy;
       if (fx < 0 || fy < 0 || fx > static_cast<double>(g.nx - 1) || fy > static_cast<double>(g.ny - 1)) continue;
       const auto i = std::min(static_cast<std::size_t>(fx), g.nx - 2), j = std::min(static_cast<std::size_t>(fy), g.ny - 2);
@@ -379,7 +379,7 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     // a level up to a step above that). Fewest levels: by the top of each
     // interval, one at the top of each not yet met.
     std::vector<std::pair<double, double>> want;  // (hi, lo)
-    for (const Vec3& v : p.near) {
+    for (const geometry::Vec3& v : p.near) {
       const double lo = grown.height_at(v.x, v.y) + p.leave;
       double hi = std::min(v.z + p.step_down + p.leave - scallop, b.top);
       if (p.bottom && hi < *p.bottom) continue;
@@ -436,7 +436,7 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
     regions[k] = detail::level_region(in);
     if (checkpoint) checkpoint(0.1 + 0.8 * static_cast<double>(++regions_done) / static_cast<double>(plan.z.size()));
   });
-  std::optional<Vec3> at;
+  std::optional<geometry::Vec3> at;
   for (std::size_t k = 0; k < plan.z.size(); ++k) {
     const double z = plan.z[k], z_above = k ? plan.z[k - 1] : b.top;
     path.stats.point_queries += regions[k].queries;
@@ -464,4 +464,4 @@ RoughingPath build_zlevel_roughing(const ClEngine& grown, const Cutter& cutter, 
   return path;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

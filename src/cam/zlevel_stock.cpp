@@ -9,7 +9,7 @@
 #include "cncstream/cam/distance_transform.hpp"
 #include "cncstream/cam/stock.hpp"
 
-namespace cncstream::detail {
+namespace cncstream::cam::detail {
 
 std::vector<double> stock_top_on_grid(const GridSpec& g, const StockBlock& s) {
   constexpr double none = std::numeric_limits<double>::lowest();  // no stock
@@ -60,4 +60,4 @@ double interpolate(const GridSpec& g, const std::vector<double>& v, double x, do
   return (r0[0] * (1 - tx) + r0[1] * tx) * (1 - ty) + (r1[0] * (1 - tx) + r1[1] * tx) * ty;
 }
 
-}  // namespace cncstream::detail
+}  // namespace cncstream::cam::detail

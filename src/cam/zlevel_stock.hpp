@@ -7,7 +7,7 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/zlevel_roughing.hpp"
 
-namespace cncstream::detail {
+namespace cncstream::cam::detail {
 
 // Per node of `g`: the highest stock top within a cell of the node (the
 // block's top where the surface does not reach; lowest() outside the block), so
@@ -22,4 +22,4 @@ std::vector<double> material_reach(const GridSpec& g, const std::vector<double>&
 // Bilinear interpolation of node values at (x, y) (clamped to the grid).
 double interpolate(const GridSpec& g, const std::vector<double>& v, double x, double y);
 
-}  // namespace cncstream::detail
+}  // namespace cncstream::cam::detail

@@ -102,10 +102,10 @@ std::pair<FileInfo, bool> FileStore::ingest(const fs::path& temp, const std::str
   f.uploaded_at = transport::Journal::now_iso8601();
   f.id = transport::sha256_file(temp);
   try {
-    const auto stl = load_stl(temp);
+    const auto stl = geometry::load_stl(temp);
     f.kind = "stl";
     f.facets = stl.mesh.size();
-    const Box3 b = stl.mesh.bounds();
+    const geometry::Box3 b = stl.mesh.bounds();
     f.bbox = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
   } catch (const std::exception& stl_error) {
     const auto lines = gcode_lines(temp);

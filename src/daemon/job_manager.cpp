@@ -125,7 +125,7 @@ json JobManager::library_tool(const std::string& machine, int number) const {
     // A program the daemon generated numbers its tools in the operations' order, not the library's:
     // the library tool is the one whose shape that operation cuts with (none when no tool has it).
     const Program* p = job->second->program.get();
-    std::optional<Cutter> cutter;
+    std::optional<cam::Cutter> cutter;
     if (p && p->tools.count(number)) cutter = p->tools.at(number);
     else if (p && p->tools.empty() && number == 1) cutter = p->cutter;
     if (cutter)
@@ -232,7 +232,7 @@ json JobManager::to_json(const DaemonJob& j) const {
   json preview = nullptr;
   if (j.program && j.program->height && !j.program->height->empty()) {
     const auto& h = *j.program->height;
-    const XYBounds b = h.bounds();
+    const cam::XYBounds b = h.bounds();
     const auto r4 = [](double v) { return std::round(v * 1e4) / 1e4; };
     const std::string base = cat({"/api/v1/jobs/", std::to_string(r.id)});
     preview = {{"bounds", {r4(b.x0), r4(b.y0), r4(b.x1), r4(b.y1)}},
@@ -673,10 +673,10 @@ json JobManager::start(std::int64_t id, const std::string& client) {
   } else {
     in.lines = j.program->lines;
   }
-  std::optional<Mesh> design;
-  std::optional<Cutter> cutter;
-  std::map<int, Cutter> tools;
-  std::optional<Box3> stock;
+  std::optional<geometry::Mesh> design;
+  std::optional<cam::Cutter> cutter;
+  std::map<int, cam::Cutter> tools;
+  std::optional<geometry::Box3> stock;
   if (!j.resume && j.program->work_mesh && j.program->cutter) {
     design = j.program->work_mesh;
     cutter = j.program->cutter;
@@ -894,7 +894,7 @@ jobs::ResumeInput JobManager::resume_input(const Program& p, const transport::Da
   if (const auto pr = journal_.last_progress(ran.journal_id)) {
     in.last_line = pr->last_line;
     if (pr->status_work_pos)
-      in.status_work_pos = Vec3{(*pr->status_work_pos)[0], (*pr->status_work_pos)[1], (*pr->status_work_pos)[2]};
+      in.status_work_pos = geometry::Vec3{(*pr->status_work_pos)[0], (*pr->status_work_pos)[1], (*pr->status_work_pos)[2]};
     in.status_line = pr->status_line;
   }
   // As `cncstream resume` reads it: the planner depth the job streamed

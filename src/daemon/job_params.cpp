@@ -69,7 +69,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   const tooling::ToolChoice tool_choice = choose("tool", j.at("tool").get<std::string>());
   const std::string tool = tool_choice.spec();
   try {
-    p.cutter = parse_cutter_spec(tool);
+    p.cutter = cam::parse_cutter_spec(tool);
   } catch (const std::exception& e) {
     bad("tool", e.what());
   }
@@ -78,7 +78,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   p.step = number(j, "step", 0, 0, 10);
   if (p.step != 0 && p.step < 0.005) bad("step", "must be 0 (automatic) or >= 0.005 mm");
   const std::string dir = choice(j, "direction", "x", {"x", "y"});
-  p.direction = dir == "y" ? RasterDirection::Y : RasterDirection::X;
+  p.direction = dir == "y" ? cam::RasterDirection::Y : cam::RasterDirection::X;
   const std::string strategy = choice(j, "strategy", "steep-shallow", {"steep-shallow", "raster"});
   p.strategy = strategy == "raster" ? jobs::FinishStrategy::Raster : jobs::FinishStrategy::SteepShallow;
   p.steep_angle = number(j, "steep_angle", 45, 1, 89);
@@ -97,7 +97,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
   const std::string zz = choice(j, "z_zero", "top", {"top", "bottom", "model"});
   p.z_zero = zz == "bottom" ? ZZero::PartBottom : zz == "model" ? ZZero::Model : ZZero::PartTop;
   const std::string units = choice(j, "units", "mm", {"mm", "in"});
-  p.part.units = units == "in" ? LengthUnit::Inch : LengthUnit::Millimetre;
+  p.part.units = units == "in" ? geometry::LengthUnit::Inch : geometry::LengthUnit::Millimetre;
   p.part.scale = number(j, "scale", 1, 0, 1000, true);
   json bounds = nullptr;
   if (j.contains("bounds") && !j.at("bounds").is_null()) {
@@ -110,7 +110,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
       v[i] = b[i].get<double>();
     }
     if (!(v[0] < v[2] && v[1] < v[3])) bad("bounds", "need x0 < x1 and y0 < y1");
-    p.bounds = XYBounds{v[0], v[1], v[2], v[3]};
+    p.bounds = cam::XYBounds{v[0], v[1], v[2], v[3]};
     bounds = json::array({v[0], v[1], v[2], v[3]});
   }
   // Stock and depth of cut, as the CLI's options (toolpath_params).
@@ -138,7 +138,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
     rough_choice = choose("rough", j.at("rough").get<std::string>());
     rough = rough_choice->spec();
     try {
-      p.rough = parse_cutter_spec(rough);
+      p.rough = cam::parse_cutter_spec(rough);
     } catch (const std::exception& e) {
       bad("rough", e.what());
     }
@@ -149,7 +149,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
       bad("rest", "expected a cutter such as ball:1");
     rest_choice = choose("rest", j.at("rest").get<std::string>());
     try {
-      p.rest = parse_cutter_spec(rest_choice->spec());
+      p.rest = cam::parse_cutter_spec(rest_choice->spec());
     } catch (const std::exception& e) {
       bad("rest", e.what());
     }
@@ -213,7 +213,7 @@ CheckedParams check_toolpath_params(const json& j, const FileInfo& file, const L
     h = (file.bbox[4] - file.bbox[1]) * to_mm + 2 * p.cutter.radius;
   }
   const double step = p.step > 0 ? p.step : std::min(p.stepover / 4, 0.1);
-  const double along = p.direction == RasterDirection::X ? w : h, across = p.direction == RasterDirection::X ? h : w;
+  const double along = p.direction == cam::RasterDirection::X ? w : h, across = p.direction == cam::RasterDirection::X ? h : w;
   out.grid_nodes = (along / step + 1) * (across / p.stepover + 1);
   if (!(out.grid_nodes <= limits.max_grid_nodes))
     bad("stepover", cat({"the tool path would sample ", num_text(out.grid_nodes), " points (limit ",

@@ -87,8 +87,8 @@ void SimMachinePort::opened() {
   if (current_) current_->opened();
 }
 
-void SimMachinePort::set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter,
-                                     std::map<int, Cutter> tools, std::optional<Box3> stock) {
+void SimMachinePort::set_next_design(std::optional<geometry::Mesh> design, std::optional<cam::Cutter> cutter,
+                                     std::map<int, cam::Cutter> tools, std::optional<geometry::Box3> stock) {
   base_.design = std::move(design);
   base_.cutter = cutter;
   base_.stock = stock;
@@ -391,9 +391,9 @@ void Machines::on_event(Machine& m, const session::SessionEvent& e) {
               {"text", ev.text}, {"info", code_info_json(ev.info)}});
 }
 
-session::CommandResult Machines::start_job(Machine& m, session::JobInput job, std::optional<Mesh> design,
-                                           std::optional<Cutter> cutter, std::map<int, Cutter> tools,
-                                           std::optional<Box3> stock) {
+session::CommandResult Machines::start_job(Machine& m, session::JobInput job, std::optional<geometry::Mesh> design,
+                                           std::optional<cam::Cutter> cutter, std::map<int, cam::Cutter> tools,
+                                           std::optional<geometry::Box3> stock) {
   if (!(m.sim && m.config.sim_verify && design && cutter)) return m.session->start_job(std::move(job));
   auto& s = *m.session;
   if (!s.ready()) return session::CommandResult::refused(cat({"the machine is not connected (", to_string(s.link()), ")"}));

@@ -18,7 +18,7 @@ using nlohmann::json;
 namespace {
 
 // Where nothing was cut: the page's dark canvas, so the part stands out.
-constexpr Rgb kNoData{11, 13, 16};
+constexpr image::Rgb kNoData{11, 13, 16};
 
 gcode::ProgramTrace trace_of(const Program& p) {
   std::string text;
@@ -35,7 +35,7 @@ gcode::ProgramTrace trace_of(const Program& p) {
 // Millimetres to the micron: the drawing needs no more, the JSON stays small.
 double micron(double v) { return std::round(v * 1000) / 1000; }
 
-json flat(const std::vector<std::vector<Vec3>>& lines) {
+json flat(const std::vector<std::vector<geometry::Vec3>>& lines) {
   json out = json::array();
   for (const auto& l : lines) {
     json a = json::array();
@@ -119,7 +119,7 @@ void Previews::png(const std::shared_ptr<const Program>& program, int max_px, Re
     }
     if (h->empty()) return Response::error(404, "not_found", "the program has no cutting move: no height image");
     Response r;
-    r.body = encode_png(jobs::render_height_preview(*h, max_px, kNoData));
+    r.body = image::encode_png(jobs::render_height_preview(*h, max_px, kNoData));
     return r;
   });
 }

@@ -91,7 +91,7 @@ class ChordModel {
 
 class Fitter {
  public:
-  Fitter(const std::vector<Vec3>& pts, const ArcFitOptions& o) : pts_(pts), o_(o) {}
+  Fitter(const std::vector<geometry::Vec3>& pts, const ArcFitOptions& o) : pts_(pts), o_(o) {}
 
   // The arc from point i to point j, if one fits.
   std::optional<FittedMove> arc(std::size_t i, std::size_t j) const {
@@ -393,7 +393,7 @@ class Fitter {
   // The run's plane: the coordinate all its points share.
   std::optional<Plane> plane_of(std::size_t i, std::size_t j) const {
     bool cx = true, cy = true, cz = true;
-    const Vec3& p0 = pts_[i];
+    const geometry::Vec3& p0 = pts_[i];
     for (std::size_t k = i + 1; k <= j && (cx || cy || cz); ++k) {
       cx = cx && pts_[k].x == p0.x;
       cy = cy && pts_[k].y == p0.y;
@@ -405,7 +405,7 @@ class Fitter {
     return std::nullopt;
   }
 
-  const std::vector<Vec3>& pts_;
+  const std::vector<geometry::Vec3>& pts_;
   const ArcFitOptions& o_;
 };
 
@@ -419,7 +419,7 @@ namespace {
 // a line to the next point; returns the index the move ends at. It depends
 // on i and last alone, so two greedy runs that meet at an index go on alike
 // (fit_range's chunks rely on it).
-std::size_t fit_step(const Fitter& fitter, const std::vector<Vec3>& points, std::size_t i, std::size_t last,
+std::size_t fit_step(const Fitter& fitter, const std::vector<geometry::Vec3>& points, std::size_t i, std::size_t last,
                      const ArcFitOptions& o, FittedMove& move) {
   const std::size_t min_span = std::max<std::size_t>(2, o.min_segments);
   std::optional<FittedMove> best;
@@ -475,7 +475,7 @@ struct GreedyRun {
   std::size_t end = 0;              // the index the last move ends at
 };
 
-GreedyRun greedy_run(const Fitter& fitter, const std::vector<Vec3>& points, std::size_t from, std::size_t until,
+GreedyRun greedy_run(const Fitter& fitter, const std::vector<geometry::Vec3>& points, std::size_t from, std::size_t until,
                      std::size_t last, const ArcFitOptions& o) {
   GreedyRun r;
   std::size_t i = from;
@@ -500,7 +500,7 @@ constexpr std::size_t kChunkPoints = 2048;
 // fit goes on one step at a time until it meets an index the next run
 // started a move at, and takes that run's moves from there. The greedy step
 // depends only on its index, so the result is the serial fit's.
-void fit_range(const Fitter& fitter, const std::vector<Vec3>& points, std::size_t first, std::size_t last,
+void fit_range(const Fitter& fitter, const std::vector<geometry::Vec3>& points, std::size_t first, std::size_t last,
                const ArcFitOptions& o, std::vector<FittedMove>& out) {
   const std::size_t chunks = o.parallel ? (last - first + kChunkPoints - 1) / kChunkPoints : 1;
   if (chunks <= 1) {
@@ -537,7 +537,7 @@ void fit_range(const Fitter& fitter, const std::vector<Vec3>& points, std::size_
 
 }  // namespace
 
-std::vector<FittedMove> fit_arcs(const std::vector<Vec3>& points, const ArcFitOptions& o) {
+std::vector<FittedMove> fit_arcs(const std::vector<geometry::Vec3>& points, const ArcFitOptions& o) {
   if (!(o.tolerance >= 0) || !(o.controller_arc_tolerance >= 0))
     throw std::invalid_argument("arc fit tolerances must not be negative");
   if (!(o.max_radius > 0) || !(o.center_step > 0) || !(o.min_sweep >= 0))
@@ -552,7 +552,7 @@ std::vector<FittedMove> fit_arcs(const std::vector<Vec3>& points, const ArcFitOp
   // the same result.
   std::vector<std::size_t> cuts{0};
   for (std::size_t k = 1; k + 1 < n; ++k) {
-    const Vec3 &a = points[k - 1], &b = points[k], &c = points[k + 1];
+    const geometry::Vec3 &a = points[k - 1], &b = points[k], &c = points[k + 1];
     const bool shared = (a.x == b.x && b.x == c.x) || (a.y == b.y && b.y == c.y) || (a.z == b.z && b.z == c.z);
     if (!shared) cuts.push_back(k);
   }

@@ -27,7 +27,7 @@ double arc_angular_travel(const ArcMove& arc) {
   return travel;
 }
 
-std::vector<Vec3> segment_arc(const ArcMove& arc, double tolerance) {
+std::vector<geometry::Vec3> segment_arc(const ArcMove& arc, double tolerance) {
   const PlaneAxes ax = axes_of(arc.plane);
   const double travel = arc_angular_travel(arc);
   const double r = arc.radius;
@@ -39,7 +39,7 @@ std::vector<Vec3> segment_arc(const ArcMove& arc, double tolerance) {
     const double n = std::floor(std::fabs(0.5 * travel * r) / std::sqrt(tolerance * (2 * r - tolerance)));
     if (n >= 0) segments = static_cast<std::size_t>(std::min(n, kMaxArcSegments));
   }
-  std::vector<Vec3> points;
+  std::vector<geometry::Vec3> points;
   points.reserve(segments + 1);
   const double c0 = component(arc.center, ax.first), c1 = component(arc.center, ax.second);
   const double start_angle = std::atan2(component(arc.from, ax.second) - c1, component(arc.from, ax.first) - c0);
@@ -49,7 +49,7 @@ std::vector<Vec3> segment_arc(const ArcMove& arc, double tolerance) {
   for (std::size_t i = 1; i < segments; ++i) {
     const double f = static_cast<double>(i) / static_cast<double>(segments);
     const double a = start_angle + travel * f;
-    Vec3 p;
+    geometry::Vec3 p;
     component(p, ax.first) = c0 + start_radius * std::cos(a);
     component(p, ax.second) = c1 + start_radius * std::sin(a);
     component(p, ax.normal) = lin0 + lin_travel * f;
@@ -63,8 +63,8 @@ ArcChords arc_chords(const ArcMove& arc, double arc_tolerance) {
   ArcChords c{segment_arc(arc, arc_tolerance), arc.feed};
   if (arc.inverse_time) {
     double length = 0;
-    Vec3 p = arc.from;
-    for (const Vec3& q : c.points) {
+    geometry::Vec3 p = arc.from;
+    for (const geometry::Vec3& q : c.points) {
       length += norm(q - p);
       p = q;
     }

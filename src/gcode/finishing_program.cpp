@@ -7,8 +7,8 @@
 
 namespace cncstream {
 
-Vec3 work_offset(const Box3& part, XYOrigin xy, ZZero z) {
-  Vec3 o;
+geometry::Vec3 work_offset(const geometry::Box3& part, XYOrigin xy, ZZero z) {
+  geometry::Vec3 o;
   switch (xy) {
     case XYOrigin::PartMin: o.x = -part.lo.x; o.y = -part.lo.y; break;
     case XYOrigin::PartCenter: o.x = -(part.lo.x + part.hi.x) / 2; o.y = -(part.lo.y + part.hi.y) / 2; break;
@@ -22,8 +22,8 @@ Vec3 work_offset(const Box3& part, XYOrigin xy, ZZero z) {
   return o;
 }
 
-std::vector<Polyline> raster_as_one_cut(const RasterPath& path) {
-  Polyline all;
+std::vector<cam::Polyline> raster_as_one_cut(const cam::RasterPath& path) {
+  cam::Polyline all;
   for (std::size_t r = 0; r < path.rows.size(); ++r) {
     all.insert(all.end(), path.rows[r].begin(), path.rows[r].end());
     if (r < path.links.size()) all.insert(all.end(), path.links[r].begin(), path.links[r].end());
@@ -31,7 +31,7 @@ std::vector<Polyline> raster_as_one_cut(const RasterPath& path) {
   return {all};
 }
 
-std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& p,
+std::string finishing_program(const cam::RasterPath& path, const geometry::Vec3& offset, const MachiningParams& p,
                               ProgramStats* stats) {
   return pieces_program(raster_as_one_cut(path), offset, p, stats);
 }
@@ -66,7 +66,7 @@ void write_program_end(GcodeWriter& w, const MachiningParams& p, ProgramStats& s
 }
 
 void write_fitted_moves(GcodeWriter& w, const std::vector<FittedMove>& moves, double feed, ProgramStats& st,
-                        Vec3& at, Box3* bounds) {
+                        geometry::Vec3& at, geometry::Box3* bounds) {
   for (const FittedMove& m : moves) {
     if (!m.arc) {
       if (w.feed(m.to.x, m.to.y, m.to.z, feed)) {
@@ -89,7 +89,7 @@ void write_fitted_moves(GcodeWriter& w, const std::vector<FittedMove>& moves, do
   }
 }
 
-std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
+std::string pieces_program(const std::vector<cam::Polyline>& pieces, const geometry::Vec3& offset, const MachiningParams& p,
                            ProgramStats* stats) {
   check_feeds(p);
   GcodeWriter w(p.decimals);
@@ -101,18 +101,18 @@ std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offs
   return w.text();
 }
 
-void write_pieces(GcodeWriter& w, const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
+void write_pieces(GcodeWriter& w, const std::vector<cam::Polyline>& pieces, const geometry::Vec3& offset, const MachiningParams& p,
                   ProgramStats& st) {
   check_feeds(p);
   // Z is rounded up to the output resolution so rounding never gouges.
   const double q = std::pow(10.0, p.decimals);
-  auto place = [&](const Vec3& v) {
-    Vec3 w = v + offset;
+  auto place = [&](const geometry::Vec3& v) {
+    geometry::Vec3 w = v + offset;
     w.z = std::ceil(w.z * q - 1e-6) / q;
     return w;
   };
 
-  Box3 bounds;
+  geometry::Box3 bounds;
   for (const auto& pl : pieces)
     for (const auto& v : pl) bounds.add(place(v));
   if (bounds.empty()) throw std::invalid_argument("tool path is empty");
@@ -122,15 +122,15 @@ void write_pieces(GcodeWriter& w, const std::vector<Polyline>& pieces, const Vec
   st.work_bounds.add(bounds.lo);
   st.work_bounds.add(bounds.hi);
 
-  Vec3 at;
+  geometry::Vec3 at;
   bool have_at = false;
   auto rapid_to = [&](std::optional<double> x, std::optional<double> y, std::optional<double> z) {
-    const Vec3 to{x.value_or(at.x), y.value_or(at.y), z.value_or(at.z)};
+    const geometry::Vec3 to{x.value_or(at.x), y.value_or(at.y), z.value_or(at.z)};
     if (have_at) st.rapid_length += norm(to - at);
     w.rapid(x, y, z);
     at = to;
   };
-  auto feed_to = [&](const Vec3& to, double f) {
+  auto feed_to = [&](const geometry::Vec3& to, double f) {
     if (w.feed(to.x, to.y, to.z, f)) {
       const double len = norm(to - at);
       st.cut_length += len;
@@ -143,7 +143,7 @@ void write_pieces(GcodeWriter& w, const std::vector<Polyline>& pieces, const Vec
   // Each piece: over its start at the safe Z, plunge, cut, retract.
   for (const auto& pl : pieces) {
     if (pl.empty()) continue;
-    const Vec3 first = place(pl.front());
+    const geometry::Vec3 first = place(pl.front());
     rapid_to(first.x, first.y, std::nullopt);
     have_at = true;
     feed_to(first, p.plunge_feed);
@@ -151,10 +151,10 @@ void write_pieces(GcodeWriter& w, const std::vector<Polyline>& pieces, const Vec
       for (const auto& v : pl) feed_to(place(v), p.feed);
     } else {
       // The fit sees the points as they are printed.
-      std::vector<Vec3> pts;
+      std::vector<geometry::Vec3> pts;
       pts.reserve(pl.size());
       for (const auto& v : pl) {
-        Vec3 w = place(v);
+        geometry::Vec3 w = place(v);
         w.x = std::round(w.x * q) / q;
         w.y = std::round(w.y * q) / q;
         pts.push_back(w);

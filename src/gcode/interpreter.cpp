@@ -50,7 +50,7 @@ struct Block {
   double f = 0, l = 0, p = 0, r = 0, s = 0;
   int t = 0;
   double n = 0;
-  Vec3 xyz{}, ijk{};
+  geometry::Vec3 xyz{}, ijk{};
 };
 
 BlockResult fail(const ParserState& state, int status, std::size_t column = 0) {
@@ -314,7 +314,7 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
     if (axis_words != 4u) return fail(state, kG43DynamicAxisError);
   }
 
-  Vec3 block_coord_system = state.coord_system;
+  geometry::Vec3 block_coord_system = state.coord_system;
   if (command_words & bit(kGroupCoordSelect)) {
     block_coord_system = state.coords.wcs[static_cast<std::size_t>(b.modal.coord_select)];
   }
@@ -339,7 +339,7 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
       }
       value_words &= ~(bit(kL) | bit(kP));
       coord_write_index = p > 0 ? p - 1 : b.modal.coord_select;
-      Vec3 data = state.coords.wcs[static_cast<std::size_t>(coord_write_index)];
+      geometry::Vec3 data = state.coords.wcs[static_cast<std::size_t>(coord_write_index)];
       for (int i = 0; i < 3; ++i) {
         if (!(axis_words & (1u << i))) continue;
         if (l == 20) {
@@ -382,7 +382,7 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
       switch (b.non_modal) {
         case NonModal::GoHome0:
         case NonModal::GoHome1: {
-          Vec3 home = b.non_modal == NonModal::GoHome0 ? state.coords.g28 : state.coords.g30;
+          geometry::Vec3 home = b.non_modal == NonModal::GoHome0 ? state.coords.g28 : state.coords.g30;
           if (axis_words) {
             for (int i = 0; i < 3; ++i)
               if (!(axis_words & (1u << i))) component(home, i) = component(state.position, i);
@@ -438,7 +438,7 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
               h = -h;
               b.r = -b.r;
             }
-            b.ijk = Vec3{};
+            b.ijk = geometry::Vec3{};
             component(b.ijk, axis0) = 0.5 * (x - y * h);
             component(b.ijk, axis1) = 0.5 * (y + x * h);
             arc_radius = b.r;
@@ -565,7 +565,7 @@ BlockResult execute_block(const ParserState& state, std::string_view line,
       out.actions.push_back(WorkOffsetChange{});
       break;
     case NonModal::ResetOffset:
-      s.g92 = Vec3{};
+      s.g92 = geometry::Vec3{};
       out.actions.push_back(WorkOffsetChange{});
       break;
     default:

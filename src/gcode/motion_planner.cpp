@@ -12,7 +12,7 @@ constexpr double kMinLength = 1e-9;
 
 
 // Largest value along `unit` that keeps every axis within its own limit.
-double limit_by_axes(const Vec3& per_axis, const Vec3& unit) {
+double limit_by_axes(const geometry::Vec3& per_axis, const geometry::Vec3& unit) {
   double limit = kHuge;
   for (int i = 0; i < 3; ++i) {
     const double u = std::fabs(component(unit, i));
@@ -28,7 +28,7 @@ MotionQueue::MotionQueue(const MotionLimits& limits, std::size_t capacity)
 
 void MotionQueue::set_limits(const MotionLimits& limits) { limits_ = limits; }
 
-void MotionQueue::set_position(const Vec3& p) { position_ = p; }
+void MotionQueue::set_position(const geometry::Vec3& p) { position_ = p; }
 
 double MotionQueue::nominal(const Planned& b) const {
   if (b.src.rapid) return b.rapid_rate * rapid_override_;
@@ -36,8 +36,8 @@ double MotionQueue::nominal(const Planned& b) const {
 }
 
 bool MotionQueue::push(const MotionBlock& block) {
-  const Vec3 start = blocks_.empty() ? position_ : blocks_.back().src.to;
-  const Vec3 delta = block.to - start;
+  const geometry::Vec3 start = blocks_.empty() ? position_ : blocks_.back().src.to;
+  const geometry::Vec3 delta = block.to - start;
   const double length = norm(delta);
   if (length < kMinLength) return false;
   Planned p;
@@ -56,7 +56,7 @@ bool MotionQueue::push(const MotionBlock& block) {
     } else if (cos_theta < -0.999999) {
       p.junction_sq = kHuge;  // straight on
     } else {
-      const Vec3 junction_unit = normalized(p.unit - last_unit_);
+      const geometry::Vec3 junction_unit = normalized(p.unit - last_unit_);
       const double junction_accel = limit_by_axes(limits_.acceleration, junction_unit);
       const double sin_half = std::sqrt(0.5 * (1.0 - cos_theta));
       p.junction_sq = junction_accel * limits_.junction_deviation * sin_half / (1.0 - sin_half);
@@ -200,7 +200,7 @@ MotionQueue::Advance MotionQueue::advance(double dt, const Traverse& on_traverse
       result.feed_length += moved;
       if (b.src.feed > 0) result.commanded_time += moved / (b.src.feed / 60.0);
     }
-    const Vec3 a_pt = position_;
+    const geometry::Vec3 a_pt = position_;
     b.remaining -= moved;
     const bool done = b.remaining <= 1e-9 * std::max(1.0, b.length);
     position_ = done ? b.src.to : b.src.to - b.unit * b.remaining;

@@ -89,15 +89,15 @@ ProgramTrace trace_program(std::string_view text, const ProgramOptions& options)
       if (options.stop_at_first_error) break;
       continue;
     }
-    const Vec3 wco = r.state.wco();
+    const geometry::Vec3 wco = r.state.wco();
     for (const Action& a : r.actions) {
       if (const auto* m = std::get_if<LinearMove>(&a)) {
         if (m->from == m->to) continue;
         trace.segments.push_back({m->from, m->to, wco, m->rapid, m->feed, i});
       } else if (const auto* arc = std::get_if<ArcMove>(&a)) {
         const ArcChords chords = arc_chords(*arc, options.arc_tolerance);
-        Vec3 p = arc->from;
-        for (const Vec3& q : chords.points) {
+        geometry::Vec3 p = arc->from;
+        for (const geometry::Vec3& q : chords.points) {
           trace.segments.push_back({p, q, wco, false, chords.feed, i});
           p = q;
         }

@@ -54,17 +54,30 @@ struct AxisRun {
 
 ProgramExtent program_extent(const std::vector<std::string>& lines, double arc_tolerance) {
   std::array<AxisRun, 3> axes;
+  HullAccumulator run_hull;
+  std::vector<XyPoint> best_hull;
+  // The hull follows the X measure: kept from the frame whose X run wins.
+  const auto close_hull = [&] {
+    const AxisRun& x = axes[0];
+    if (x.run.known && (!x.best.known || x.run.size() > x.best.size())) best_hull = run_hull.hull();
+    run_hull = HullAccumulator{};
+  };
+  const auto add_xy = [&](double px, double py) {
+    if (axes[0].known && axes[1].known) run_hull.add(px, py);
+  };
   ParserState state;
   for (const std::string& raw : lines) {
     const CleanLine c = clean_line(raw);
     if (c.overflow || c.text.empty() || c.text == "%" || c.text.front() == '$') continue;
     const BlockResult r = execute_block(state, c.text);
     if (!r.ok()) continue;
-    if (r.state.modal.coord_select != state.modal.coord_select)
+    if (r.state.modal.coord_select != state.modal.coord_select) {
+      close_hull();
       for (AxisRun& a : axes) {
         a.close();
         a.known = false;
       }
+    }
     const LineWords words = line_words(c.text);
     bool moved = false, probed = false;
     for (const Action& action : r.actions) {
@@ -88,19 +101,25 @@ ProgramExtent program_extent(const std::vector<std::string>& lines, double arc_t
         if (const auto* m = std::get_if<LinearMove>(&action)) {
           for (int i = 0; i < 3; ++i)
             if (axes[i].known) axes[i].add(component(m->to, i));
+          add_xy(m->to.x, m->to.y);
         } else if (const auto* arc = std::get_if<ArcMove>(&action)) {
           // Its chords need a known start as well as a known end.
-          for (const Vec3& p : arc_chords(*arc, arc_tolerance).points)
+          for (const geometry::Vec3& p : arc_chords(*arc, arc_tolerance).points) {
             for (int i = 0; i < 3; ++i)
               if (axes[i].known && known_before[i]) axes[i].add(component(p, i));
+            if (known_before[0] && known_before[1]) add_xy(p.x, p.y);
+          }
           for (int i = 0; i < 3; ++i)
             if (axes[i].known) axes[i].add(component(arc->to, i));
+          add_xy(arc->to.x, arc->to.y);
         }
       }
     }
     state = r.state;
   }
   ProgramExtent e;
+  close_hull();
+  e.xy_hull = std::move(best_hull);
   for (int i = 0; i < 3; ++i) {
     axes[i].close();
     e.axes[i] = axes[i].best;

@@ -19,8 +19,8 @@ std::vector<std::string> resume_preamble(const ParserState& at, const ResumeOpti
     out.push_back(l.str());
     l.str({});
   };
-  const Vec3 p = at.work_position();  // where the tool was, in the program's work coordinates
-  const Vec3 g92 = at.g92;
+  const geometry::Vec3 p = at.work_position();  // where the tool was, in the program's work coordinates
+  const geometry::Vec3 g92 = at.g92;
   const double safe = std::max(o.safe_z, p.z);
   l << "G21 G90 G94 G17";
   emit();
@@ -41,7 +41,7 @@ std::vector<std::string> resume_preamble(const ParserState& at, const ResumeOpti
   emit();
   l << "G0 X" << num(p.x + g92.x) << " Y" << num(p.y + g92.y);
   emit();
-  if (g92 != Vec3{}) {
+  if (g92 != geometry::Vec3{}) {
     l << "G92 X" << num(p.x) << " Y" << num(p.y) << " Z" << num(safe);
     emit();
   }
@@ -111,8 +111,8 @@ std::optional<ModalArcFix> with_modal_arc(std::span<const std::string> lines_aft
 
 namespace {
 
-double distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 ab = b - a;
+double distance_to_segment(const geometry::Vec3& p, const geometry::Vec3& a, const geometry::Vec3& b) {
+  const geometry::Vec3 ab = b - a;
   const double len2 = dot(ab, ab);
   const double t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
   return norm(p - (a + ab * t));

@@ -8,7 +8,7 @@
 
 namespace cncstream {
 
-void write_roughing(GcodeWriter& w, const RoughingPath& path, const Vec3& offset, const MachiningParams& p,
+void write_roughing(GcodeWriter& w, const cam::RoughingPath& path, const geometry::Vec3& offset, const MachiningParams& p,
                     ProgramStats& st) {
   // Feeds are written with one decimal: below 0.1 mm/min would print as F0.
   if (!(p.feed >= 0.1) || !(p.plunge_feed >= 0.1) || !std::isfinite(p.feed) || !std::isfinite(p.plunge_feed))
@@ -21,24 +21,24 @@ void write_roughing(GcodeWriter& w, const RoughingPath& path, const Vec3& offset
   // Z rounded up to the output resolution (never into the stock to leave);
   // X and Y to the nearest, as printed, so arcs are fitted to what is cut.
   const double q = std::pow(10.0, p.decimals);
-  auto place = [&](const Vec3& v) {
-    Vec3 o = v + offset;
-    return Vec3{std::round(o.x * q) / q, std::round(o.y * q) / q, std::ceil(o.z * q - 1e-6) / q};
+  auto place = [&](const geometry::Vec3& v) {
+    geometry::Vec3 o = v + offset;
+    return geometry::Vec3{std::round(o.x * q) / q, std::round(o.y * q) / q, std::ceil(o.z * q - 1e-6) / q};
   };
   const double clearance = std::ceil((path.clearance_z + offset.z) * q - 1e-6) / q;
   if (!(p.safe_z >= clearance))
     throw std::invalid_argument("safe Z " + format_gcode_number(p.safe_z) + " is below the roughing clearance Z" +
                                 format_gcode_number(clearance) + " (work coordinates)");
 
-  Vec3 at{0, 0, p.safe_z};
+  geometry::Vec3 at{0, 0, p.safe_z};
   bool have_xy = false;
-  auto rapid_to = [&](const Vec3& to) {
+  auto rapid_to = [&](const geometry::Vec3& to) {
     if (have_xy) st.rapid_length += norm(to - at);
     w.rapid(to.x, to.y, to.z);
     at = to;
     have_xy = true;
   };
-  auto feed_to = [&](const Vec3& to, double f) {
+  auto feed_to = [&](const geometry::Vec3& to, double f) {
     if (w.feed(to.x, to.y, to.z, f)) {
       const double len = norm(to - at);
       st.cut_length += len;
@@ -53,7 +53,7 @@ void write_roughing(GcodeWriter& w, const RoughingPath& path, const Vec3& offset
   for (const auto& lv : path.levels)
     for (const auto& ps : lv.passes) {
       if (ps.points.empty()) continue;
-      const Vec3 first = place(ps.points.front());
+      const geometry::Vec3 first = place(ps.points.front());
       if (ps.lift_before || !have_xy) {
         const double lift = std::min(p.safe_z, std::ceil((ps.lift_z + offset.z) * q - 1e-6) / q);
         if (have_xy && lift > at.z) rapid_to({at.x, at.y, lift});
@@ -66,7 +66,7 @@ void write_roughing(GcodeWriter& w, const RoughingPath& path, const Vec3& offset
       st.work_bounds.add(first);
       const std::size_t ramp_end = std::min(ps.entry_points, ps.points.size() - 1);
       for (std::size_t k = 1; k <= ramp_end; ++k) feed_to(place(ps.points[k]), p.plunge_feed);
-      std::vector<Vec3> rest;
+      std::vector<geometry::Vec3> rest;
       rest.reserve(ps.points.size() - ramp_end);
       for (std::size_t k = ramp_end; k < ps.points.size(); ++k) rest.push_back(place(ps.points[k]));
       if (rest.size() < 2) continue;
@@ -79,7 +79,7 @@ void write_roughing(GcodeWriter& w, const RoughingPath& path, const Vec3& offset
   rapid_to({at.x, at.y, p.safe_z});
 }
 
-std::string roughing_program(const RoughingPath& path, const Vec3& offset, const MachiningParams& p,
+std::string roughing_program(const cam::RoughingPath& path, const geometry::Vec3& offset, const MachiningParams& p,
                              ProgramStats* stats) {
   GcodeWriter w(p.decimals);
   write_program_start(w, p);

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <sstream>
 
-namespace cncstream {
+namespace cncstream::geometry {
 
 Box3 Mesh::bounds() const {
   Box3 b;
@@ -81,4 +81,4 @@ std::string MeshSummary::to_string() const {
   return o.str();
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::geometry

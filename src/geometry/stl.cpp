@@ -12,7 +12,7 @@
 #include <system_error>
 #include <unordered_map>
 
-namespace cncstream {
+namespace cncstream::geometry {
 
 LengthUnit parse_length_unit(const std::string& s) {
   if (s == "mm") return LengthUnit::Millimetre;
@@ -372,4 +372,4 @@ void write_stl_binary(const std::filesystem::path& path, const Mesh& mesh, const
   if (!f) throw StlError(path.string() + ": write error");
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::geometry

@@ -6,7 +6,7 @@
 
 namespace cncstream::gl {
 
-double exact_height_around(const ClEngine& exact, double x, double y, double r, bool highest) {
+double exact_height_around(const cam::ClEngine& exact, double x, double y, double r, bool highest) {
   constexpr int kPoints = 32;
   double best = highest ? -HUGE_VAL : HUGE_VAL;
   for (int k = 0; k < kPoints; ++k) {

@@ -127,7 +127,7 @@ void split(double v, float& hi, float& lo) {
 
 // Plane z = z0 + gx * (x - x_0) + gy * (y - y_0) through three points; false
 // when the triangle has no area seen from above.
-bool plane_of(const Vec3& a, const Vec3& b, const Vec3& c, double& gx, double& gy) {
+bool plane_of(const geometry::Vec3& a, const geometry::Vec3& b, const geometry::Vec3& c, double& gx, double& gy) {
   const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z, vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
   const double det = ux * vy - uy * vx;
   if (det == 0) return false;
@@ -145,15 +145,15 @@ struct Planes {
 
 // The vertical prism of a facet as three inward half-planes; false where the
 // facet's xy triangle has no area (a vertical facet: its prism is empty).
-bool prism_planes(const Vec3& a, const Vec3& b, const Vec3& c, Planes& out) {
+bool prism_planes(const geometry::Vec3& a, const geometry::Vec3& b, const geometry::Vec3& c, Planes& out) {
   const double area2 = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
   const double scale = std::max({norm(b - a), norm(c - a), norm(c - b)});
   if (!(std::fabs(area2) > 1e-12 * scale * scale)) return false;
-  const Vec3 v[3] = {a, b, c};
+  const geometry::Vec3 v[3] = {a, b, c};
   const double sgn = area2 > 0 ? 1.0 : -1.0;
   for (std::size_t k = 0; k < 3; ++k) {
-    const Vec3& p = v[k];
-    const Vec3& q = v[(k + 1) % 3];
+    const geometry::Vec3& p = v[k];
+    const geometry::Vec3& q = v[(k + 1) % 3];
     double nx = -(q.y - p.y) * sgn, ny = (q.x - p.x) * sgn;
     const double len = std::hypot(nx, ny);
     nx /= len;
@@ -173,16 +173,16 @@ bool prism_planes(const Vec3& a, const Vec3& b, const Vec3& c, Planes& out) {
 // is just out of reach is never lit by it (the depth buffer's triangles are
 // inscribed in XY as well as in Z).
 struct Source {
-  Vec3 ref;
+  geometry::Vec3 ref;
   float s[4] = {0, 0, 0, 0};
   float reach2 = 0;
 };
 
-Source make_source(const Vec3& p0, const Vec3* p1, const Vec3* p2, double R) {
+Source make_source(const geometry::Vec3& p0, const geometry::Vec3* p1, const geometry::Vec3* p2, double R) {
   Source s;
   s.ref = p0;
   double size = 0;
-  const Vec3* corners[2] = {p1 ? p1 : &p0, p2 ? p2 : (p1 ? p1 : &p0)};
+  const geometry::Vec3* corners[2] = {p1 ? p1 : &p0, p2 ? p2 : (p1 ? p1 : &p0)};
   for (int k = 0; k < 2; ++k) {
     const double x = corners[k]->x - p0.x, y = corners[k]->y - p0.y;
     s.s[2 * k] = static_cast<float>(x);
@@ -195,8 +195,8 @@ Source make_source(const Vec3& p0, const Vec3* p1, const Vec3* p2, double R) {
 }
 
 struct Setup {
-  const Mesh& mesh;
-  Vec3 origin;  // relative coordinates: x - origin.x etc. (origin.z: middle of the depth range)
+  const geometry::Mesh& mesh;
+  geometry::Vec3 origin;  // relative coordinates: x - origin.x etc. (origin.z: middle of the depth range)
   bool trim;
 };
 
@@ -216,7 +216,7 @@ class Batch {
   Batch(const Batch&) = delete;
   Batch& operator=(const Batch&) = delete;
 
-  void triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& o, const TileMap& tm, const Planes* pl,
+  void triangle(const geometry::Vec3& a, const geometry::Vec3& b, const geometry::Vec3& c, const geometry::Vec3& o, const TileMap& tm, const Planes* pl,
                 const Source& src) {
     // A triangle with no area seen from above (a vertical one) adds nothing
     // to the top view, and its depth plane is meaningless in float: a
@@ -235,7 +235,7 @@ class Batch {
     split(tm.wy(src.ref.y), ry, ryl);
     const float z0 = static_cast<float>(a.z - o.z);
     const auto q0x = static_cast<float>(a.x - src.ref.x), q0y = static_cast<float>(a.y - src.ref.y);
-    for (const Vec3* v : {&a, &b, &c}) {
+    for (const geometry::Vec3* v : {&a, &b, &c}) {
       data_.insert(data_.end(), {static_cast<float>(v->x - o.x), static_cast<float>(v->y - o.y),
                                  static_cast<float>(v->z - o.z), zlo, zhi, rx, ry, rxl, ryl, z0,
                                  static_cast<float>(gx), static_cast<float>(gy), q0x, q0y, src.s[0], src.s[1],
@@ -299,11 +299,11 @@ class CapDraw {
     std::vector<float> tris;
     const auto& P = cap.points();
     for (const auto& t : cap.triangles()) {
-      const Vec3 a = P[t[0]], b = P[t[1]], c = P[t[2]];
+      const geometry::Vec3 a = P[t[0]], b = P[t[1]], c = P[t[2]];
       double gx = 0, gy = 0;
       plane_of(a, b, c, gx, gy);
       const double zlo = std::min({a.z, b.z, c.z}), zhi = std::max({a.z, b.z, c.z});
-      for (const Vec3* v : {&a, &b, &c})
+      for (const geometry::Vec3* v : {&a, &b, &c})
         tris.insert(tris.end(), {static_cast<float>(v->x), static_cast<float>(v->y), static_cast<float>(v->z),
                                  static_cast<float>(zlo), static_cast<float>(zhi), static_cast<float>(a.z),
                                  static_cast<float>(gx), static_cast<float>(gy), static_cast<float>(a.x),
@@ -335,7 +335,7 @@ class CapDraw {
   CapDraw(const CapDraw&) = delete;
   CapDraw& operator=(const CapDraw&) = delete;
 
-  void add(const Vec3& v, const Vec3& o, const TileMap& tm, const Planes* pl) {
+  void add(const geometry::Vec3& v, const geometry::Vec3& o, const TileMap& tm, const Planes* pl) {
     float rx, rxl, ry, ryl;
     split(tm.wx(v.x), rx, rxl);
     split(tm.wy(v.y), ry, ryl);
@@ -406,11 +406,11 @@ struct EdgeSlot {
   std::uint32_t count = 0;
 };
 
-bool redundant(const Mesh& m, const EdgeSlot& s) {
+bool redundant(const geometry::Mesh& m, const EdgeSlot& s) {
   if (s.count != 2) return false;
-  const Vec3 pa = m.vertices[s.a], pb = m.vertices[s.b];
-  const Vec3 oa = m.vertices[s.opposite[0]], ob = m.vertices[s.opposite[1]];
-  const Vec3 na = upward_unit_normal(pa, pb, oa), nb = upward_unit_normal(pa, pb, ob);
+  const geometry::Vec3 pa = m.vertices[s.a], pb = m.vertices[s.b];
+  const geometry::Vec3 oa = m.vertices[s.opposite[0]], ob = m.vertices[s.opposite[1]];
+  const geometry::Vec3 na = upward_unit_normal(pa, pb, oa), nb = upward_unit_normal(pa, pb, ob);
   if (na.z < 0.01 || nb.z < 0.01) return false;
   if (norm(na - nb) > 1e-9) return false;
   const bool ha = std::hypot(na.x, na.y) < 1e-9, hb = std::hypot(nb.x, nb.y) < 1e-9;
@@ -422,7 +422,7 @@ bool redundant(const Mesh& m, const EdgeSlot& s) {
   return dot(ob - pa, na) >= 0 && dot(oa - pa, nb) >= 0;
 }
 
-std::vector<EdgeSlot> mesh_edges(const Mesh& m) {
+std::vector<EdgeSlot> mesh_edges(const geometry::Mesh& m) {
   std::unordered_map<std::uint64_t, std::uint32_t> index;
   index.reserve(m.triangles.size() * 2);
   std::vector<EdgeSlot> out;
@@ -471,7 +471,7 @@ class DepthTarget {
   GLuint fbo_ = 0, rb_ = 0;
 };
 
-void check_spec(const GridSpec& s) {
+void check_spec(const cam::GridSpec& s) {
   if (!(s.dx > 0) || !(s.dy > 0) || !std::isfinite(s.dx) || !std::isfinite(s.dy))
     throw std::invalid_argument("GL CL engine: grid step must be positive and finite");
   if (!std::isfinite(s.x0) || !std::isfinite(s.y0)) throw std::invalid_argument("GL CL engine: grid origin must be finite");
@@ -479,13 +479,13 @@ void check_spec(const GridSpec& s) {
 
 }  // namespace
 
-ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec& spec, const GlClOptions& opt,
+cam::ClGrid compute_cl_grid_gl(const geometry::Mesh& mesh, const cam::Cutter& cutter, const cam::GridSpec& spec, const GlClOptions& opt,
                           GlClStats* stats_out) {
   check_spec(spec);
   if (opt.floor && !std::isfinite(*opt.floor)) throw std::invalid_argument("GL CL engine: floor must be finite");
   const CutterCap cap(cutter, opt.tolerance);
-  const Box3 box = mesh.bounds();
-  ClGrid grid;
+  const geometry::Box3 box = mesh.bounds();
+  cam::ClGrid grid;
   grid.spec = spec;
   grid.floor = opt.floor ? *opt.floor : (box.empty() ? 0.0 : box.lo.z);
   grid.z.assign(spec.size(), grid.floor);
@@ -512,13 +512,13 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   // corner radius (a rim point) to the highest vertex, plus a margin so that
   // every drawn height has a depth above the cleared 0.
   const double rk = !cutter.is_apt()                   ? cutter.profile_top()
-                    : cutter.type == CutterType::Flat ? 0.0
-                    : cutter.type == CutterType::Ball ? cutter.radius
+                    : cutter.type == cam::CutterType::Flat ? 0.0
+                    : cutter.type == cam::CutterType::Ball ? cutter.radius
                                                       : cutter.corner_radius;
   const double span0 = box.hi.z - (box.lo.z - rk);
   const double margin = 1e-3 * std::max(1.0, span0);
   const double zlo = box.lo.z - rk - margin, zhi = box.hi.z + margin;
-  const Vec3 origin{spec.x0, spec.y0, 0.5 * (zlo + zhi)};
+  const geometry::Vec3 origin{spec.x0, spec.y0, 0.5 * (zlo + zhi)};
   st.depth_quantum = (zhi - zlo) * std::ldexp(1.0, -24);
 
   GLint max_rb = 0, vp[2] = {0, 0};
@@ -543,11 +543,11 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
     for (int k = 0; k < 3; ++k) glEnable(GL_CLIP_DISTANCE0 + k);
 
   // What is drawn, decided once.
-  std::vector<std::array<Vec3, 3>> faces;
+  std::vector<std::array<geometry::Vec3, 3>> faces;
   std::vector<Source> face_sources;  // the facets themselves
   for (const auto& t : mesh.triangles) {
-    std::array<Vec3, 3> f;
-    const Vec3 &p0 = mesh.vertices[t[0]], &p1 = mesh.vertices[t[1]], &p2 = mesh.vertices[t[2]];
+    std::array<geometry::Vec3, 3> f;
+    const geometry::Vec3 &p0 = mesh.vertices[t[0]], &p1 = mesh.vertices[t[1]], &p2 = mesh.vertices[t[2]];
     if (face_offset_triangle(p0, p1, p2, cutter, f)) {
       faces.push_back(f);
       face_sources.push_back(make_source(p0, &p1, &p2, cutter.radius));
@@ -588,7 +588,7 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   st.vertices_drawn = verts.size();
 
   // Each edge's generators on the exact offset surface, once for all tiles.
-  std::vector<Vec3> gens, one;
+  std::vector<geometry::Vec3> gens, one;
   std::vector<std::size_t> gen_first{0};
   gen_first.reserve(edges.size() + 1);
   for (const EdgeDraw& e : edges) {
@@ -598,7 +598,7 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
   }
 
   Batch batch(opt.trim);
-  CapDraw caps(cap, opt.trim, make_source(Vec3{}, nullptr, nullptr, cutter.radius).reach2);
+  CapDraw caps(cap, opt.trim, make_source(geometry::Vec3{}, nullptr, nullptr, cutter.radius).reach2);
   // The radius of the circle inside the cap's rim polygon (a hair less).
   const double r_in = cutter.radius * std::cos(M_PI / static_cast<double>(cap.spokes())) * (1 - 1e-7);
   std::vector<float> depth(tw * th);
@@ -632,14 +632,14 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
         if (!outside(lx, ly, hx, hy)) batch.triangle(f[0], f[1], f[2], origin, tm, nullptr, face_sources[k]);
       }
       for (const VertexDraw& vd : verts) {
-        const Vec3& v = mesh.vertices[vd.v];
+        const geometry::Vec3& v = mesh.vertices[vd.v];
         if (!outside(v.x - R, v.y - R, v.x + R, v.y + R)) caps.add(v, origin, tm, opt.trim ? &vd.planes : nullptr);
       }
       st.triangles += caps.instances() * caps.triangles_per_instance();
       caps.draw();
       for (std::size_t k = 0; k < edges.size(); ++k) {
         const EdgeDraw& e = edges[k];
-        const Vec3 a = mesh.vertices[e.a], b = mesh.vertices[e.b];
+        const geometry::Vec3 a = mesh.vertices[e.a], b = mesh.vertices[e.b];
         if (outside(std::min(a.x, b.x) - R, std::min(a.y, b.y) - R, std::max(a.x, b.x) + R, std::max(a.y, b.y) + R)) continue;
         const Planes* pl = opt.trim ? &e.planes : nullptr;
         const Source segment = make_source(a, &b, nullptr, R);
@@ -650,9 +650,9 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
         // that high), so no lens between polygon and rim is left uncovered.
         const double L = std::hypot(b.x - a.x, b.y - a.y);
         const double m = L > 0 ? (b.z - a.z) / L : 0.0;
-        const Vec3 up = m < 0 ? a : b;
-        const Vec3 dir = L > 0 ? Vec3{(b.x - a.x) / L, (b.y - a.y) / L, 0} * (m < 0 ? -1.0 : 1.0) : Vec3{};
-        auto apron = [&](const Vec3& q, double& delta) {  // false: the generator cannot reach inside
+        const geometry::Vec3 up = m < 0 ? a : b;
+        const geometry::Vec3 dir = L > 0 ? geometry::Vec3{(b.x - a.x) / L, (b.y - a.y) / L, 0} * (m < 0 ? -1.0 : 1.0) : geometry::Vec3{};
+        auto apron = [&](const geometry::Vec3& q, double& delta) {  // false: the generator cannot reach inside
           const double sdot = -(q.x * dir.x + q.y * dir.y), c2 = q.x * q.x + q.y * q.y - r_in * r_in;
           if (c2 <= 0) return delta = 0, true;
           if (sdot * sdot < c2) return false;
@@ -660,14 +660,14 @@ ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec
           return true;
         };
         for (std::size_t g = gen_first[k]; g + 1 < gen_first[k + 1]; ++g) {
-          const Vec3 q1 = gens[g], q2 = gens[g + 1];
+          const geometry::Vec3 q1 = gens[g], q2 = gens[g + 1];
           batch.triangle(a + q1, a + q2, b + q2, origin, tm, pl, segment);
           batch.triangle(a + q1, b + q2, b + q1, origin, tm, pl, segment);
           double d1 = 0, d2 = 0;
           if (m != 0 && apron(q1, d1) && apron(q2, d2) && (d1 > 0 || d2 > 0)) {
             const double z = up.z + std::min(q1.z, q2.z);
-            const Vec3 p1{up.x + q1.x, up.y + q1.y, z}, p2{up.x + q2.x, up.y + q2.y, z};
-            const Vec3 p3 = p2 + dir * d2, p4 = p1 + dir * d1;
+            const geometry::Vec3 p1{up.x + q1.x, up.y + q1.y, z}, p2{up.x + q2.x, up.y + q2.y, z};
+            const geometry::Vec3 p3 = p2 + dir * d2, p4 = p1 + dir * d1;
             const Source vertex = make_source(up, nullptr, nullptr, R);
             batch.triangle(p1, p2, p3, origin, tm, pl, vertex);
             batch.triangle(p1, p3, p4, origin, tm, pl, vertex);

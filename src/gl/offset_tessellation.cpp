@@ -14,11 +14,11 @@ namespace {
 struct Profile {
   double R = 0, rk = 0, rc = 0;
   bool general = false;
-  CutterProfile bands;
-  explicit Profile(const Cutter& c)
+  cam::CutterProfile bands;
+  explicit Profile(const cam::Cutter& c)
       : R(c.radius),
-        rk(c.type == CutterType::Flat ? 0.0
-           : c.type == CutterType::Ball ? c.radius
+        rk(c.type == cam::CutterType::Flat ? 0.0
+           : c.type == cam::CutterType::Ball ? c.radius
                                          : std::clamp(c.corner_radius, 0.0, c.radius)),
         rc(R - rk),
         general(!c.is_apt()) {
@@ -26,8 +26,8 @@ struct Profile {
       bands = c.profile();
       R = bands.R;
       rk = 0;
-      const ProfileBand& b0 = bands.band[0];
-      rc = b0.kind == ProfileBand::Kind::Cone && b0.slope == 0 && b0.h0 == 0 ? b0.rho1 : 0.0;
+      const cam::ProfileBand& b0 = bands.band[0];
+      rc = b0.kind == cam::ProfileBand::Kind::Cone && b0.slope == 0 && b0.h0 == 0 ? b0.rho1 : 0.0;
     }
   }
   // Top of the inverted cutter at radius rho: -h(rho), concave, decreasing.
@@ -63,15 +63,15 @@ void subdivide(const Profile& p, double a, double b, double tol, int depth, std:
   out.push_back(b);
 }
 
-Vec3 face_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
-  Vec3 n = normalized(cross(b - a, c - a));
+geometry::Vec3 face_normal(const geometry::Vec3& a, const geometry::Vec3& b, const geometry::Vec3& c) {
+  geometry::Vec3 n = normalized(cross(b - a, c - a));
   if (n.z < 0) n = -n;
   return n;
 }
 
 }  // namespace
 
-CutterCap::CutterCap(const Cutter& cutter, double tolerance) {
+CutterCap::CutterCap(const cam::Cutter& cutter, double tolerance) {
   if (!(tolerance > 0) || !std::isfinite(tolerance))
     throw std::invalid_argument("GL CL engine: tessellation tolerance must be a positive number of mm");
   const Profile p(cutter);
@@ -83,7 +83,7 @@ CutterCap::CutterCap(const Cutter& cutter, double tolerance) {
   if (p.rc > 0) rho_.push_back(p.rc);
   if (p.general) {
     for (std::size_t k = 0; k < p.bands.count; ++k) {
-      const ProfileBand& b = p.bands.band[k];
+      const cam::ProfileBand& b = p.bands.band[k];
       if (b.rho1 > p.rc) subdivide(p, std::max(b.rho0, p.rc), b.rho1, tol_r, 0, rho_);
     }
   } else if (p.rk > 0) {
@@ -156,7 +156,7 @@ CutterCap::CutterCap(const Cutter& cutter, double tolerance) {
 
 double CutterCap::sliver_width() const { return R_ * (1 - std::cos(M_PI / static_cast<double>(spokes_))); }
 
-void CutterCap::silhouette_edges(const Vec3& d, std::vector<std::array<std::uint32_t, 2>>& out) const {
+void CutterCap::silhouette_edges(const geometry::Vec3& d, std::vector<std::array<std::uint32_t, 2>>& out) const {
   out.clear();
   for (const CapEdge& e : edges_) {
     const double s1 = dot(face_normal_[e.f1], d), s2 = dot(face_normal_[e.f2], d);
@@ -194,7 +194,7 @@ double best_u(const Profile& p, double m, double d, double& gbest) {
 
 }  // namespace
 
-void edge_generators(const Cutter& cutter, const Vec3& a, const Vec3& b, double tolerance, std::vector<Vec3>& out) {
+void edge_generators(const cam::Cutter& cutter, const geometry::Vec3& a, const geometry::Vec3& b, double tolerance, std::vector<geometry::Vec3>& out) {
   out.clear();
   const Profile p(cutter);
   const double ex = b.x - a.x, ey = b.y - a.y, L = std::hypot(ex, ey);
@@ -236,19 +236,19 @@ void edge_generators(const Cutter& cutter, const Vec3& a, const Vec3& b, double 
   for (const Sample& s : done) out.push_back({s.u * ux + s.d * nx, s.u * uy + s.d * ny, s.F + m * s.u});
 }
 
-Vec3 upward_unit_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
-  Vec3 n = normalized(cross(p1 - p0, p2 - p0));
+geometry::Vec3 upward_unit_normal(const geometry::Vec3& p0, const geometry::Vec3& p1, const geometry::Vec3& p2) {
+  geometry::Vec3 n = normalized(cross(p1 - p0, p2 - p0));
   if (n.z < 0) n = -n;
   return n;
 }
 
-bool face_offset_triangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cutter& cutter,
-                          std::array<Vec3, 3>& out) {
+bool face_offset_triangle(const geometry::Vec3& p0, const geometry::Vec3& p1, const geometry::Vec3& p2, const cam::Cutter& cutter,
+                          std::array<geometry::Vec3, 3>& out) {
   const Profile p(cutter);
-  const Vec3 n = upward_unit_normal(p0, p1, p2);
+  const geometry::Vec3 n = upward_unit_normal(p0, p1, p2);
   if (!(n.z >= 1e-8)) return false;
   const double nxy = std::hypot(n.x, n.y);
-  Vec3 shift;
+  geometry::Vec3 shift;
   if (p.general) {
     // The contact radius rho maximises t rho - h(rho) (t the plane's slope;
     // concave): the node sits rho downhill of the contact, h(rho) below it.
@@ -262,12 +262,12 @@ bool face_offset_triangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, const 
         else hi = m2;
       }
       rho = 0.5 * (lo + hi);
-      shift = Vec3{n.x / nxy, n.y / nxy, 0} * rho;
+      shift = geometry::Vec3{n.x / nxy, n.y / nxy, 0} * rho;
     }
     shift.z = p.g(rho);
   } else {
-    shift = n * p.rk - Vec3{0, 0, p.rk};
-    if (nxy >= 1e-9) shift += Vec3{n.x / nxy, n.y / nxy, 0} * p.rc;
+    shift = n * p.rk - geometry::Vec3{0, 0, p.rk};
+    if (nxy >= 1e-9) shift += geometry::Vec3{n.x / nxy, n.y / nxy, 0} * p.rc;
   }
   out = {p0 + shift, p1 + shift, p2 + shift};
   return true;

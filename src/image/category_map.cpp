@@ -7,7 +7,7 @@
 #include "cncstream/image/category_map.hpp"
 #include "map_frame.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 namespace mf = map_frame;
 
@@ -65,4 +65,4 @@ RgbImage render_category_map(const MapGrid& grid, std::span<const int> category,
   return std::move(f.image);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::image

@@ -5,7 +5,7 @@
 
 #include "cncstream/image/image.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 namespace {
 
@@ -133,4 +133,4 @@ Rgb colormap_diverging(double t) {
   return interpolate(kDiverging, (t + 1) / 2, 1.0);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::image

@@ -8,7 +8,7 @@
 #include "cncstream/image/deviation_map.hpp"
 #include "map_frame.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 namespace mf = map_frame;
 
@@ -162,4 +162,4 @@ RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> dev, 
   return std::move(f.image);
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::image

@@ -6,7 +6,7 @@
 
 #include "cncstream/image/image.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 namespace {
 
@@ -170,4 +170,4 @@ void RgbImage::draw_text(int x, int y, const std::string& text, Rgb c, int scale
   }
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::image

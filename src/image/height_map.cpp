@@ -8,7 +8,7 @@
 #include "cncstream/image/height_map.hpp"
 #include "map_frame.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 namespace mf = map_frame;
 
@@ -188,4 +188,4 @@ RgbImage render_height_image(const MapGrid& grid, std::span<const float> values,
   return img;
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::image

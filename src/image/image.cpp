@@ -5,7 +5,7 @@
 
 #include "cncstream/image/image.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 RgbImage::RgbImage(int width, int height, Rgb fill) : w_(width), h_(height) {
   if (width < 0 || height < 0 || (width > 0 && height > (1 << 30) / 3 / width))
@@ -55,4 +55,4 @@ void RgbImage::blit(const RgbImage& src, int x, int y) {
     for (int xx = 0; xx < src.w_; ++xx) set(x + xx, y + yy, src.get(xx, yy));
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::image

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace cncstream::map_frame {
+namespace cncstream::image::map_frame {
 
 namespace {
 
@@ -169,4 +169,4 @@ void draw_swatch(RgbImage& img, int x, int y, Rgb colour, const std::string& lab
   img.draw_text(x + 24, y + 1, label, kInk, kTextScale);
 }
 
-}  // namespace cncstream::map_frame
+}  // namespace cncstream::image::map_frame

@@ -11,7 +11,7 @@
 #include "cncstream/image/image.hpp"
 #include "cncstream/image/map_grid.hpp"
 
-namespace cncstream::map_frame {
+namespace cncstream::image::map_frame {
 
 inline constexpr Rgb kInk{25, 25, 25};
 inline constexpr Rgb kFaint{110, 110, 110};
@@ -56,4 +56,4 @@ std::string fixed(double v, int decimals);
 // Decimals that tell apart values across `range` (mm).
 int decimals_for(double range);
 
-}  // namespace cncstream::map_frame
+}  // namespace cncstream::image::map_frame

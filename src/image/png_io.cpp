@@ -9,7 +9,7 @@
 
 #include "cncstream/image/image.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 namespace {
 
@@ -106,4 +106,4 @@ RgbImage decode_png(std::string_view bytes) {
   return finish_read(info, "PNG in memory");
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::image

@@ -35,7 +35,7 @@ FinishSpacing finish_spacing(const ToolpathParams& p) {
   s.z_step = p.stepover;
   if (!p.scallop) return s;
   const double h = *p.scallop;
-  const bool vbit = p.cutter.type == CutterType::VBit;
+  const bool vbit = p.cutter.type == cam::CutterType::VBit;
   if (!(rk > 0) && !vbit)
     throw std::invalid_argument("a scallop height needs a ball, bull-nose, tapered ball or V-bit (a flat end leaves "
                                 "terraces, not scallops): give --stepover instead");
@@ -59,17 +59,17 @@ FinishSpacing finish_spacing(const ToolpathParams& p) {
   return s;
 }
 
-ClGrid ground_grid(const ClEngine& engine, const XYBounds& region, const FinishSpacing& spacing,
-                   const Checkpoint& checkpoint) {
-  const GridSpec spec = GridSpec::covering(region.x0, region.y0, region.x1, region.y1, spacing.grid_step,
+cam::ClGrid ground_grid(const cam::ClEngine& engine, const cam::XYBounds& region, const FinishSpacing& spacing,
+                   const cam::Checkpoint& checkpoint) {
+  const cam::GridSpec spec = cam::GridSpec::covering(region.x0, region.y0, region.x1, region.y1, spacing.grid_step,
                                            spacing.grid_step);
   return engine.compute(spec, checkpoint);
 }
 
-void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine& engine, const ClGrid& grid,
-                    const XYLattice& lattice, const FinishSpacing& spacing, const Checkpoint& checkpoint) {
-  const SlopeMap slope(grid);
-  WaterlineOptions wo;
+void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const cam::ClEngine& engine, const cam::ClGrid& grid,
+                    const cam::XYLattice& lattice, const FinishSpacing& spacing, const cam::Checkpoint& checkpoint) {
+  const cam::SlopeMap slope(grid);
+  cam::WaterlineOptions wo;
   wo.z_step = spacing.z_step;
   wo.steep_angle_deg = p.steep_angle;
   wo.tolerance = p.tolerance;
@@ -77,8 +77,8 @@ void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine&
   // Half the tolerance merges straight stretches; arcs take the curves.
   wo.simplify_tolerance = p.tolerance / 2;
   wo.sample_step = std::min(0.05, spacing.grid_step / 2);
-  const WaterlinePath w = build_waterline(engine, grid, slope, wo, checkpoint_part(checkpoint, 0, 0.95));
-  const SteepSkip shallow = skip_steep(raster_as_one_cut(r.path), slope, radians(p.steep_angle));
+  const cam::WaterlinePath w = cam::build_waterline(engine, grid, slope, wo, cam::checkpoint_part(checkpoint, 0, 0.95));
+  const cam::SteepSkip shallow = cam::skip_steep(raster_as_one_cut(r.path), slope, radians(p.steep_angle));
   r.finish_pieces = w.pieces;
   r.finish_pieces.insert(r.finish_pieces.end(), shallow.pieces.begin(), shallow.pieces.end());
   r.waterline_pieces = w.pieces.size();

@@ -34,13 +34,13 @@ FinishSpacing finish_spacing(const ToolpathParams& p);
 
 // The CL grid over the region at spacing.grid_step that the waterlines
 // and the rows' spacing read the slope from.
-ClGrid ground_grid(const ClEngine& engine, const XYBounds& region, const FinishSpacing& spacing,
-                   const Checkpoint& checkpoint);
+cam::ClGrid ground_grid(const cam::ClEngine& engine, const cam::XYBounds& region, const FinishSpacing& spacing,
+                   const cam::Checkpoint& checkpoint);
 
 // Waterlines where the surface is steep, then the raster with its steep
 // stretches bridged, into r.finish_pieces (and the waterline counts).
 // `grid`: ground_grid's; `lattice`: the G-code's, as the raster's.
-void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const ClEngine& engine, const ClGrid& grid,
-                    const XYLattice& lattice, const FinishSpacing& spacing, const Checkpoint& checkpoint);
+void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const cam::ClEngine& engine, const cam::ClGrid& grid,
+                    const cam::XYLattice& lattice, const FinishSpacing& spacing, const cam::Checkpoint& checkpoint);
 
 }  // namespace cncstream::jobs

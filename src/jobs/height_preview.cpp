@@ -46,15 +46,15 @@ void resample_max(std::size_t n, double p0, double d, std::size_t m, double t0, 
 
 }  // namespace
 
-XYBounds HeightPreview::bounds() const {
+cam::XYBounds HeightPreview::bounds() const {
   return {grid.x0, grid.y0, grid.x0 + double(grid.nx ? grid.nx - 1 : 0) * grid.dx,
           grid.y0 + double(grid.ny ? grid.ny - 1 : 0) * grid.dy};
 }
 
-HeightPreview height_preview_from_grid(const ClGrid& g, const XYBounds& extent, const Vec3& offset,
+HeightPreview height_preview_from_grid(const cam::ClGrid& g, const cam::XYBounds& extent, const geometry::Vec3& offset,
                                        std::size_t max_side) {
   HeightPreview out;
-  const GridSpec& s = g.spec;
+  const cam::GridSpec& s = g.spec;
   if (s.size() == 0 || g.z.size() != s.size()) return out;
   const double ex = extent.x1 - extent.x0, ey = extent.y1 - extent.y0;
   const std::size_t nx = node_count(ex, s.dx, max_side), ny = node_count(ey, s.dy, max_side);
@@ -70,7 +70,7 @@ HeightPreview height_preview_from_grid(const ClGrid& g, const XYBounds& extent, 
     resample_max(
         s.ny, s.y0, s.dy, ny, extent.y0, hy, [&](std::size_t k) { return rows[k * nx + i]; },
         [&](std::size_t j, float v) { out.z[j * nx + i] = v + static_cast<float>(offset.z); });
-  out.grid = MapGrid{nx, ny, hx, hy, extent.x0 + offset.x, extent.y0 + offset.y};
+  out.grid = image::MapGrid{nx, ny, hx, hy, extent.x0 + offset.x, extent.y0 + offset.y};
   const auto [lo, hi] = std::minmax_element(g.z.begin(), g.z.end());
   out.z_min = *lo + offset.z;
   out.z_max = *hi + offset.z;
@@ -82,7 +82,7 @@ HeightPreview height_preview_from_trace(const gcode::ProgramTrace& trace, std::s
   double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
   for (const auto& s : trace.segments) {
     if (s.rapid) continue;
-    for (const Vec3& p : {s.work_from(), s.work_to()}) {
+    for (const geometry::Vec3& p : {s.work_from(), s.work_to()}) {
       x0 = std::min(x0, p.x);
       y0 = std::min(y0, p.y);
       x1 = std::max(x1, p.x);
@@ -95,7 +95,7 @@ HeightPreview height_preview_from_trace(const gcode::ProgramTrace& trace, std::s
   const double h = longest > 0 ? longest / double(side - 1) : 1;
   const std::size_t nx = node_count(ex, h, side), ny = node_count(ey, h, side);
   const double dx = nx > 1 ? ex / double(nx - 1) : h, dy = ny > 1 ? ey / double(ny - 1) : h;
-  out.grid = MapGrid{nx, ny, dx, dy, x0, y0};
+  out.grid = image::MapGrid{nx, ny, dx, dy, x0, y0};
   out.z.assign(nx * ny, kNone);
   const auto node = [&](double x, double y) {
     const auto i = static_cast<std::size_t>(std::clamp(std::round((x - x0) / dx), 0.0, double(nx - 1)));
@@ -106,7 +106,7 @@ HeightPreview height_preview_from_trace(const gcode::ProgramTrace& trace, std::s
   const double ds = 0.5 * std::min(dx, dy);
   for (const auto& s : trace.segments) {
     if (s.rapid) continue;
-    const Vec3 a = s.work_from(), b = s.work_to();
+    const geometry::Vec3 a = s.work_from(), b = s.work_to();
     const double len = std::hypot(b.x - a.x, b.y - a.y);
     const auto n = static_cast<std::size_t>(std::max(1.0, std::ceil(len / ds)));
     for (std::size_t k = 0; k <= n; ++k) {
@@ -155,18 +155,18 @@ HeightPreview height_preview_from_trace(const gcode::ProgramTrace& trace, std::s
   return out;
 }
 
-RgbImage render_height_preview(const HeightPreview& h, int max_px, Rgb no_data) {
+image::RgbImage render_height_preview(const HeightPreview& h, int max_px, image::Rgb no_data) {
   if (h.empty()) throw std::invalid_argument("height preview: empty (no cutting move)");
-  const XYBounds b = h.bounds();
+  const cam::XYBounds b = h.bounds();
   const double ex = b.x1 - b.x0, ey = b.y1 - b.y0;
-  HeightImageOptions o;
+  image::HeightImageOptions o;
   o.width = o.height = max_px;
   if (ex > ey) o.height = std::max(1, static_cast<int>(std::lround(max_px * ey / ex)));
   else if (ey > ex) o.width = std::max(1, static_cast<int>(std::lround(max_px * ex / ey)));
   o.z_min = h.z_min;
   o.z_max = h.z_max;
   o.no_data = no_data;
-  return render_height_image(h.grid, h.z, o);
+  return image::render_height_image(h.grid, h.z, o);
 }
 
 }  // namespace cncstream::jobs

@@ -18,7 +18,7 @@ OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParam
   o.name = "finishing";
   o.cutter = r.cutter;
   o.detail = fmt::format("raster, {} rows {} mm apart along {}", r.path.rows.size(), row_spacing_text(r.path),
-                         p.direction == RasterDirection::Y ? "Y" : "X");
+                         p.direction == cam::RasterDirection::Y ? "Y" : "X");
   if (r.waterline_pieces > 0)
     o.detail = fmt::format("waterlines where steeper than {} degrees ({} levels {} mm apart, {} pieces), then {} with "
                            "{} steep stretches left to them",
@@ -81,7 +81,7 @@ void compose_job(ToolpathProgram& r, const ToolpathParams& p, const RoughingStag
   JobProgram program(jo);
 
   // An operation's lines and time begin with its tool change.
-  auto begin = [&](const std::string& name, int tool, const Cutter& c, double rpm) {
+  auto begin = [&](const std::string& name, int tool, const cam::Cutter& c, double rpm) {
     auto at = std::make_pair(program.writer().lines().size(), program.stats());
     program.begin_operation({name, tool, c, rpm});
     return at;

@@ -28,11 +28,11 @@ void JobRun::within(double fraction) {
   report(from_ + (to_ - from_) * std::clamp(fraction, 0.0, 1.0));
 }
 
-Checkpoint JobRun::checkpoint() {
+cam::Checkpoint JobRun::checkpoint() {
   return [this](double fraction) { within(fraction); };
 }
 
-Checkpoint JobRun::nested_checkpoint(double from, double to) {
+cam::Checkpoint JobRun::nested_checkpoint(double from, double to) {
   return [this, from, to](double fraction) { within(from + (to - from) * std::clamp(fraction, 0.0, 1.0)); };
 }
 

@@ -28,10 +28,10 @@ class JobRun {
   // Thread-safe.
   void within(double fraction);
   // A cam-layer checkpoint doing within() for the current stage.
-  Checkpoint checkpoint();
+  cam::Checkpoint checkpoint();
   // The same for one part [from, to] of the current stage (two computations
   // in one stage).
-  Checkpoint nested_checkpoint(double from, double to);
+  cam::Checkpoint nested_checkpoint(double from, double to);
   // The control for a job run inside this one (already in its thread limit):
   // the same stop, its stages reported as this job's, inside [from, to].
   JobControl nested(double from, double to);

@@ -4,16 +4,16 @@
 
 namespace cncstream::jobs {
 
-std::shared_ptr<const Mesh> load_part(const PartSource& part) {
-  std::shared_ptr<const Mesh> mesh = part.mesh;
+std::shared_ptr<const geometry::Mesh> load_part(const PartSource& part) {
+  std::shared_ptr<const geometry::Mesh> mesh = part.mesh;
   if (!mesh) {
-    StlLoadOptions opt;
+    geometry::StlLoadOptions opt;
     opt.units = part.units;
     opt.scale = part.scale;
-    mesh = std::make_shared<const Mesh>(load_stl(part.stl, opt).mesh);
+    mesh = std::make_shared<const geometry::Mesh>(geometry::load_stl(part.stl, opt).mesh);
   }
   if (mesh->triangles.empty())
-    throw StlError(part.stl + ": the file holds no facets with area; nothing to machine");
+    throw geometry::StlError(part.stl + ": the file holds no facets with area; nothing to machine");
   check_part_size(mesh->bounds(), part.stl.empty() ? std::string("the part") : part.stl, part.max_extent_mm);
   return mesh;
 }

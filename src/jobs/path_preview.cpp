@@ -13,8 +13,8 @@ namespace {
 
 enum Span : std::uint8_t { kRapid = 0, kCut = 1, kJump = 2 };
 
-double distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 ab = b - a, ap = p - a;
+double distance_to_segment(const geometry::Vec3& p, const geometry::Vec3& a, const geometry::Vec3& b) {
+  const geometry::Vec3 ab = b - a, ap = p - a;
   const double l2 = dot(ab, ab);
   const double t = l2 > 0 ? std::clamp(dot(ap, ab) / l2, 0.0, 1.0) : 0.0;
   return norm(ap - ab * t);
@@ -23,7 +23,7 @@ double distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
 // Douglas-Peucker without a tolerance: each point gets the distance at which
 // it would be split off (never more than its parent's), so keeping the k most
 // important points is the simplification with k points.
-std::vector<double> importance(const std::vector<Vec3>& p) {
+std::vector<double> importance(const std::vector<geometry::Vec3>& p) {
   const std::size_t n = p.size();
   std::vector<double> imp(n, 0.0);
   imp.front() = imp.back() = std::numeric_limits<double>::infinity();
@@ -56,10 +56,10 @@ std::vector<double> importance(const std::vector<Vec3>& p) {
 PathPreview decimate_path(const gcode::ProgramTrace& trace, std::size_t max_points) {
   if (max_points < 2) throw std::invalid_argument("path preview: max_points must be at least 2");
   // The path as one chain of points; span[k] joins pts[k] and pts[k+1].
-  std::vector<Vec3> pts;
+  std::vector<geometry::Vec3> pts;
   std::vector<std::uint8_t> span;
   for (const auto& s : trace.segments) {
-    const Vec3 a = s.work_from(), b = s.work_to();
+    const geometry::Vec3 a = s.work_from(), b = s.work_to();
     if (pts.empty()) {
       pts.push_back(a);
     } else if (norm(pts.back() - a) > 1e-9) {

@@ -26,7 +26,7 @@ namespace {
 // reach: per node the lowest height the option's cutters can reach at all
 // (NaN where not computed: all of the residual counts as scallop).
 PlanOption evaluate(const std::string& name, const std::vector<const std::string*>& programs,
-                    const std::vector<double>& machined, const std::vector<double>& reach, const DesignHeights& design,
+                    const std::vector<double>& machined, const std::vector<double>& reach, const cam::DesignHeights& design,
                     double tol, const gcode::MotionLimits& limits, JobRun& run) {
   PlanOption o;
   o.name = name;
@@ -38,7 +38,7 @@ PlanOption evaluate(const std::string& name, const std::vector<const std::string
   for (std::size_t k = 0; k < machined.size(); ++k) {
     if (design.off_part[k]) continue;
     const double r = machined[k] - design.z[k];
-    const double unreachable = k < reach.size() ? unreachable_part(machined[k], design.z[k], reach[k]) : 0.0;
+    const double unreachable = k < reach.size() ? cam::unreachable_part(machined[k], design.z[k], reach[k]) : 0.0;
     o.max_residual = std::max(o.max_residual, r);
     o.max_scallop = std::max(o.max_scallop, r - unreachable);
     ++on;
@@ -63,17 +63,17 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
   // along the passes too (no speed target here, unlike the report).
   if (so.sim_along <= 0) so.sim_along = std::min(so.stepover, std::max(so.step, 0.2));
   JobRun run(control);
-  run_with_thread_limit(control.threads, [&] {
+  cam::run_with_thread_limit(control.threads, [&] {
     p.selection = run_selection(so, run.nested(0, kSelectionShare));
     const SelectionResult& r = p.selection;
-    const bool along_x = so.direction != RasterDirection::Y;
+    const bool along_x = so.direction != cam::RasterDirection::Y;
     p.radiused_first = 2 * r.choice.radiused_by_volume >= r.choice.on_part;
     const CutterRun& first = p.first();
     const CutterRun& second = p.second();
 
     // Clean-up: the second cutter's rows where the first leaves too much.
     run.stage("clean-up", kSelectionShare, 0.85);
-    const GridSpec& sg = r.design.grid;
+    const cam::GridSpec& sg = r.design.grid;
     // Only where the second cutter does better: corners neither reaches are
     // not worth a pass.
     std::vector<double> worth(sg.size(), std::numeric_limits<double>::quiet_NaN());
@@ -81,8 +81,8 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
       const double a = first.scallops.residual[k], b = second.scallops.residual[k];
       if (std::isfinite(a) && std::isfinite(b) && b < a - 0.25 * so.scallop_tol) worth[k] = a;
     }
-    p.cleanup_pieces = cleanup_pieces(second.path, sg, worth, so.scallop_tol, second.cutter.radius, along_x);
-    const std::vector<Polyline>& pieces = p.cleanup_pieces;
+    p.cleanup_pieces = cam::cleanup_pieces(second.path, sg, worth, so.scallop_tol, second.cutter.radius, along_x);
+    const std::vector<cam::Polyline>& pieces = p.cleanup_pieces;
     MachiningParams mp;
     mp.feed = params.feed;
     mp.plunge_feed = params.plunge_feed;
@@ -93,8 +93,8 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
         for (const auto& pt : row) top = std::max(top, pt.z);
     mp.safe_z = top + r.work_offset.z + 5;
     // A cutter's own feeds and speed, where the plan has them (--material).
-    auto rate_for = [&](const Cutter& c) {
-      const auto& rate = c.type == CutterType::Ball ? params.ball_rate : params.radiused_rate;
+    auto rate_for = [&](const cam::Cutter& c) {
+      const auto& rate = c.type == cam::CutterType::Ball ? params.ball_rate : params.radiused_rate;
       MachiningParams m = mp;
       if (rate) {
         m.feed = rate->feed;
@@ -105,19 +105,19 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
     };
     // The simulated clean-up, with its retracts (a straight move between
     // pieces would cut where the program does not).
-    std::vector<Polyline> sim_pieces;
+    std::vector<cam::Polyline> sim_pieces;
     const double sim_safe = mp.safe_z - r.work_offset.z;
     for (const auto& pl : pieces) {
-      Polyline s;
+      cam::Polyline s;
       s.push_back({pl.front().x, pl.front().y, sim_safe});
       s.insert(s.end(), pl.begin(), pl.end());
       s.push_back({pl.back().x, pl.back().y, sim_safe});
       sim_pieces.push_back(std::move(s));
     }
-    const std::vector<double> combined = machine_path(sg, first.machined, sim_pieces, second.cutter, run.checkpoint());
+    const std::vector<double> combined = cam::machine_path(sg, first.machined, sim_pieces, second.cutter, run.checkpoint());
 
     run.stage("programs", 0.85, 0.88);
-    auto header = [&](const Cutter& c, const std::string& what, int tool) {
+    auto header = [&](const cam::Cutter& c, const std::string& what, int tool) {
       MachiningParams h = rate_for(c);
       h.tool = tool;
       h.header_comments = {"cncstream plan: " + what, "part: " + so.part.stl,
@@ -148,10 +148,10 @@ PlanResult run_plan(const PlanParams& params, const JobControl& control) {
       p.program_job = job.finish();
     }
     const std::string prog_ball =
-        first.cutter.type == CutterType::Ball ? p.program_first
+        first.cutter.type == cam::CutterType::Ball ? p.program_first
                                               : finishing_program(r.ball.path, r.work_offset, rate_for(r.ball.cutter));
     const std::string prog_rad =
-        first.cutter.type == CutterType::Bull
+        first.cutter.type == cam::CutterType::Bull
             ? p.program_first
             : finishing_program(r.radiused.path, r.work_offset, rate_for(r.radiused.cutter));
 

@@ -26,12 +26,12 @@ constexpr double kRestLevelLeave = 0.05;
 
 }  // namespace
 
-RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& finish_engine, const XYBounds& region,
-                    const XYLattice& lattice, const Checkpoint& checkpoint) {
-  const Cutter& big = p.cutter;
+RestStage plan_rest(const ToolpathParams& p, const geometry::Mesh& mesh, const cam::ClEngine& finish_engine, const cam::XYBounds& region,
+                    const cam::XYLattice& lattice, const cam::Checkpoint& checkpoint) {
+  const cam::Cutter& big = p.cutter;
   RestStage s;
   s.cutter = *p.rest;
-  const Cutter& small = s.cutter;
+  const cam::Cutter& small = s.cutter;
   if (!(small.radius < big.radius - 1e-9))
     throw std::invalid_argument(fmt::format("the rest cutter {} must be smaller than the finishing cutter {}: it cuts "
                                             "where that one cannot reach",
@@ -39,16 +39,16 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
   // Where the finishing cutter leaves material: its reach limit over the
   // part on a grid fine enough for the smaller cutter's grooves.
   const double h = std::clamp(small.radius / 2, 0.05, 0.25);
-  const GridSpec grid = GridSpec::covering(region.x0, region.y0, region.x1, region.y1, h, h);
-  const DesignHeights design = design_heights(mesh, grid);
+  const cam::GridSpec grid = cam::GridSpec::covering(region.x0, region.y0, region.x1, region.y1, h, h);
+  const cam::DesignHeights design = cam::design_heights(mesh, grid);
   std::vector<std::uint8_t> wanted(grid.size());
   for (std::size_t k = 0; k < grid.size(); ++k) wanted[k] = design.off_part[k] ? 0 : 1;
   const double pitch = std::min(h, 0.1);
   const double r = big.radius;
-  const GridSpec lattice_around =
-      reach_lattice(grid, region.x0 - r, region.y0 - r, region.x1 + r, region.y1 + r, pitch, pitch);
-  const ClGrid dense = finish_engine.compute(lattice_around, checkpoint_part(checkpoint, 0, 0.3));
-  const std::vector<double> reach = reach_heights(dense, big, grid, wanted, checkpoint_part(checkpoint, 0.3, 0.5));
+  const cam::GridSpec lattice_around =
+      cam::reach_lattice(grid, region.x0 - r, region.y0 - r, region.x1 + r, region.y1 + r, pitch, pitch);
+  const cam::ClGrid dense = finish_engine.compute(lattice_around, cam::checkpoint_part(checkpoint, 0, 0.3));
+  const std::vector<double> reach = cam::reach_heights(dense, big, grid, wanted, cam::checkpoint_part(checkpoint, 0.3, 0.5));
   std::vector<double> left(grid.size(), std::numeric_limits<double>::quiet_NaN());
   // The reach lattice's own scallop and a micron-scale CL are not rest.
   s.threshold = std::max(2 * p.tolerance, 0.01);
@@ -80,24 +80,24 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
   }
   if (s.nodes == 0) return s;
 
-  ClOptions clo;
+  cam::ClOptions clo;
   clo.floor = p.floor;
   clo.floor_is_lowest = true;  // as the finishing's engine
-  const ClEngine engine(mesh, small, clo);
+  const cam::ClEngine engine(mesh, small, clo);
   const double grow = small.radius + h;
-  XYBounds box{std::max(region.x0, x0 - grow), std::max(region.y0, y0 - grow), std::min(region.x1, x1 + grow),
+  cam::XYBounds box{std::max(region.x0, x0 - grow), std::max(region.y0, y0 - grow), std::min(region.x1, x1 + grow),
                std::min(region.y1, y1 + grow)};
-  RasterOptions ro;
+  cam::RasterOptions ro;
   ro.stepover = s.stepover;
   ro.step = std::min(s.stepover / 4, 0.1);
   ro.direction = p.direction;
   ro.tolerance = rows_tolerance(p);
   ro.lattice = lattice;
-  const RasterPath rows = build_raster(engine, box, ro, checkpoint_part(checkpoint, 0.5, 0.7));
-  s.pieces = cleanup_pieces(rows, grid, left, s.threshold, grow, p.direction != RasterDirection::Y);
+  const cam::RasterPath rows = cam::build_raster(engine, box, ro, cam::checkpoint_part(checkpoint, 0.5, 0.7));
+  s.pieces = cam::cleanup_pieces(rows, grid, left, s.threshold, grow, p.direction != cam::RasterDirection::Y);
   // Then along the creases there (a groove's bottom, where it touches both
   // faces): the rows leave their cusps right at a crease.
-  PencilOptions po;
+  cam::PencilOptions po;
   po.step = std::min(0.1, small.radius / 4);
   po.lattice = lattice;
   po.tolerance = p.tolerance;
@@ -107,7 +107,7 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
     const double v = left[static_cast<std::size_t>(fj) * grid.nx + static_cast<std::size_t>(fi)];
     return std::isfinite(v) && v > s.threshold;
   };
-  for (Polyline& pl : pencil_passes(engine, box, po, where)) {
+  for (cam::Polyline& pl : cam::pencil_passes(engine, box, po, where)) {
     s.pieces.push_back(std::move(pl));
     ++s.pencils;
   }
@@ -122,10 +122,10 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
     z[k] = std::isfinite(reach[k]) ? reach[k] + (wanted[k] ? cusp + p.tolerance : 0) : dense.floor;
     top = std::max(top, z[k]);
   }
-  HeightFieldStock stock(grid, top, std::move(z));
+  cam::HeightFieldStock stock(grid, top, std::move(z));
   const double most = default_max_depth(small);
   const double retract_z = top + 1;
-  RoughingParams rr;
+  cam::RoughingParams rr;
   rr.tolerance = 0.05;
   rr.leave = std::max(kRestLevelLeave, rr.tolerance / 2 + p.tolerance);
   rr.step_down = most - rr.leave;
@@ -135,7 +135,7 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
   // skin).
   const double half_step = std::min(small.radius, rr.step_down / 2);
   const double rim = rr.leave + small.radius - std::sqrt(small.radius * small.radius - half_step * half_step);
-  PassDepth depth = pass_depth(stock, s.pieces, small, rim, most, retract_z);
+  cam::PassDepth depth = cam::pass_depth(stock, s.pieces, small, rim, most, retract_z);
   if (depth.deepest <= most + 1e-9) {
     s.depth = depth.deepest;
     if (checkpoint) checkpoint(1.0);
@@ -148,19 +148,19 @@ RestStage plan_rest(const ToolpathParams& p, const Mesh& mesh, const ClEngine& f
   rr.near_radius = small.radius;
   rr.bottom = dense.floor;
   s.level_leave = rr.leave;
-  const ClEngine grown(mesh, grown_cutter(small, rr.leave), clo);
-  StockBlock block{region.x0, region.y0, region.x1, region.y1, top, nullptr};
+  const cam::ClEngine grown(mesh, cam::grown_cutter(small, rr.leave), clo);
+  cam::StockBlock block{region.x0, region.y0, region.x1, region.y1, top, nullptr};
   double grid_step = 0;
   for (int round = 1;; ++round) {
     rr.near = depth.over;
     rr.grid_step = grid_step;
     block.surface = &stock;
-    RoughingPath levels = build_zlevel_roughing(grown, small, block, rr, checkpoint_part(checkpoint, 0.7, 0.95));
+    cam::RoughingPath levels = cam::build_zlevel_roughing(grown, small, block, rr, cam::checkpoint_part(checkpoint, 0.7, 0.95));
     if (levels.levels.empty()) break;
     stock = stock_after(stock, levels);
     grid_step = levels.grid.dx / 2;
     s.levels.push_back(std::move(levels));
-    depth = pass_depth(stock, s.pieces, small, rim, most, retract_z);
+    depth = cam::pass_depth(stock, s.pieces, small, rim, most, retract_z);
     if (depth.deepest <= most + 1e-9 || round == 3) break;
   }
   s.depth = depth.deepest;

@@ -16,12 +16,12 @@ namespace {
 
 // The deepest the pass cuts below the stock's top: over its points whose
 // cutter reaches over the stock (work coordinates).
-double depth_below_stock(const std::vector<Polyline>& pieces, const Vec3& offset, const WorkStock& stock,
+double depth_below_stock(const std::vector<cam::Polyline>& pieces, const geometry::Vec3& offset, const WorkStock& stock,
                          double radius) {
   double deepest = 0;
-  auto visit = [&](const Polyline& pl) {
-    for (const Vec3& m : pl) {
-      const Vec3 v = m + offset;
+  auto visit = [&](const cam::Polyline& pl) {
+    for (const geometry::Vec3& m : pl) {
+      const geometry::Vec3 v = m + offset;
       if (v.x < stock.box.lo.x - radius || v.x > stock.box.hi.x + radius || v.y < stock.box.lo.y - radius ||
           v.y > stock.box.hi.y + radius)
         continue;
@@ -36,29 +36,29 @@ double depth_below_stock(const std::vector<Polyline>& pieces, const Vec3& offset
 
 // A height map in work coordinates as a stock surface in model coordinates
 // (no value: the block's top).
-HeightFieldStock model_surface(const HeightFieldData& map, const Vec3& work_offset, double top) {
-  GridSpec g = map.grid;
+cam::HeightFieldStock model_surface(const cam::HeightFieldData& map, const geometry::Vec3& work_offset, double top) {
+  cam::GridSpec g = map.grid;
   g.x0 -= work_offset.x;
   g.y0 -= work_offset.y;
   std::vector<double> z(map.z.size());
   for (std::size_t n = 0; n < z.size(); ++n)
     z[n] = std::isfinite(map.z[n]) ? static_cast<double>(map.z[n]) - work_offset.z : top;
-  return HeightFieldStock(g, top, std::move(z));
+  return cam::HeightFieldStock(g, top, std::move(z));
 }
 
 std::string mm(double v) { return fmt::format("{:.2f} mm", v); }
 
 // The stock before the roughing on a grid over the block (model
 // coordinates): the block's top, or the height map's surface below it.
-HeightFieldStock stock_before(const StockBlock& block, double cell) {
-  const GridSpec g = GridSpec::covering(block.x0, block.y0, block.x1, block.y1, cell, cell);
+cam::HeightFieldStock stock_before(const cam::StockBlock& block, double cell) {
+  const cam::GridSpec g = cam::GridSpec::covering(block.x0, block.y0, block.x1, block.y1, cell, cell);
   std::vector<double> z(g.size(), block.top);
   if (block.surface)
     for (std::size_t j = 0; j < g.ny; ++j)
       for (std::size_t i = 0; i < g.nx; ++i)
-        if (const double h = stock_height_at(*block.surface, g.x(i), g.y(j)); std::isfinite(h))
+        if (const double h = cam::stock_height_at(*block.surface, g.x(i), g.y(j)); std::isfinite(h))
           z[j * g.nx + i] = std::min(h, block.top);
-  return HeightFieldStock(g, block.top, std::move(z));
+  return cam::HeightFieldStock(g, block.top, std::move(z));
 }
 
 // The rest roughing's leave: small, so the ball grown by it fits gaps
@@ -74,7 +74,7 @@ constexpr double kRestLeave = 0.05;
 
 }  // namespace
 
-double round_stepover(const Cutter& c, double step_down) {
+double round_stepover(const cam::Cutter& c, double step_down) {
   if (!c.is_apt()) {
     // A tapered ball or V-bit: from its tip, not its top (the cone rises
     // steeply beyond the tip): half the radius at which the profile rises a
@@ -93,9 +93,9 @@ double round_stepover(const Cutter& c, double step_down) {
   return std::clamp(reach - c.radius / 6, 0.1 * c.diameter(), 0.4 * c.diameter());
 }
 
-HeightFieldStock stock_after(const HeightFieldStock& stock, const RoughingPath& path) {
-  std::vector<double> z = machine_path(stock.grid(), stock.heights(), {roughing_moves(path)}, path.cutter);
-  return HeightFieldStock(stock.grid(), stock.top(), std::move(z));
+cam::HeightFieldStock stock_after(const cam::HeightFieldStock& stock, const cam::RoughingPath& path) {
+  std::vector<double> z = cam::machine_path(stock.grid(), stock.heights(), {cam::roughing_moves(path)}, path.cutter);
+  return cam::HeightFieldStock(stock.grid(), stock.top(), std::move(z));
 }
 
 namespace {
@@ -103,8 +103,8 @@ namespace {
 // The stock as a block in model coordinates; a height map its surface
 // (levels start below its highest point and cut only where there is
 // material above them).
-StockBlock model_block(const RoughingStage& s, const Vec3& work_offset) {
-  StockBlock block;
+cam::StockBlock model_block(const RoughingStage& s, const geometry::Vec3& work_offset) {
+  cam::StockBlock block;
   block.x0 = s.stock.box.lo.x - work_offset.x;
   block.y0 = s.stock.box.lo.y - work_offset.y;
   block.x1 = s.stock.box.hi.x - work_offset.x;
@@ -116,13 +116,13 @@ StockBlock model_block(const RoughingStage& s, const Vec3& work_offset) {
 
 // No level below the stock's bottom (an open mesh would let the tip go
 // below the part's floor).
-double block_bottom(const RoughingStage& s, const Vec3& work_offset) { return s.stock.box.lo.z - work_offset.z; }
+double block_bottom(const RoughingStage& s, const geometry::Vec3& work_offset) { return s.stock.box.lo.z - work_offset.z; }
 
 // The Z-level roughing from the stock into s.path (its summary in
 // s.path_note).
-void add_roughing_path(RoughingStage& s, const ToolpathParams& p, const Mesh& mesh, const Vec3& work_offset,
-                       const Checkpoint& checkpoint) {
-  const Cutter rc = s.rough_cutter;
+void add_roughing_path(RoughingStage& s, const ToolpathParams& p, const geometry::Mesh& mesh, const geometry::Vec3& work_offset,
+                       const cam::Checkpoint& checkpoint) {
+  const cam::Cutter rc = s.rough_cutter;
   s.rough_max_depth = p.rough_max_depth.value_or(default_max_depth(rc));
   if (!(s.rough_max_depth > 0)) throw std::invalid_argument("the roughing cutter's maximum depth must be positive");
   if (!(p.leave >= 0)) throw std::invalid_argument("the stock to leave must not be negative");
@@ -130,8 +130,8 @@ void add_roughing_path(RoughingStage& s, const ToolpathParams& p, const Mesh& me
     throw std::invalid_argument(fmt::format("the stock to leave ({}) is not less than the finishing cutter's maximum depth "
                                             "({}): the finishing pass could not take it",
                                             mm(p.leave), mm(s.finish_max_depth)));
-  const StockBlock block = model_block(s, work_offset);
-  RoughingParams rp;
+  const cam::StockBlock block = model_block(s, work_offset);
+  cam::RoughingParams rp;
   rp.leave = p.leave;
   rp.bottom = block_bottom(s, work_offset);
   rp.stepover = p.rough_stepover;
@@ -149,10 +149,10 @@ void add_roughing_path(RoughingStage& s, const ToolpathParams& p, const Mesh& me
     throw std::invalid_argument(fmt::format("step-down {} must be positive and at most the roughing cutter's maximum "
                                             "depth {}",
                                             mm(rp.step_down), mm(s.rough_max_depth)));
-  ClOptions clo;
+  cam::ClOptions clo;
   clo.floor = p.floor;
-  const ClEngine grown(mesh, grown_cutter(rc, p.leave), clo);
-  RoughingPath path = build_zlevel_roughing(grown, rc, block, rp, checkpoint);
+  const cam::ClEngine grown(mesh, cam::grown_cutter(rc, p.leave), clo);
+  cam::RoughingPath path = cam::build_zlevel_roughing(grown, rc, block, rp, checkpoint);
   // The terraces' bound came out above what the finishing cutter may take
   // (round cutters leave scallops between loops too): once more with the
   // levels closer by the excess.
@@ -160,7 +160,7 @@ void add_roughing_path(RoughingStage& s, const ToolpathParams& p, const Mesh& me
   if (after > s.finish_max_depth + 1e-9 && !p.step_down) {
     rp.step_down -= after - s.finish_max_depth;
     if (rp.step_down > 0.05) {
-      path = build_zlevel_roughing(grown, rc, block, rp, checkpoint);
+      path = cam::build_zlevel_roughing(grown, rc, block, rp, checkpoint);
       after = p.leave + path.terrace_bound;
     }
   }
@@ -171,15 +171,15 @@ void add_roughing_path(RoughingStage& s, const ToolpathParams& p, const Mesh& me
   // The stock it leaves, on a grid fine enough for the finishing cutter
   // (check_roughing measures the finishing pass's depth of cut against it).
   const double cell = std::min(0.25, p.cutter.radius / 4);
-  s.roughed = std::make_shared<const HeightFieldStock>(stock_after(stock_before(block, cell), *s.path));
+  s.roughed = std::make_shared<const cam::HeightFieldStock>(stock_after(stock_before(block, cell), *s.path));
 }
 
 }  // namespace
 
-RoughingStage roughing_from_stock(const ToolpathParams& p, const Mesh& mesh, const Vec3& work_offset,
-                                  bool with_path, const Checkpoint& checkpoint) {
+RoughingStage roughing_from_stock(const ToolpathParams& p, const geometry::Mesh& mesh, const geometry::Vec3& work_offset,
+                                  bool with_path, const cam::Checkpoint& checkpoint) {
   RoughingStage s;
-  Box3 part = mesh.bounds();
+  geometry::Box3 part = mesh.bounds();
   part.lo = part.lo + work_offset;
   part.hi = part.hi + work_offset;
   s.stock = resolve_stock(*p.stock, part);
@@ -187,14 +187,14 @@ RoughingStage roughing_from_stock(const ToolpathParams& p, const Mesh& mesh, con
   if (!(s.finish_max_depth > 0)) throw std::invalid_argument("the maximum depth of cut must be positive");
   s.rough_cutter = p.rough.value_or(p.cutter);
   if (s.stock.heights)
-    s.surface = std::make_shared<const HeightFieldStock>(
+    s.surface = std::make_shared<const cam::HeightFieldStock>(
         model_surface(*s.stock.heights, work_offset, s.stock.box.hi.z - work_offset.z));
   if (with_path) add_roughing_path(s, p, mesh, work_offset, checkpoint);
   return s;
 }
 
-void check_roughing(RoughingStage& s, const ToolpathParams& p, const Mesh& mesh,
-                    const std::vector<Polyline>& finishing, const Vec3& work_offset, const Checkpoint& checkpoint) {
+void check_roughing(RoughingStage& s, const ToolpathParams& p, const geometry::Mesh& mesh,
+                    const std::vector<cam::Polyline>& finishing, const geometry::Vec3& work_offset, const cam::Checkpoint& checkpoint) {
   s.finish_depth_alone = depth_below_stock(finishing, work_offset, s.stock, p.cutter.radius);
   s.finish_depth = s.finish_depth_alone;
   const bool needed = s.finish_depth_alone > s.finish_max_depth + 1e-9;
@@ -219,17 +219,17 @@ void check_roughing(RoughingStage& s, const ToolpathParams& p, const Mesh& mesh,
   // could not reach (gaps narrower than it grown by the leave), it would
   // still cut deep. Its depth of cut leaves out a rim as wide as the leave:
   // its side cut of the skin along a wall is as tall as the wall.
-  const StockBlock block = model_block(s, work_offset);
+  const cam::StockBlock block = model_block(s, work_offset);
   const double retract_z = block.top + 1;
-  auto finishing_depth = [&](const HeightFieldStock& stock) {
-    return pass_depth(stock, finishing, p.cutter, p.leave, s.finish_max_depth, retract_z);
+  auto finishing_depth = [&](const cam::HeightFieldStock& stock) {
+    return cam::pass_depth(stock, finishing, p.cutter, p.leave, s.finish_max_depth, retract_z);
   };
-  auto where = [&](const PassDepth& e) {
+  auto where = [&](const cam::PassDepth& e) {
     return fmt::format("X{:.3f} Y{:.3f} (work coordinates; down to Z{:.3f})", e.at.x + work_offset.x,
                        e.at.y + work_offset.y, e.at.z + work_offset.z);
   };
-  const HeightFieldStock& roughed = *s.roughed;
-  const PassDepth after_rough = finishing_depth(roughed);
+  const cam::HeightFieldStock& roughed = *s.roughed;
+  const cam::PassDepth after_rough = finishing_depth(roughed);
   s.finish_depth = after_rough.deepest;
   if (after_rough.deepest <= s.finish_max_depth + 1e-9) {
     s.notes.push_back(fmt::format("after roughing the finishing pass cuts at most {}, within its cutter's {}",
@@ -242,7 +242,7 @@ void check_roughing(RoughingStage& s, const ToolpathParams& p, const Mesh& mesh,
   // levels only where material stands above them, each within the
   // finishing cutter's depth, and one that brings the stock there within it.
   s.rest_spots = after_rough.over.size();
-  RoughingParams rr;
+  cam::RoughingParams rr;
   rr.tolerance = 0.05;
   rr.leave = std::min(p.leave, std::max(kRestLeave, rr.tolerance / 2 + p.tolerance));
   rr.bottom = block_bottom(s, work_offset);
@@ -252,34 +252,34 @@ void check_roughing(RoughingStage& s, const ToolpathParams& p, const Mesh& mesh,
   rr.near_radius = p.cutter.radius;
   rr.step_down = s.finish_max_depth - rr.leave;
   if (p.cutter.corner_radius > 0) rr.stepover = round_stepover(p.cutter, rr.step_down);
-  StockBlock rest_block = block;
-  ClOptions clo;
+  cam::StockBlock rest_block = block;
+  cam::ClOptions clo;
   clo.floor = p.floor;
-  const ClEngine grown_finish(mesh, grown_cutter(p.cutter, rr.leave), clo);
+  const cam::ClEngine grown_finish(mesh, cam::grown_cutter(p.cutter, rr.leave), clo);
   // The stage's progress stays where the roughing ended; a stop request
   // still stops it.
-  Checkpoint rest_checkpoint;
+  cam::Checkpoint rest_checkpoint;
   if (checkpoint) rest_checkpoint = [&checkpoint](double) { checkpoint(1.0); };
   // What a rest roughing leaves too deep (its regions come from a grid: a
   // pit the finishing ball drops into, narrower than a cell, is missed) gets
   // another near it alone, from the stock after it, on a grid half as fine.
-  HeightFieldStock stock = roughed;
-  PassDepth depth = after_rough;
+  cam::HeightFieldStock stock = roughed;
+  cam::PassDepth depth = after_rough;
   double grid_step = 0;  // the roughing's default first
   for (int attempt = 1;; ++attempt) {
     rest_block.surface = &stock;
     rr.grid_step = grid_step;
-    RoughingPath rest = build_zlevel_roughing(grown_finish, p.cutter, rest_block, rr, rest_checkpoint);
+    cam::RoughingPath rest = cam::build_zlevel_roughing(grown_finish, p.cutter, rest_block, rr, rest_checkpoint);
     if (rest.levels.empty())
       throw std::invalid_argument(fmt::format(
           "after roughing{} the finishing pass would still cut {} at {}, more than the {}'s {}, and a rest roughing "
           "with it finds nothing it can cut there: give a smaller --leave or --step-down",
           s.rest.empty() ? "" : " and rest roughing", mm(depth.deepest), where(depth), p.cutter.spec(),
           mm(s.finish_max_depth)));
-    HeightFieldStock after = stock_after(stock, rest);
+    cam::HeightFieldStock after = stock_after(stock, rest);
     // Bounded from the measure before (cheap), measured again only where a
     // bound is over.
-    PassDepth now = pass_depth_bound(after, depth, p.cutter, p.leave, s.finish_max_depth);
+    cam::PassDepth now = cam::pass_depth_bound(after, depth, p.cutter, p.leave, s.finish_max_depth);
     if (now.deepest > s.finish_max_depth + 1e-9) now = finishing_depth(after);
     grid_step = rest.grid.dx / 2;
     s.rest.push_back(std::move(rest));

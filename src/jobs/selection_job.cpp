@@ -21,22 +21,22 @@ namespace cncstream::jobs {
 namespace {
 
 // Scallop of the 2-D estimate as a function of the cross slope, tabulated.
-std::vector<double> scallop_table(const Cutter& c, double s) {
+std::vector<double> scallop_table(const cam::Cutter& c, double s) {
   std::vector<double> t(181);
-  for (std::size_t k = 0; k < t.size(); ++k) t[k] = scallop_2d(c, s, double(k) * 0.5 * M_PI / 180);
+  for (std::size_t k = 0; k < t.size(); ++k) t[k] = cam::scallop_2d(c, s, double(k) * 0.5 * M_PI / 180);
   return t;
 }
 
 // Residual up to which the reach split is not computed: it counts as scallop
 // (an unreachable part this small is not reported anyway).
-constexpr double kReachSplitMin = kUnreachableMin;
+constexpr double kReachSplitMin = cam::kUnreachableMin;
 
 }  // namespace
 
 SelectionResult run_selection(const SelectionParams& o, const JobControl& control) {
   SelectionResult r;
   JobRun run(control);
-  run_with_thread_limit(control.threads, [&] {
+  cam::run_with_thread_limit(control.threads, [&] {
     // Stage shares of the whole job as measured on the plaque (cut
     // simulation about half, CL grids and paths a third).
     const auto t_all = std::chrono::steady_clock::now();
@@ -44,24 +44,24 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     r.pair = o.cutters;
     run.stage("load", 0, 0.01);
     auto t0 = std::chrono::steady_clock::now();
-    const std::shared_ptr<const Mesh> part = load_part(o.part);
-    const Mesh& mesh = *part;
+    const std::shared_ptr<const geometry::Mesh> part = load_part(o.part);
+    const geometry::Mesh& mesh = *part;
     r.facets = mesh.triangles.size();
-    const Box3 box = mesh.bounds();
+    const geometry::Box3 box = mesh.bounds();
     const WorkSetup work = work_setup(box);
     r.work_offset = work.offset;
     r.timings.push_back({"load", seconds_since(t0)});
 
-    const bool along_x = o.direction != RasterDirection::Y;
-    const XYBounds b = default_bounds(mesh, r.pair.ball);
+    const bool along_x = o.direction != cam::RasterDirection::Y;
+    const cam::XYBounds b = cam::default_bounds(mesh, r.pair.ball);
     // Both finishing rasters on the G-code's lattice, as `toolpath` makes them;
     // their CL grids (every CL point of every pass) are where the choice is made.
     run.stage("CL grids + raster paths", 0.01, 0.30);
     t0 = std::chrono::steady_clock::now();
-    const ClEngine e_ball(mesh, r.pair.ball), e_rad(mesh, r.pair.radiused);
-    std::optional<ClEngine> e_tap;
+    const cam::ClEngine e_ball(mesh, r.pair.ball), e_rad(mesh, r.pair.radiused);
+    std::optional<cam::ClEngine> e_tap;
     if (o.tapered) e_tap.emplace(mesh, *o.tapered);
-    RasterOptions ro;
+    cam::RasterOptions ro;
     ro.stepover = o.stepover;
     ro.step = o.step;
     ro.direction = o.direction;
@@ -70,20 +70,20 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     r.ball.cutter = r.pair.ball;
     r.radiused.cutter = r.pair.radiused;
     const double raster_share = e_tap ? 1.0 / 3 : 0.5;
-    r.ball.path = build_raster(e_ball, b, ro, [&](double f) { run.within(raster_share * f); });
-    r.radiused.path = build_raster(e_rad, b, ro, [&](double f) { run.within(raster_share * (1 + f)); });
+    r.ball.path = cam::build_raster(e_ball, b, ro, [&](double f) { run.within(raster_share * f); });
+    r.radiused.path = cam::build_raster(e_rad, b, ro, [&](double f) { run.within(raster_share * (1 + f)); });
     if (e_tap) {
       r.tapered.emplace();
       r.tapered->cutter = *o.tapered;
-      r.tapered->path = build_raster(*e_tap, b, ro, [&](double f) { run.within(raster_share * (2 + f)); });
+      r.tapered->path = cam::build_raster(*e_tap, b, ro, [&](double f) { run.within(raster_share * (2 + f)); });
     }
     r.timings.push_back({"CL grids + raster paths", seconds_since(t0)});
     run.stage("choice", 0.30, 0.33);
     t0 = std::chrono::steady_clock::now();
-    const ClGrid& g_ball = r.ball.path.grid;
-    const GridSpec& ag = g_ball.spec;
-    r.choice = choose_by_removal(r.pair, g_ball, r.radiused.path.grid);
-    r.profile = slope_profile(r.choice, 5);
+    const cam::ClGrid& g_ball = r.ball.path.grid;
+    const cam::GridSpec& ag = g_ball.spec;
+    r.choice = cam::choose_by_removal(r.pair, g_ball, r.radiused.path.grid);
+    r.profile = cam::slope_profile(r.choice, 5);
     r.timings.push_back({"choice", seconds_since(t0)});
 
     // The cut simulation grid over the part: fine across the passes.
@@ -98,9 +98,9 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     const double first = along_x ? r.ball.path.rows.front().front().y : r.ball.path.rows.front().front().x;
     const double lo_across = along_x ? box.lo.y : box.lo.x;
     const double start = first - std::ceil((first - lo_across) / fine - 1e-9) * fine;
-    const GridSpec sg = along_x ? GridSpec::covering(box.lo.x, start, box.hi.x, box.hi.y, along, fine)
-                                : GridSpec::covering(start, box.lo.y, box.hi.x, box.hi.y, fine, along);
-    r.design = design_heights(mesh, sg);
+    const cam::GridSpec sg = along_x ? cam::GridSpec::covering(box.lo.x, start, box.hi.x, box.hi.y, along, fine)
+                                : cam::GridSpec::covering(start, box.lo.y, box.hi.x, box.hi.y, fine, along);
+    r.design = cam::design_heights(mesh, sg);
     r.timings.push_back({"design heights", seconds_since(t0)});
     run.stage("cut simulation", 0.35, 0.85);
     t0 = std::chrono::steady_clock::now();
@@ -110,7 +110,7 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     for (std::size_t n = 0; n < runs.size(); ++n) {
       CutterRun* cr = runs[n];
       const double base = double(n) * share;
-      cr->machined = machine_path(sg, std::vector<double>(sg.size(), stock_top), raster_pieces(cr->path), cr->cutter,
+      cr->machined = cam::machine_path(sg, std::vector<double>(sg.size(), stock_top), cam::raster_pieces(cr->path), cr->cutter,
                                   [&](double f) { run.within(base + share * f); });
     }
     r.timings.push_back({"cut simulation", seconds_since(t0)});
@@ -131,16 +131,16 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
       for (const auto& row : cr->path.rows) rows.push_back(along_x ? row.front().y : row.front().x);
       std::vector<double> reach;
       if (pitch > 0) {
-        const ClEngine& e = cr == &r.ball ? e_ball : cr == &r.radiused ? e_rad : *e_tap;
+        const cam::ClEngine& e = cr == &r.ball ? e_ball : cr == &r.radiused ? e_rad : *e_tap;
         std::vector<std::uint8_t> wanted(sg.size(), 0);
         for (std::size_t k = 0; k < sg.size(); ++k)
           wanted[k] = !r.design.off_part[k] && cr->machined[k] - r.design.z[k] > kReachSplitMin;
-        const ClGrid dense = e.compute(reach_lattice(sg, b.x0, b.y0, b.x1, b.y1, pitch, pitch),
+        const cam::ClGrid dense = e.compute(cam::reach_lattice(sg, b.x0, b.y0, b.x1, b.y1, pitch, pitch),
                                        [&](double f) { run.within(base + 0.5 * share * f); });
-        reach = reach_heights(dense, cr->cutter, sg, wanted,
+        reach = cam::reach_heights(dense, cr->cutter, sg, wanted,
                               [&](double f) { run.within(base + 0.5 * share * (1 + f)); });
       }
-      cr->scallops = scallops_from_cut(sg, cr->machined, r.design, rows, along_x, pitch > 0 ? &reach : nullptr);
+      cr->scallops = cam::scallops_from_cut(sg, cr->machined, r.design, rows, along_x, pitch > 0 ? &reach : nullptr);
       cr->reach = std::move(reach);
     }
     if (pitch > 0) r.timings.push_back({"reach limits", seconds_since(t0)});
@@ -150,7 +150,7 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
     for (CutterRun* cr : runs) {
       const auto table = scallop_table(cr->cutter, o.stepover);
       std::vector<double> est(ag.size(), std::numeric_limits<double>::quiet_NaN());
-      const ClGrid& g = g_ball;
+      const cam::ClGrid& g = g_ball;
       for (std::size_t j = 1; j + 1 < ag.ny; ++j)
         for (std::size_t i = 1; i + 1 < ag.nx; ++i) {
           const std::size_t k = j * ag.nx + i;
@@ -162,16 +162,16 @@ SelectionResult run_selection(const SelectionParams& o, const JobControl& contro
           const auto lo = static_cast<std::size_t>(f);
           est[k] = table[lo] + (table[lo + 1] - table[lo]) * (f - double(lo));
         }
-      cr->estimate_2d = scallop_stats(est);
+      cr->estimate_2d = cam::scallop_stats(est);
     }
 
     // The cutter leaving the smaller scallop, per pass pair and column.
-    r.min_scallop_choice.assign(sg.size(), static_cast<std::int8_t>(Choice::None));
+    r.min_scallop_choice.assign(sg.size(), static_cast<std::int8_t>(cam::Choice::None));
     for (std::size_t k = 0; k < sg.size(); ++k) {
       const double a = r.ball.scallops.strip[k], c = r.radiused.scallops.strip[k];
       if (!std::isfinite(a) || !std::isfinite(c)) continue;
       r.min_scallop_choice[k] =
-          std::fabs(a - c) <= 1e-3 ? std::int8_t{2} : static_cast<std::int8_t>(a < c ? Choice::Ball : Choice::Radiused);
+          std::fabs(a - c) <= 1e-3 ? std::int8_t{2} : static_cast<std::int8_t>(a < c ? cam::Choice::Ball : cam::Choice::Radiused);
     }
     r.seconds = seconds_since(t_all);
   });
@@ -194,8 +194,8 @@ std::vector<CutterRun*> SelectionResult::runs() {
 std::string SelectionResult::table() const {
   const auto mm = [](double v, int digits = 4) { return fixed_text(v, digits); };
   std::ostringstream o;
-  const double vol_sw = switch_angle(pair.rc(), choice.d_base_volume) * 180 / M_PI;
-  const double area_sw = switch_angle(pair.rc(), choice.d_base_area) * 180 / M_PI;
+  const double vol_sw = cam::switch_angle(pair.rc(), choice.d_base_volume) * 180 / M_PI;
+  const double area_sw = cam::switch_angle(pair.rc(), choice.d_base_area) * 180 / M_PI;
   o << "cutters: " << pair.ball.description() << " [" << pair.ball.spec() << "] vs " << pair.radiused.description() << " ["
     << pair.radiused.spec() << "]";
   if (tapered) o << ", beside them " << tapered->cutter.description() << " [" << tapered->cutter.spec() << "]";
@@ -210,7 +210,7 @@ std::string SelectionResult::table() const {
   o << "scallop heights, stepover " << mm(params.stepover, 3) << " mm (Table 4.1 form):\n";
   o << "  cutter                   method            max mm    min mm    mean mm\n";
   for (const CutterRun* run : runs()) {
-    auto row = [&](const char* method, const ScallopStats& s) {
+    auto row = [&](const char* method, const cam::ScallopStats& s) {
       o << "  " << std::left << std::setw(24) << run->cutter.spec() << " " << std::setw(16) << method << std::right
         << std::setw(8) << mm(s.max) << "  " << std::setw(8) << mm(s.min) << "  " << std::setw(8) << mm(s.mean) << "\n";
     };
@@ -220,10 +220,10 @@ std::string SelectionResult::table() const {
   if (ball.scallops.unreachable_stats.computed) {
     o << "material no stepover removes (gaps and inside corners narrower than the cutter; not counted as scallop):\n";
     for (const CutterRun* run : runs()) {
-      const UnreachableStats& u = run->scallops.unreachable_stats;
+      const cam::UnreachableStats& u = run->scallops.unreachable_stats;
       o << "  " << std::left << std::setw(24) << run->cutter.spec() << std::right << " max " << mm(u.max) << " mm at ("
         << mm(u.max_x + work_offset.x, 2) << ", " << mm(u.max_y + work_offset.y, 2) << ") work, mean " << mm(u.mean)
-        << " mm, more than " << mm(kUnreachableMin, 2) << " mm on " << mm(100 * u.share, 1) << " % of the part\n";
+        << " mm, more than " << mm(cam::kUnreachableMin, 2) << " mm on " << mm(100 * u.share, 1) << " % of the part\n";
     }
   }
   o << "time: " << mm(seconds, 2) << " s (";

@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-MapGrid map_grid(const GridSpec& g) { return {g.nx, g.ny, g.dx, g.dy, g.x0, g.y0}; }
+image::MapGrid map_grid(const cam::GridSpec& g) { return {g.nx, g.ny, g.dx, g.dy, g.x0, g.y0}; }
 
 std::string mm(double v, int digits = 4) { return fixed_text(v, digits); }
 
@@ -51,31 +51,31 @@ std::string json_text(const SelectionResult& r) {
   j["facets"] = r.facets;
   j["stepover_mm"] = r.params.stepover;
   j["step_mm"] = r.params.step;
-  j["direction"] = r.params.direction == RasterDirection::Y ? "y" : "x";
+  j["direction"] = r.params.direction == cam::RasterDirection::Y ? "y" : "x";
   j["cutters"] = {{"ball", r.pair.ball.spec()}, {"radiused", r.pair.radiused.spec()}};
   if (r.tapered) j["cutters"]["tapered"] = r.tapered->cutter.spec();
   j["d_base_mm"] = {{"volume", r.choice.d_base_volume}, {"area", r.choice.d_base_area}};
-  j["switch_deg"] = {{"volume_plane", switch_angle(r.pair.rc(), r.choice.d_base_volume) * 180 / M_PI},
-                     {"area_plane", switch_angle(r.pair.rc(), r.choice.d_base_area) * 180 / M_PI},
+  j["switch_deg"] = {{"volume_plane", cam::switch_angle(r.pair.rc(), r.choice.d_base_volume) * 180 / M_PI},
+                     {"area_plane", cam::switch_angle(r.pair.rc(), r.choice.d_base_area) * 180 / M_PI},
                      {"volume_measured", std::isfinite(r.profile.switch_deg_volume) ? nlohmann::json(r.profile.switch_deg_volume) : nlohmann::json()},
                      {"area_measured", std::isfinite(r.profile.switch_deg_area) ? nlohmann::json(r.profile.switch_deg_area) : nlohmann::json()}};
   const double on = std::max<double>(1, double(r.choice.on_part));
   j["share_radiused_pct"] = {{"volume", 100 * double(r.choice.radiused_by_volume) / on},
                              {"area", 100 * double(r.choice.radiused_by_area) / on}};
   j["analysis_nodes_on_part"] = r.choice.on_part;
-  auto stats = [](const ScallopStats& s) {
+  auto stats = [](const cam::ScallopStats& s) {
     return nlohmann::json{{"max_mm", s.max}, {"min_mm", s.min}, {"mean_mm", s.mean}, {"samples", s.samples}};
   };
   for (const CutterRun* run : r.runs()) {
     j["scallop"][run->cutter.spec()] = {{"cut_simulation", stats(run->scallops.stats)},
                                         {"estimate_2d", stats(run->estimate_2d)}};
-    const UnreachableStats& u = run->scallops.unreachable_stats;
+    const cam::UnreachableStats& u = run->scallops.unreachable_stats;
     if (u.computed)
       j["unreachable"][run->cutter.spec()] = {{"max_mm", u.max},
                                               {"at_work_xy", {u.max_x + r.work_offset.x, u.max_y + r.work_offset.y}},
                                               {"mean_mm", u.mean},
                                               {"share_above_min_pct", 100 * u.share},
-                                              {"min_mm", kUnreachableMin}};
+                                              {"min_mm", cam::kUnreachableMin}};
   }
   for (const auto& bin : r.profile.bins)
     if (bin.nodes)
@@ -93,10 +93,10 @@ std::string json_text(const SelectionResult& r) {
 // the choice maps.
 void write_nodes_csv(const SelectionResult& r, std::ostream& f) {
   f << "x,y,z_ball,z_radiused,d,slope_deg,by_volume,by_area\n";
-  const GridSpec& g = r.choice.grid;
+  const cam::GridSpec& g = r.choice.grid;
   const auto& zb = r.ball.path.grid.z;
   const auto& zr = r.radiused.path.grid.z;
-  auto name = [](Choice c) { return c == Choice::Ball ? "ball" : c == Choice::Radiused ? "radiused" : ""; };
+  auto name = [](cam::Choice c) { return c == cam::Choice::Ball ? "ball" : c == cam::Choice::Radiused ? "radiused" : ""; };
   std::string out;
   auto at = std::back_inserter(out);
   auto num = [&](double v, int digits) {  // empty where NaN
@@ -122,7 +122,7 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
                                              const SelectionReportOptions& options, const JobControl& control) {
   JobRun run(control);
   std::vector<fs::path> files;
-  run_with_thread_limit(control.threads, [&] {
+  cam::run_with_thread_limit(control.threads, [&] {
     run.stage("report", 0, 1);
     std::error_code ec;
     fs::create_directories(dir, ec);
@@ -146,7 +146,7 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
       write_report_file(p, [&](std::ostream& f) {
         f << "cutter,method,max_mm,min_mm,mean_mm,samples\n";
         for (const CutterRun* cr : r.runs()) {
-          for (const auto& [method, s] : {std::pair<const char*, ScallopStats>{"cut_simulation", cr->scallops.stats},
+          for (const auto& [method, s] : {std::pair<const char*, cam::ScallopStats>{"cut_simulation", cr->scallops.stats},
                                           {"estimate_2d", cr->estimate_2d}})
             f << cr->cutter.spec() << "," << method << "," << mm(s.max, 6) << "," << mm(s.min, 6) << "," << mm(s.mean, 6)
               << "," << s.samples << "\n";
@@ -169,21 +169,21 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
 
     // Pictures: rendered and encoded side by side (they are independent).
     std::vector<std::function<void()>> pictures;
-    const std::vector<MapCategory> cats = {{"ball " + ball + " removes more", category_colour(1)},
-                                           {"radiused " + rad + " removes more", category_colour(2)}};
-    auto png = [](const fs::path& p, const RgbImage& image) {
-      write_file_atomically(p, [&](const fs::path& file) { write_png(file, image); });
+    const std::vector<image::MapCategory> cats = {{"ball " + ball + " removes more", image::category_colour(1)},
+                                           {"radiused " + rad + " removes more", image::category_colour(2)}};
+    auto png = [](const fs::path& p, const image::RgbImage& image) {
+      write_file_atomically(p, [&](const fs::path& file) { image::write_png(file, image); });
     };
-    auto choice_png = [&](const std::vector<Choice>& ch, const char* name, const std::string& title) {
+    auto choice_png = [&](const std::vector<cam::Choice>& ch, const char* name, const std::string& title) {
       std::vector<int> c(ch.size());
       for (std::size_t k = 0; k < ch.size(); ++k) c[k] = static_cast<int>(ch[k]);
-      CategoryMapOptions mo;
+      image::CategoryMapOptions mo;
       mo.title = title;
       mo.subtitle = "d = ball centre z - corner centre z; radiused where d > d_base";
       mo.none_label = "off part";
       const fs::path p = dir / name;
       pictures.push_back([&r, &cats, png, p, c = std::move(c), mo] {
-        png(p, render_category_map(map_grid(r.choice.grid), c, cats, mo));
+        png(p, image::render_category_map(map_grid(r.choice.grid), c, cats, mo));
       });
       files.push_back(p);
     };
@@ -209,7 +209,7 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
         invalid[k] = !std::isfinite(cr->scallops.residual[k]);
         if (invalid[k]) v[k] = 0;
       }
-      HeightMapOptions ho;
+      image::HeightMapOptions ho;
       ho.title = "Material left (machined - design) by " + cr->cutter.description();
       ho.subtitle = "cut simulation, stepover " + mm(r.params.stepover, 3) + " mm; colours clipped at " + mm(top, 3) +
                     " mm (3 x the median scallop or the tolerance)";
@@ -218,22 +218,22 @@ std::vector<fs::path> write_selection_report(const SelectionResult& r, const fs:
       ho.vertical_exaggeration = 0;
       const fs::path p = dir / ("scallop_" + safe(cr->cutter.spec()) + ".png");
       pictures.push_back([&r, png, p, v = std::move(v), invalid = std::move(invalid), ho] {
-        png(p, render_height_map(map_grid(r.design.grid), v, invalid, ho));
+        png(p, image::render_height_map(map_grid(r.design.grid), v, invalid, ho));
       });
       files.push_back(p);
     }
     {
       std::vector<int> c(r.min_scallop_choice.begin(), r.min_scallop_choice.end());
-      const std::vector<MapCategory> mc = {{"ball " + ball + " leaves less", category_colour(1)},
-                                           {"radiused " + rad + " leaves less", category_colour(2)},
-                                           {"equal within 1 um", category_colour(0)}};
-      CategoryMapOptions mo;
+      const std::vector<image::MapCategory> mc = {{"ball " + ball + " leaves less", image::category_colour(1)},
+                                           {"radiused " + rad + " leaves less", image::category_colour(2)},
+                                           {"equal within 1 um", image::category_colour(0)}};
+      image::CategoryMapOptions mo;
       mo.title = "Cutter leaving the smaller scallop";
       mo.subtitle = "scallop between each pair of passes (cut simulation), stepover " + mm(r.params.stepover, 3) + " mm";
       mo.none_label = "off part";
       const fs::path p = dir / "choice_min_scallop.png";
       pictures.push_back([&r, png, p, c = std::move(c), mc, mo] {
-        png(p, render_category_map(map_grid(r.design.grid), c, mc, mo));
+        png(p, image::render_category_map(map_grid(r.design.grid), c, mc, mo));
       });
       files.push_back(p);
     }

@@ -17,8 +17,8 @@ std::string human_bytes(double b) {
 
 }  // namespace
 
-void check_part_size(const Box3& bounds, const std::string& source, double limit_mm) {
-  const Vec3 size = bounds.hi - bounds.lo;
+void check_part_size(const geometry::Box3& bounds, const std::string& source, double limit_mm) {
+  const geometry::Vec3 size = bounds.hi - bounds.lo;
   const double largest = std::max({size.x, size.y, size.z});
   if (std::isfinite(largest) && largest <= limit_mm) return;
   if (!std::isfinite(largest))
@@ -36,9 +36,9 @@ void check_part_size(const Box3& bounds, const std::string& source, double limit
                                           source, size.x, size.y, size.z, limit_mm, hint));
 }
 
-std::string units_warning(const Box3& bounds, LengthUnit units, double cutter_diameter, const std::string& source) {
+std::string units_warning(const geometry::Box3& bounds, geometry::LengthUnit units, double cutter_diameter, const std::string& source) {
   if (bounds.empty()) return {};
-  const Vec3 size = bounds.hi - bounds.lo;
+  const geometry::Vec3 size = bounds.hi - bounds.lo;
   const double largest = std::max({size.x, size.y, size.z});
   if (!std::isfinite(largest) || !(largest > 0)) return {};
   // A part a router makes is rarely under 10 mm; under the cutter's own
@@ -46,13 +46,13 @@ std::string units_warning(const Box3& bounds, LengthUnit units, double cutter_di
   // this long: the candidates that land between 10 mm and 3 m.
   const bool tiny = largest < 10, under_cutter = largest < cutter_diameter;
   if (!tiny && !under_cutter) return {};
-  const double to_mm = unit_to_mm(units);
+  const double to_mm = geometry::unit_to_mm(units);
   std::string hint;
-  for (LengthUnit u : {LengthUnit::Inch, LengthUnit::Metre}) {
+  for (geometry::LengthUnit u : {geometry::LengthUnit::Inch, geometry::LengthUnit::Metre}) {
     if (u == units) continue;
-    const double would = largest / to_mm * unit_to_mm(u);
+    const double would = largest / to_mm * geometry::unit_to_mm(u);
     if (would < 10 || would > 3000) continue;
-    hint += fmt::format("{}--units {} ({:.0f} mm)", hint.empty() ? "" : " or ", u == LengthUnit::Inch ? "in" : "m", would);
+    hint += fmt::format("{}--units {} ({:.0f} mm)", hint.empty() ? "" : " or ", u == geometry::LengthUnit::Inch ? "in" : "m", would);
   }
   const std::string why = under_cutter ? fmt::format("smaller than the {:g} mm cutter", cutter_diameter)
                                        : std::string("only a few millimetres");

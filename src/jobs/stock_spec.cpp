@@ -33,7 +33,7 @@ std::vector<std::string_view> split(std::string_view s, char sep) {
   }
 }
 
-Vec3 corner(std::string_view text, std::string_view field, const char* which) {
+geometry::Vec3 corner(std::string_view text, std::string_view field, const char* which) {
   const auto v = split(field, ',');
   if (v.size() != 3)
     throw std::invalid_argument(fmt::format("--stock {}: the {} corner '{}' needs three numbers X,Y,Z", text, which, field));
@@ -53,10 +53,10 @@ StockSpec parse_stock_spec(std::string_view text) {
   const auto corners = split(text, ':');
   if (corners.size() == 2 && text.find(',') != std::string_view::npos) {
     s.kind = StockSpec::Kind::Box;
-    const Vec3 a = corner(text, corners[0], "first"), b = corner(text, corners[1], "second");
+    const geometry::Vec3 a = corner(text, corners[0], "first"), b = corner(text, corners[1], "second");
     s.box.add(a);
     s.box.add(b);
-    const Vec3 size = s.box.hi - s.box.lo;
+    const geometry::Vec3 size = s.box.hi - s.box.lo;
     if (!(size.x > 0 && size.y > 0 && size.z > 0))
       throw std::invalid_argument(fmt::format("--stock {}: the block has no volume (its corners share an X, Y or Z)", text));
     return s;
@@ -71,27 +71,27 @@ StockSpec parse_stock_spec(std::string_view text) {
 
 double WorkStock::top_at(double x, double y) const {
   if (!heights) return box.hi.z;
-  const GridSpec& g = heights->grid;
+  const cam::GridSpec& g = heights->grid;
   const double fi = std::round((x - g.x0) / g.dx), fj = std::round((y - g.y0) / g.dy);
   if (!(fi >= 0 && fj >= 0 && fi < static_cast<double>(g.nx) && fj < static_cast<double>(g.ny))) return box.hi.z;
   const float z = heights->z[static_cast<std::size_t>(fj) * g.nx + static_cast<std::size_t>(fi)];
   return std::isfinite(z) ? static_cast<double>(z) : box.hi.z;
 }
 
-WorkStock resolve_stock(const StockSpec& spec, const Box3& part) {
+WorkStock resolve_stock(const StockSpec& spec, const geometry::Box3& part) {
   WorkStock w;
   switch (spec.kind) {
     case StockSpec::Kind::Auto: {
-      const Vec3 m{spec.margin, spec.margin, spec.margin};
-      w.box.add(part.lo - Vec3{m.x, m.y, 0});
+      const geometry::Vec3 m{spec.margin, spec.margin, spec.margin};
+      w.box.add(part.lo - geometry::Vec3{m.x, m.y, 0});
       w.box.add(part.hi + m);
       return w;
     }
     case StockSpec::Kind::Box: w.box = spec.box; break;
     case StockSpec::Kind::HeightMap: {
-      HeightFieldData d = read_height_field(spec.height_map);
+      cam::HeightFieldData d = cam::read_height_field(spec.height_map);
       if (d.work_origin) {
-        const Vec3 o = *d.work_origin;
+        const geometry::Vec3 o = *d.work_origin;
         if (!spec.work_origin)
           throw std::invalid_argument(fmt::format(
               "stock height map {} was saved with its work zero at machine X{:.3f} Y{:.3f} Z{:.3f}; this job's work "
@@ -99,7 +99,7 @@ WorkStock resolve_stock(const StockSpec& spec, const Box3& part) {
               "X,Y,Z, machine coordinates of its work zero: G54 + G92 from $#)",
               spec.height_map.string(), o.x, o.y, o.z));
         // Machine = saved work + its origin = this job's work + this origin.
-        const Vec3 shift = o - *spec.work_origin;
+        const geometry::Vec3 shift = o - *spec.work_origin;
         d.grid.x0 += shift.x;
         d.grid.y0 += shift.y;
         for (float& z : d.z)
@@ -111,8 +111,8 @@ WorkStock resolve_stock(const StockSpec& spec, const Box3& part) {
         if (std::isfinite(z)) top = std::max(top, static_cast<double>(z));
       if (!std::isfinite(top))
         throw std::invalid_argument(fmt::format("stock height map {} holds no value", spec.height_map.string()));
-      w.box.add(Vec3{d.grid.x0, d.grid.y0, part.lo.z});
-      w.box.add(Vec3{d.grid.x1(), d.grid.y1(), top});
+      w.box.add(geometry::Vec3{d.grid.x0, d.grid.y0, part.lo.z});
+      w.box.add(geometry::Vec3{d.grid.x1(), d.grid.y1(), top});
       w.heights = std::move(d);
       break;
     }

@@ -34,27 +34,27 @@ constexpr double kPathFrom = 0.05, kRoughFrom = 0.5, kGcodeFrom = 0.85, kWriteFr
 
 }  // namespace
 
-std::string row_spacing_text(const RasterPath& path) {
+std::string row_spacing_text(const cam::RasterPath& path) {
   if (path.stepover - path.stepover_min < 1e-9) return format_gcode_number(path.stepover, 4);
   return format_gcode_number(path.stepover_min, 4) + " to " + format_gcode_number(path.stepover, 4);
 }
 
 // A V-bit or tapered ball: as deep as a ball of its top diameter, and never
 // deeper than its flutes (beyond them the shank rubs the wall).
-double default_max_depth(const Cutter& c) {
+double default_max_depth(const cam::Cutter& c) {
   if (!c.is_apt()) return std::min(c.profile_top(), c.radius);
-  return c.type == CutterType::Flat ? c.diameter() / 4 : c.radius;
+  return c.type == cam::CutterType::Flat ? c.diameter() / 4 : c.radius;
 }
 
 ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& control) {
   ToolpathProgram r;
   JobRun run(control);
-  run_with_thread_limit(control.threads, [&] {
+  cam::run_with_thread_limit(control.threads, [&] {
     r.cutter = p.cutter;
     const double end_of_gcode = p.output.empty() ? 1.0 : kWriteFrom;
     run.stage("load", 0, kPathFrom);
     auto t0 = std::chrono::steady_clock::now();
-    const std::shared_ptr<const Mesh> mesh = load_part(p.part);
+    const std::shared_ptr<const geometry::Mesh> mesh = load_part(p.part);
     if (control.warn) {
       const std::string w =
           units_warning(mesh->bounds(), p.part.units, p.cutter.diameter(), p.part.stl.empty() ? "the part" : p.part.stl);
@@ -68,21 +68,21 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     const double path_to = (p.stock ? kRoughFrom : kGcodeFrom) - rest_share;
     run.stage("tool path", kPathFrom, path_to);
     t0 = std::chrono::steady_clock::now();
-    ClOptions clo;
+    cam::ClOptions clo;
     clo.floor = p.floor;
     clo.floor_is_lowest = true;  // no pass below the part's bottom (ClOptions)
-    const ClEngine engine(*mesh, r.cutter, clo);
-    const Box3 box = mesh->bounds();
+    const cam::ClEngine engine(*mesh, r.cutter, clo);
+    const geometry::Box3 box = mesh->bounds();
     const WorkSetup work = work_setup(box, p.origin, p.z_zero);
     const FinishSpacing spacing = finish_spacing(p);
-    const bool along_x = p.direction != RasterDirection::Y;
-    RasterOptions ro;
+    const bool along_x = p.direction != cam::RasterDirection::Y;
+    cam::RasterOptions ro;
     ro.stepover = spacing.stepover;
     ro.step = spacing.step;
     ro.direction = p.direction;
     ro.tolerance = rows_tolerance(p);
     ro.lattice = work.lattice;
-    const XYBounds region = p.bounds.value_or(default_bounds(*mesh, r.cutter));
+    const cam::XYBounds region = p.bounds.value_or(cam::default_bounds(*mesh, r.cutter));
     {
       // Rows across, points along (the raster's default step), before any is made.
       const double step = spacing.step > 0 ? spacing.step : std::min(spacing.stepover / 4, 0.1);
@@ -97,7 +97,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
         throw std::invalid_argument("another CL engine makes only the raster finishing's grid: steep-and-shallow "
                                     "finishing and rest machining need the exact engine's point queries (use "
                                     "--strategy raster, without --rest)");
-      ro.grid_source = [&](const GridSpec& spec, const Checkpoint&) { return p.raster_grid(*mesh, r.cutter, spec); };
+      ro.grid_source = [&](const cam::GridSpec& spec, const cam::Checkpoint&) { return p.raster_grid(*mesh, r.cutter, spec); };
     }
     // Operations that need nothing of the finishing run beside it: the
     // roughing's path when a roughing cutter is asked for (else whether one
@@ -106,7 +106,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
     // roughing took 0.55-0.65 s after the finishing on 1.2 cores; its check
     // alone is left there, 0.25-0.3 s). They check for a stop; their
     // progress shows in their stage after the finishing.
-    const Checkpoint stop_only = [&run](double) { run.check(); };
+    const cam::Checkpoint stop_only = [&run](double) { run.check(); };
     std::optional<RoughingStage> rough;
     std::optional<RestStage> rest;
     double rough_beside_s = 0, rest_beside_s = 0;
@@ -126,10 +126,10 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
       });
 
     // The slope of the ground, for the waterlines and the rows' spacing.
-    std::optional<ClGrid> ground;
+    std::optional<cam::ClGrid> ground;
     if (steep_shallow || by_slope) ground = ground_grid(engine, region, spacing, run.nested_checkpoint(0, 0.15));
     if (by_slope) {
-      auto rows = std::make_shared<const RowSpacing>(*ground, along_x, spacing.row_widest, spacing.row_angle);
+      auto rows = std::make_shared<const cam::RowSpacing>(*ground, along_x, spacing.row_widest, spacing.row_angle);
       ro.stepover = spacing.row_widest;
       ro.row_gap = [rows](double va, double vb) { return rows->gap(va, vb); };
       // Along the rows, as for even rows at the narrowest spacing.
@@ -138,9 +138,9 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
       ro.keep_grid = true;  // for the preview, then let go
     }
     const double rows_to = steep_shallow ? 0.65 : 1.0;
-    r.path = build_raster(engine, region, ro, run.nested_checkpoint(ground ? 0.15 : 0, rows_to));
+    r.path = cam::build_raster(engine, region, ro, run.nested_checkpoint(ground ? 0.15 : 0, rows_to));
     r.preview = height_preview_from_grid(by_slope ? *ground : r.path.grid, r.path.bounds, work.offset);
-    r.path.grid = ClGrid{};
+    r.path.grid = cam::ClGrid{};
     if (steep_shallow) {
       add_waterlines(r, p, engine, *ground, work.lattice, spacing, run.nested_checkpoint(rows_to, 1.0));
     } else {
@@ -186,7 +186,7 @@ ToolpathProgram generate_toolpath(const ToolpathParams& p, const JobControl& con
         "part: " + p.part.stl + " (" + std::to_string(r.facets) + " facets)",
         "tool: " + r.cutter.description() + " [" + r.cutter.spec() + "]",
         "stepover " + row_spacing_text(r.path) + " mm along " +
-            (p.direction == RasterDirection::Y ? "Y" : "X") + ", step " + format_gcode_number(r.path.step, 4) +
+            (p.direction == cam::RasterDirection::Y ? "Y" : "X") + ", step " + format_gcode_number(r.path.step, 4) +
             " mm, tolerance " + format_gcode_number(p.tolerance, 4) + " mm" +
             (p.arcs ? std::string(", arcs for a controller arc tolerance of ")
                           .append(format_gcode_number(p.controller_arc_tolerance, 4))

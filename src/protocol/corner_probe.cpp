@@ -11,13 +11,13 @@ namespace detail_corner_probe {
 
 constexpr const char* kAxisLetter = "XYZ";
 
-double axis_of(const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+double axis_of(const geometry::Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
 
 // The machine position of a report: MPos, or WPos + WCO.
-std::optional<Vec3> machine_position(const StatusReport& r) {
-  if (r.mpos) return Vec3{(*r.mpos)[0], (*r.mpos)[1], (*r.mpos)[2]};
+std::optional<geometry::Vec3> machine_position(const StatusReport& r) {
+  if (r.mpos) return geometry::Vec3{(*r.mpos)[0], (*r.mpos)[1], (*r.mpos)[2]};
   if (r.wpos && r.wco)
-    return Vec3{(*r.wpos)[0] + (*r.wco)[0], (*r.wpos)[1] + (*r.wco)[1], (*r.wpos)[2] + (*r.wco)[2]};
+    return geometry::Vec3{(*r.wpos)[0] + (*r.wco)[0], (*r.wpos)[1] + (*r.wco)[1], (*r.wpos)[2] + (*r.wco)[2]};
   return std::nullopt;
 }
 
@@ -165,9 +165,9 @@ void CornerProbeRoutine::build() {
   // The result, shown before it is written.
   add([this, sides] {
     const std::string name = fmt::format("G5{}", 4 + result_.wcs);
-    const Vec3 g92 = offsets_.count("G92") ? offsets_["G92"] : Vec3{};
+    const geometry::Vec3 g92 = offsets_.count("G92") ? offsets_["G92"] : geometry::Vec3{};
     const double tlo = offsets_.count("TLO") ? offsets_["TLO"].z : 0.0;
-    Vec3& w = result_.offset_written;
+    geometry::Vec3& w = result_.offset_written;
     std::string found;
     if (sides) {
       result_.edge_x = x_trigger_ + cfg_.tool_radius + cfg_.plate.lip;
@@ -182,14 +182,14 @@ void CornerProbeRoutine::build() {
       w.z = *result_.top_z - g92.z - tlo;
       found += fmt::format("{}top at machine Z{}", found.empty() ? "" : ", ", routine_mm(*result_.top_z));
     }
-    const Vec3& b = result_.offset_before;
+    const geometry::Vec3& b = result_.offset_before;
     prompt(fmt::format("corner probe: {}. Set {} to X{} Y{} Z{} (was X{} Y{} Z{}; work zero moves by {:+.3f}, "
                        "{:+.3f}, {:+.3f} mm)? Remove the plate, then confirm to write it, or decline",
                        found, name, routine_mm(w.x), routine_mm(w.y), routine_mm(w.z), routine_mm(b.x),
                        routine_mm(b.y), routine_mm(b.z), w.x - b.x, w.y - b.y, w.z - b.z));
   });
   add([this, sides] {
-    const Vec3& w = result_.offset_written;
+    const geometry::Vec3& w = result_.offset_written;
     std::string words;
     if (sides) words += fmt::format(" X{} Y{}", routine_mm(w.x), routine_mm(w.y));
     if (cfg_.axes != CornerAxes::XY) words += " Z" + routine_mm(w.z);
@@ -200,7 +200,7 @@ void CornerProbeRoutine::build() {
   add([this, sides] {
     const std::string name = fmt::format("G5{}", 4 + result_.wcs);
     const auto it = offsets_.find(name);
-    const Vec3& w = result_.offset_written;
+    const geometry::Vec3& w = result_.offset_written;
     const bool z = cfg_.axes != CornerAxes::XY;
     const auto off = [](double a, double b) { return std::fabs(a - b) > 0.0015; };
     if (it == offsets_.end() || (sides && (off(it->second.x, w.x) || off(it->second.y, w.y))) ||

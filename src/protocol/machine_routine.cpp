@@ -28,7 +28,7 @@ std::string routine_mm(double v) {
   return fmt::format("{:.3f}", v);
 }
 
-std::optional<std::pair<std::string, Vec3>> parse_offset_report(std::string_view line) {
+std::optional<std::pair<std::string, geometry::Vec3>> parse_offset_report(std::string_view line) {
   using detail_machine_routine::number_of;
   while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
   if (line.size() < 6 || line.front() != '[' || line.back() != ']') return std::nullopt;
@@ -39,7 +39,7 @@ std::optional<std::pair<std::string, Vec3>> parse_offset_report(std::string_view
   if (name == "TLO") {
     const auto z = number_of(body);
     if (!z) return std::nullopt;
-    return std::pair{name, Vec3{0, 0, *z}};
+    return std::pair{name, geometry::Vec3{0, 0, *z}};
   }
   const bool wcs = name.size() == 3 && name[0] == 'G' && name[1] == '5' && name[2] >= '4' && name[2] <= '9';
   if (!wcs && name != "G92" && name != "G28" && name != "G30") return std::nullopt;
@@ -49,7 +49,7 @@ std::optional<std::pair<std::string, Vec3>> parse_offset_report(std::string_view
   const auto y = number_of(body.substr(c1 + 1, c2 - c1 - 1));
   const auto z = number_of(body.substr(c2 + 1));
   if (!x || !y || !z) return std::nullopt;
-  return std::pair{name, Vec3{*x, *y, *z}};
+  return std::pair{name, geometry::Vec3{*x, *y, *z}};
 }
 
 std::optional<int> parse_active_coordinate_system(std::string_view line) {

@@ -2,14 +2,13 @@
 
 #include <fmt/core.h>
 
-#include <array>
 #include <cmath>
 #include <stdexcept>
 
 namespace cncstream::protocol {
 
 OutlineConfig outline_from_extent(const gcode::ProgramExtent& extent, std::optional<double> safe_z, double feed,
-                                  const std::string& what) {
+                                  const std::string& what, OutlineShape shape) {
   const auto& x = extent.axes[0];
   const auto& y = extent.axes[1];
   const auto& z = extent.axes[2];
@@ -22,6 +21,13 @@ OutlineConfig outline_from_extent(const gcode::ProgramExtent& extent, std::optio
   c.y0 = y.known ? y.lo : 0;
   c.y1 = y.known ? y.hi : 0;
   c.feed = feed;
+  if (shape == OutlineShape::Hull && x.known && y.known) {
+    auto hull = gcode::simplify_hull(extent.xy_hull, kOutlineHullTolerance);
+    if (hull.size() >= 3) {
+      c.shape = OutlineShape::Hull;
+      c.path = std::move(hull);
+    }
+  }
   if (!z.known && !safe_z)
     throw std::invalid_argument(what + ": the program never sets Z: give the outline's safe Z");
   const double top = z.known ? z.hi : -1e300;
@@ -31,6 +37,11 @@ OutlineConfig outline_from_extent(const gcode::ProgramExtent& extent, std::optio
         routine_mm(*safe_z), what, routine_mm(top)));
   c.safe_z = safe_z ? *safe_z : top;
   return c;
+}
+
+std::vector<gcode::XyPoint> outline_corners(const OutlineConfig& c) {
+  if (!c.path.empty()) return c.path;
+  return {{c.x0, c.y0}, {c.x1, c.y0}, {c.x1, c.y1}, {c.x0, c.y1}};
 }
 
 OutlineTraceRoutine::OutlineTraceRoutine(OutlineConfig config) : cfg_(config) {
@@ -44,11 +55,13 @@ void OutlineTraceRoutine::build() {
   add([this] { send("G21 G90"); });
   add([this] { send("G0 Z" + routine_mm(cfg_.safe_z)); });
   add([this] { wait_idle(); });
-  add([this] { send(fmt::format("G0 X{} Y{}", routine_mm(cfg_.x0), routine_mm(cfg_.y0))); });
+  const std::vector<gcode::XyPoint> corners = outline_corners(cfg_);
+  add([this, first = corners.front()] {
+    send(fmt::format("G0 X{} Y{}", routine_mm(first[0]), routine_mm(first[1])));
+  });
   add([this] { wait_idle(); });
-  const std::array<std::array<double, 2>, 4> corners{
-      {{cfg_.x1, cfg_.y0}, {cfg_.x1, cfg_.y1}, {cfg_.x0, cfg_.y1}, {cfg_.x0, cfg_.y0}}};
-  for (const auto& c : corners) {
+  for (std::size_t k = 1; k <= corners.size(); ++k) {
+    const gcode::XyPoint c = corners[k % corners.size()];  // back to the first at the end
     add([this, c] {
       send(fmt::format("G1 X{} Y{} F{}", routine_mm(c[0]), routine_mm(c[1]), routine_mm(cfg_.feed)));
     });
@@ -58,9 +71,11 @@ void OutlineTraceRoutine::build() {
     if (inches_) send("G20");
   });
   add([this] {
-    set_summary(fmt::format("traced X{}..{} Y{}..{} at Z{} (work), F{}", routine_mm(cfg_.x0), routine_mm(cfg_.x1),
-                            routine_mm(cfg_.y0), routine_mm(cfg_.y1), routine_mm(cfg_.safe_z),
-                            routine_mm(cfg_.feed)));
+    set_summary(fmt::format("traced the {} within X{}..{} Y{}..{} at Z{} (work), F{}",
+                            cfg_.shape == OutlineShape::Hull ? fmt::format("hull ({} corners)", cfg_.path.size())
+                                                             : std::string("box"),
+                            routine_mm(cfg_.x0), routine_mm(cfg_.x1), routine_mm(cfg_.y0), routine_mm(cfg_.y1),
+                            routine_mm(cfg_.safe_z), routine_mm(cfg_.feed)));
   });
 }
 

@@ -222,7 +222,7 @@ void ToolChangeRoutine::add_return() {
   }
   const gcode::ParserState& m = req_.modal;
   const double k = m.modal.inches ? 1.0 / gcode::kMmPerInch : 1.0;
-  const Vec3 p = m.work_position();  // mm
+  const geometry::Vec3 p = m.work_position();  // mm
   add([this] { send("G53 G0 Z" + routine_mm(cfg_.safe_z)); });
   add([this, p] { send(fmt::format("G90 G0 X{} Y{}", routine_mm(p.x), routine_mm(p.y))); });
   if (m.modal.spindle != gcode::SpindleState::Off) {

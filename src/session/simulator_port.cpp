@@ -149,15 +149,15 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
       const auto stl = removal_->write_result(opt_.result, opt_.work_offset, parser.coord_system + parser.g92);
       o << "sim: machined surface written to " << opt_.result << " (+ .txt) and " << stl.string() << "\n";
     }
-    const auto heights = design_heights(*opt_.design, removal_->stock().grid());
-    const auto result = compare_to_design(removal_->stock(), heights, opt_.tolerance);
+    const auto heights = cam::design_heights(*opt_.design, removal_->stock().grid());
+    const auto result = cam::compare_to_design(removal_->stock(), heights, opt_.tolerance);
     o << "verify (" << removal_->cutter().description() << ", grid " << opt_.resolution << " mm):\n"
       << result.stats.summary() << "\n";
     r.gouged = result.stats.gouged > 0;
     if (result.stats.has_gouge) r.largest_gouge_mm = -result.stats.largest_gouge.value;
     if (!opt_.png.empty()) {
       cncsim::write_whole(opt_.png, [&](const std::filesystem::path& file) {
-        write_deviation_png(file, result, "cncstream sim verify", removal_->cutter().description());
+        cam::write_deviation_png(file, result, "cncstream sim verify", removal_->cutter().description());
       });
       o << "verify: deviation map written to " << opt_.png << "\n";
     }

@@ -34,7 +34,7 @@ std::vector<std::string_view> split_colons(std::string_view s) {
 double length(std::string_view spec, std::string_view part, const char* what) {
   if (part == "0") return 0;
   try {
-    return parse_cutter_spec(fmt::format("flat:{}", part)).diameter();
+    return cam::parse_cutter_spec(fmt::format("flat:{}", part)).diameter();
   } catch (const std::exception&) {
     throw std::invalid_argument(fmt::format("bad tool spec '{}': {} '{}' is not a positive length (mm, or 1/8in)",
                                             spec, what, part));
@@ -115,15 +115,15 @@ ToolGeometry parse_tool_spec(std::string_view spec) {
   const std::string_view kind = parts[0];
   ToolGeometry g;
   if (kind == "flat" || kind == "ball" || kind == "bull") {
-    Cutter c;
+    cam::Cutter c;
     try {
-      c = parse_cutter_spec(spec);
-    } catch (const CutterSpecError& e) {
+      c = cam::parse_cutter_spec(spec);
+    } catch (const cam::CutterSpecError& e) {
       throw std::invalid_argument(e.what());
     }
-    g.shape = c.type == CutterType::Flat ? ToolShape::Flat : c.type == CutterType::Ball ? ToolShape::Ball : ToolShape::Bull;
+    g.shape = c.type == cam::CutterType::Flat ? ToolShape::Flat : c.type == cam::CutterType::Ball ? ToolShape::Ball : ToolShape::Bull;
     g.diameter = c.diameter();
-    g.corner_radius = c.type == CutterType::Flat ? 0.0 : c.corner_radius;
+    g.corner_radius = c.type == cam::CutterType::Flat ? 0.0 : c.corner_radius;
     return g;
   }
   const std::string usage =

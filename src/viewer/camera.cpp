@@ -56,7 +56,7 @@ void Camera::set_viewport(int width, int height) {
   height_ = height;
 }
 
-void Camera::set_scene(const Box3& bounds) {
+void Camera::set_scene(const geometry::Box3& bounds) {
   if (bounds.empty()) {
     scene_center_ = {};
     scene_radius_ = 1;
@@ -75,25 +75,25 @@ void Camera::set_view(NamedView v) {
   }
 }
 
-Vec3 Camera::right() const {
+geometry::Vec3 Camera::right() const {
   const double a = azimuth_deg_ * kDeg;
   return {std::cos(a), std::sin(a), 0};
 }
 
-Vec3 Camera::back() const {
+geometry::Vec3 Camera::back() const {
   const double a = azimuth_deg_ * kDeg, e = elevation_deg_ * kDeg;
   return {std::cos(e) * std::sin(a), -std::cos(e) * std::cos(a), std::sin(e)};
 }
 
-Vec3 Camera::up() const { return cross(back(), right()); }
+geometry::Vec3 Camera::up() const { return cross(back(), right()); }
 
-void Camera::fit(const Box3& bounds) {
+void Camera::fit(const geometry::Box3& bounds) {
   if (bounds.empty()) return;
   target_ = (bounds.lo + bounds.hi) * 0.5;
-  const Vec3 r = right(), u = up();
+  const geometry::Vec3 r = right(), u = up();
   double ext_r = 0, ext_u = 0;
   for (int k = 0; k < 8; ++k) {
-    const Vec3 c{k & 1 ? bounds.hi.x : bounds.lo.x, k & 2 ? bounds.hi.y : bounds.lo.y,
+    const geometry::Vec3 c{k & 1 ? bounds.hi.x : bounds.lo.x, k & 2 ? bounds.hi.y : bounds.lo.y,
                  k & 4 ? bounds.hi.z : bounds.lo.z};
     ext_r = std::max(ext_r, std::fabs(dot(c - target_, r)));
     ext_u = std::max(ext_u, std::fabs(dot(c - target_, u)));
@@ -116,8 +116,8 @@ void Camera::zoom_at(double factor, double x, double y) {
   if (!(factor > 0) || !std::isfinite(factor)) return;
   const double aspect = static_cast<double>(width_) / height_;
   const double nx = 2 * x / width_ - 1, ny = 1 - 2 * y / height_;
-  const Vec3 r = right(), u = up();
-  const Vec3 under = target_ + r * (nx * half_height_ * aspect) + u * (ny * half_height_);
+  const geometry::Vec3 r = right(), u = up();
+  const geometry::Vec3 under = target_ + r * (nx * half_height_ * aspect) + u * (ny * half_height_);
   half_height_ = std::clamp(half_height_ / factor, kMinHalfHeight, kMaxHalfHeight);
   target_ = under - r * (nx * half_height_ * aspect) - u * (ny * half_height_);
 }
@@ -125,9 +125,9 @@ void Camera::zoom_at(double factor, double x, double y) {
 double Camera::depth_half() const { return scene_radius_ + norm(target_ - scene_center_) + 1.0; }
 
 Mat4 Camera::view_matrix() const {
-  const Vec3 r = right(), u = up(), b = back();
+  const geometry::Vec3 r = right(), u = up(), b = back();
   Mat4 v = Mat4::identity();
-  const Vec3 rows[3] = {r, u, b};
+  const geometry::Vec3 rows[3] = {r, u, b};
   for (int i = 0; i < 3; ++i) {
     v.at(i, 0) = rows[i].x;
     v.at(i, 1) = rows[i].y;
@@ -146,15 +146,15 @@ Mat4 Camera::projection_matrix() const {
   return p;
 }
 
-WindowPoint Camera::project(const Vec3& world) const {
-  const Vec3 d = world - target_;
+WindowPoint Camera::project(const geometry::Vec3& world) const {
+  const geometry::Vec3 d = world - target_;
   const double aspect = static_cast<double>(width_) / height_;
   const double nx = dot(d, right()) / (half_height_ * aspect), ny = dot(d, up()) / half_height_;
   const double nz = -dot(d, back()) / depth_half();
   return {(nx + 1) * 0.5 * width_, (1 - ny) * 0.5 * height_, (nz + 1) * 0.5};
 }
 
-bool Camera::may_see(const Box3& box) const {
+bool Camera::may_see(const geometry::Box3& box) const {
   if (box.empty()) return false;
   double lo_x = HUGE_VAL, hi_x = -HUGE_VAL, lo_y = HUGE_VAL, hi_y = -HUGE_VAL;
   for (int k = 0; k < 8; ++k) {
@@ -165,7 +165,7 @@ bool Camera::may_see(const Box3& box) const {
   return hi_x >= 0 && lo_x <= width_ && hi_y >= 0 && lo_y <= height_;
 }
 
-Vec3 Camera::unproject(const WindowPoint& p) const {
+geometry::Vec3 Camera::unproject(const WindowPoint& p) const {
   const double aspect = static_cast<double>(width_) / height_;
   const double nx = 2 * p.x / width_ - 1, ny = 1 - 2 * p.y / height_, nz = 2 * p.depth - 1;
   return target_ + right() * (nx * half_height_ * aspect) + up() * (ny * half_height_) + back() * (-nz * depth_half());

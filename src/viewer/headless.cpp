@@ -63,12 +63,12 @@ void HeadlessView::draw(const Camera& camera) {
   if (err != GL_NO_ERROR) throw gl::GlError(fmt::format("OpenGL: drawing the view failed (GL error 0x{:04X})", err));
 }
 
-RgbImage HeadlessView::read_image() const {
+image::RgbImage HeadlessView::read_image() const {
   std::vector<std::uint8_t> px(static_cast<std::size_t>(width_) * height_ * 4);
   glBindFramebuffer(GL_FRAMEBUFFER, impl_->fbo);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
-  RgbImage img(width_, height_);
+  image::RgbImage img(width_, height_);
   for (int y = 0; y < height_; ++y)
     for (int x = 0; x < width_; ++x) {
       // GL's rows run bottom-up.
@@ -98,16 +98,16 @@ void load_scene(Renderer& renderer, const Scene& scene) {
 Camera camera_for(const Scene& scene, NamedView view, int width, int height) {
   Camera cam;
   cam.set_viewport(width, height);
-  const Box3 b = scene.bounds();
+  const geometry::Box3 b = scene.bounds();
   cam.set_scene(b);
   cam.set_view(view);
   cam.fit(b);
   return cam;
 }
 
-DeviationLegend legend_of(const CutSurface& cut) {
-  const DeviationStats& st = cut.stats;
-  DeviationLegend l;
+image::DeviationLegend legend_of(const CutSurface& cut) {
+  const cam::DeviationStats& st = cut.stats;
+  image::DeviationLegend l;
   l.tolerance = st.tolerance;
   l.lo = st.has_gouge ? std::min(0.0, st.largest_gouge.value) : 0.0;
   l.hi = std::max(0.0, st.largest_excess.value);
@@ -119,12 +119,12 @@ DeviationLegend legend_of(const CutSurface& cut) {
   return l;
 }
 
-RgbImage screenshot(const Scene& scene, NamedView view, int width, int height, std::string* gl_renderer) {
-  std::optional<DeviationLegend> legend;
+image::RgbImage screenshot(const Scene& scene, NamedView view, int width, int height, std::string* gl_renderer) {
+  std::optional<image::DeviationLegend> legend;
   int legend_w = 0;
   if (scene.cut && scene.cut->stats.tolerance > 0) {  // compared with a design (not a bare stock)
     legend = legend_of(*scene.cut);
-    const auto [w, h] = deviation_legend_size(*legend);
+    const auto [w, h] = image::deviation_legend_size(*legend);
     if (h + 32 <= height && w + 32 < width / 2) legend_w = w + 32;
     else legend.reset();  // no room: the view alone
   }
@@ -134,9 +134,9 @@ RgbImage screenshot(const Scene& scene, NamedView view, int width, int height, s
   load_scene(hv.renderer(), scene);
   hv.draw(camera_for(scene, view, view_w, height));
   if (!legend) return hv.read_image();
-  RgbImage out(width, height, kBackground);
+  image::RgbImage out(width, height, kBackground);
   out.blit(hv.read_image(), 0, 0);
-  draw_deviation_legend(out, view_w + 16, 16, *legend);
+  image::draw_deviation_legend(out, view_w + 16, 16, *legend);
   return out;
 }
 

@@ -42,18 +42,18 @@ bool expect(std::string_view text, std::size_t& pos, std::string_view what) {
   return true;
 }
 
-HeightFieldStock make_stock(const Toolpath& path, const std::vector<MountedCutter>& cutters,
-                            std::optional<Box3> block, const LiveCutOptions& options) {
+cam::HeightFieldStock make_stock(const Toolpath& path, const std::vector<MountedCutter>& cutters,
+                            std::optional<geometry::Box3> block, const LiveCutOptions& options) {
   if (cutters.empty()) throw std::invalid_argument("viewer: the live cut needs the cutter the program runs with");
   if (!block) {
     double reach = 0;
     for (const auto& c : cutters) reach = std::max(reach, c.cutter.radius);
-    Box3 moves;
+    geometry::Box3 moves;
     double top = -HUGE_VAL;
     bool from_z0 = false;
     for (std::size_t k = 0; k < path.size(); ++k) {
       if (path.vertices[path.segments[k].vertex].kind != kCut) continue;
-      const Vec3 a = path.from(k), b = path.to(k);
+      const geometry::Vec3 a = path.from(k), b = path.to(k);
       moves.add(a);
       moves.add(b);
       if (a.x != b.x || a.y != b.y) top = std::max({top, a.z, b.z});
@@ -62,15 +62,15 @@ HeightFieldStock make_stock(const Toolpath& path, const std::vector<MountedCutte
     if (moves.empty()) throw std::invalid_argument("viewer: the program has no cutting move to show the cut of");
     if (from_z0) top = std::max(top, options.work_z0);
     if (!std::isfinite(top)) top = moves.hi.z;  // plunges only
-    block = Box3{moves.lo - Vec3{reach, reach, 0}, Vec3{moves.hi.x + reach, moves.hi.y + reach, top}};
+    block = geometry::Box3{moves.lo - geometry::Vec3{reach, reach, 0}, geometry::Vec3{moves.hi.x + reach, moves.hi.y + reach, top}};
   }
-  const Vec3 size = block->size();
+  const geometry::Vec3 size = block->size();
   if (!(size.x > 0 && size.y > 0))
     throw std::invalid_argument("viewer: the stock for the live cut has no extent in X or Y");
   const double step =
       std::max(options.min_step, std::sqrt(size.x * size.y / static_cast<double>(std::max<std::size_t>(options.max_nodes, 4))));
-  const GridSpec grid = GridSpec::covering(block->lo.x, block->lo.y, block->hi.x, block->hi.y, step, step);
-  return HeightFieldStock(grid, block->hi.z);
+  const cam::GridSpec grid = cam::GridSpec::covering(block->lo.x, block->lo.y, block->hi.x, block->hi.y, step, step);
+  return cam::HeightFieldStock(grid, block->hi.z);
 }
 
 }  // namespace
@@ -82,7 +82,7 @@ std::vector<MountedCutter> program_cutters(std::string_view program) {
     if (lb == std::string::npos || rb == std::string::npos || rb < lb) continue;
     try {
       out.push_back({op.mounted_line > 0 ? op.mounted_line - 1 : 0,
-                     parse_cutter_spec(std::string_view(op.cutter).substr(lb + 1, rb - lb - 1))});
+                     cam::parse_cutter_spec(std::string_view(op.cutter).substr(lb + 1, rb - lb - 1))});
     } catch (const std::invalid_argument&) {
       // Not a cutter we know: the operation cuts nothing in the view.
     }
@@ -90,7 +90,7 @@ std::vector<MountedCutter> program_cutters(std::string_view program) {
   return out;
 }
 
-std::optional<Box3> program_stock(std::string_view program) {
+std::optional<geometry::Box3> program_stock(std::string_view program) {
   // JobProgram's header: "(stock: X -1.000..121.000 Y -1.000..101.000 Z -10.500..1.000 [work coordinates])".
   const std::size_t at = program.substr(0, 8192).find("(stock: X ");
   if (at == std::string_view::npos) return std::nullopt;
@@ -101,10 +101,10 @@ std::optional<Box3> program_stock(std::string_view program) {
                   read_number(program, pos, v[4]) && expect(program, pos, " Z ") && read_number(program, pos, v[2]) &&
                   expect(program, pos, "..") && read_number(program, pos, v[5]);
   if (!ok || !(v[0] < v[3] && v[1] < v[4] && v[2] < v[5])) return std::nullopt;
-  return Box3{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}};
+  return geometry::Box3{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}};
 }
 
-LiveCut::LiveCut(const Toolpath& path, std::vector<MountedCutter> cutters, std::optional<Box3> stock,
+LiveCut::LiveCut(const Toolpath& path, std::vector<MountedCutter> cutters, std::optional<geometry::Box3> stock,
                  const LiveCutOptions& options)
     : path_(path), cutters_(std::move(cutters)), stock_(make_stock(path, cutters_, stock, options)) {
   std::stable_sort(cutters_.begin(), cutters_.end(),

@@ -108,7 +108,7 @@ void main() { frag = vec4(colour, 1.0); }
 struct StripRun {
   GLint first = 0;
   GLsizei count = 0;
-  Box3 box;
+  geometry::Box3 box;
 };
 constexpr std::size_t kRunVertices = 16384;
 
@@ -258,7 +258,7 @@ void Renderer::set_toolpath(const Toolpath& path) {
   l.count = static_cast<GLsizei>(path.vertices.size());
   l.runs = strip_runs(path.vertices.size(), [&](std::size_t v) {
     const PathVertex& p = path.vertices[v];
-    return Vec3{p.x, p.y, p.z};
+    return geometry::Vec3{p.x, p.y, p.z};
   });
   // The strip for distant views: lossless below half a pixel (display_strip).
   distant_tolerance_ = std::max(norm(path.bounds.size()) / 8000, 1e-4);
@@ -279,7 +279,7 @@ void Renderer::set_toolpath(const Toolpath& path) {
   d.count = static_cast<GLsizei>(distant.size());
   d.runs = strip_runs(distant.size(), [&](std::size_t v) {
     const PathVertex& p = distant[v].v;
-    return Vec3{p.x, p.y, p.z};
+    return geometry::Vec3{p.x, p.y, p.z};
   });
   distant_vertices_ = distant.size();
   glBindVertexArray(0);
@@ -304,14 +304,14 @@ void Renderer::draw(const Camera& camera) {
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LEQUAL);
   const Mat4 vp = camera.view_projection();
-  const Vec3 light = camera.back();
+  const geometry::Vec3 light = camera.back();
 
   const GLuint mp = impl_->mesh_program;
   glUseProgram(mp);
   set_matrix(mp, "vp", vp);
   glUniform3f(glGetUniformLocation(mp, "light"), static_cast<float>(light.x), static_cast<float>(light.y),
               static_cast<float>(light.z));
-  auto draw_mesh = [&](const Layer& l, const Vec3& offset, float specular) {
+  auto draw_mesh = [&](const Layer& l, const geometry::Vec3& offset, float specular) {
     if (!l.count) return;
     glUniform3f(glGetUniformLocation(mp, "offset"), static_cast<float>(offset.x), static_cast<float>(offset.y),
                 static_cast<float>(offset.z));

@@ -7,9 +7,9 @@
 
 namespace cncstream::viewer {
 
-Box3 Scene::bounds() const {
-  Box3 b;
-  auto add = [&](const Box3& o) {
+geometry::Box3 Scene::bounds() const {
+  geometry::Box3 b;
+  auto add = [&](const geometry::Box3& o) {
     if (!o.empty()) b.add(o.lo), b.add(o.hi);
   };
   if (part) add(part->bounds);
@@ -17,18 +17,18 @@ Box3 Scene::bounds() const {
   if (program) add(program->bounds);
   if (const auto tip = cutter_tip()) {
     b.add(*tip);
-    b.add(*tip + Vec3{cutter->radius, cutter->radius, default_cutter_length(*cutter)});
-    b.add(*tip - Vec3{cutter->radius, cutter->radius, 0});
+    b.add(*tip + geometry::Vec3{cutter->radius, cutter->radius, default_cutter_length(*cutter)});
+    b.add(*tip - geometry::Vec3{cutter->radius, cutter->radius, 0});
   }
   return b;
 }
 
-std::optional<Vec3> Scene::cutter_tip() const {
+std::optional<geometry::Vec3> Scene::cutter_tip() const {
   if (!cutter) return std::nullopt;
   if (cutter_at) return cutter_at;
   if (program && program->size() > 0)
     return program->point_at(std::isnan(progress) ? static_cast<double>(program->size()) : progress);
-  return Vec3{};
+  return geometry::Vec3{};
 }
 
 double timeline_step(const Scene& scene, double direction) {
@@ -44,7 +44,7 @@ double timeline_at_bar(double x, int bar_x, int bar_w, std::size_t segments) {
   return f * static_cast<double>(segments);
 }
 
-std::string format_position(const Vec3& p) { return fmt::format("X {:.3f} Y {:.3f} Z {:.3f}", p.x, p.y, p.z); }
+std::string format_position(const geometry::Vec3& p) { return fmt::format("X {:.3f} Y {:.3f} Z {:.3f}", p.x, p.y, p.z); }
 
 std::string format_progress(const Toolpath& path, double progress) {
   if (path.size() == 0) return "no moves";

@@ -15,21 +15,21 @@ namespace cncstream::viewer {
 
 namespace {
 
-MeshVertex vertex(const Vec3& p, const Vec3& n, Rgb c) {
+MeshVertex vertex(const geometry::Vec3& p, const geometry::Vec3& n, image::Rgb c) {
   return {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z), static_cast<float>(n.x),
           static_cast<float>(n.y), static_cast<float>(n.z), c.r, c.g, c.b, 255};
 }
 
 }  // namespace
 
-TriangleMesh part_surface(const Mesh& mesh, Rgb colour) {
+TriangleMesh part_surface(const geometry::Mesh& mesh, image::Rgb colour) {
   TriangleMesh out;
   out.vertices.reserve(mesh.size() * 3);
   out.indices.reserve(mesh.size() * 3);
   for (std::size_t t = 0; t < mesh.size(); ++t) {
-    const Vec3 a = mesh.corner(t, 0), b = mesh.corner(t, 1), c = mesh.corner(t, 2);
-    const Vec3 n = normalized(cross(b - a, c - a));
-    for (const Vec3& p : {a, b, c}) {
+    const geometry::Vec3 a = mesh.corner(t, 0), b = mesh.corner(t, 1), c = mesh.corner(t, 2);
+    const geometry::Vec3 n = normalized(cross(b - a, c - a));
+    for (const geometry::Vec3& p : {a, b, c}) {
       out.indices.push_back(static_cast<std::uint32_t>(out.vertices.size()));
       out.vertices.push_back(vertex(p, n, colour));
       out.bounds.add(p);
@@ -38,9 +38,9 @@ TriangleMesh part_surface(const Mesh& mesh, Rgb colour) {
   return out;
 }
 
-double default_cutter_length(const Cutter& cutter) { return std::max(6 * cutter.radius, 8.0); }
+double default_cutter_length(const cam::Cutter& cutter) { return std::max(6 * cutter.radius, 8.0); }
 
-TriangleMesh cutter_surface(const Cutter& cutter, const Vec3& tip, double length, int segments) {
+TriangleMesh cutter_surface(const cam::Cutter& cutter, const geometry::Vec3& tip, double length, int segments) {
   if (!(cutter.radius > 0)) throw std::invalid_argument("viewer: the cutter's radius must be positive");
   if (segments < 3) throw std::invalid_argument("viewer: a cutter needs at least 3 segments around");
   if (!(length > 0)) length = default_cutter_length(cutter);
@@ -65,14 +65,14 @@ TriangleMesh cutter_surface(const Cutter& cutter, const Vec3& tip, double length
   } else {
     // V-bit, tapered ball: band by band (a cone piece is straight, an arc
     // is stepped by its tilt), a crease where the tilt jumps.
-    const CutterProfile bands = cutter.profile();
+    const cam::CutterProfile bands = cutter.profile();
     for (std::size_t b = 0; b < bands.count; ++b) {
-      const ProfileBand& band = bands.band[b];
-      const int steps = band.kind == ProfileBand::Kind::Arc ? 8 : 1;
+      const cam::ProfileBand& band = bands.band[b];
+      const int steps = band.kind == cam::ProfileBand::Kind::Arc ? 8 : 1;
       for (int k = 0; k <= steps; ++k) {
         const double sn = band.sin0 + (band.sin1 - band.sin0) * k / steps;
         const double cs = std::sqrt(std::max(0.0, 1 - sn * sn));
-        const double rho = band.kind == ProfileBand::Kind::Arc ? band.a + band.r * sn
+        const double rho = band.kind == cam::ProfileBand::Kind::Arc ? band.a + band.r * sn
                                                                : band.rho0 + (band.rho1 - band.rho0) * k / steps;
         prof.push_back({rho, band.h(rho), sn, -cs});
       }
@@ -88,7 +88,7 @@ TriangleMesh cutter_surface(const Cutter& cutter, const Vec3& tip, double length
   for (const P& p : prof)
     for (int s = 0; s <= segments; ++s) {
       const double a = 2 * std::numbers::pi * s / segments, ca = std::cos(a), sa = std::sin(a);
-      const Vec3 pos = tip + Vec3{p.rho * ca, p.rho * sa, p.z};
+      const geometry::Vec3 pos = tip + geometry::Vec3{p.rho * ca, p.rho * sa, p.z};
       out.vertices.push_back(vertex(pos, {p.nr * ca, p.nr * sa, p.nz}, kCutterColour));
       out.bounds.add(pos);
     }
@@ -105,7 +105,7 @@ TriangleMesh cutter_surface(const Cutter& cutter, const Vec3& tip, double length
 
 namespace {
 
-void check_height_field(const GridSpec& grid, const std::vector<float>& heights) {
+void check_height_field(const cam::GridSpec& grid, const std::vector<float>& heights) {
   if (grid.nx < 2 || grid.ny < 2) throw std::invalid_argument("viewer: a cut result needs at least 2 x 2 nodes");
   if (heights.size() != grid.size())
     throw std::invalid_argument(std::string("viewer: the cut result has ")
@@ -125,7 +125,7 @@ double highest(const std::vector<float>& heights) {
 
 // A height field's top surface, each node coloured by colour_of(node index).
 template <class ColourOf>
-TriangleMesh height_field_surface(const GridSpec& grid, const std::vector<float>& heights, double top,
+TriangleMesh height_field_surface(const cam::GridSpec& grid, const std::vector<float>& heights, double top,
                                   ColourOf colour_of) {
   TriangleMesh out;
   const std::size_t nx = grid.nx, ny = grid.ny;
@@ -145,8 +145,8 @@ TriangleMesh height_field_surface(const GridSpec& grid, const std::vector<float>
                               grid.dx * static_cast<double>((i > 0) + (i + 1 < nx)));
       const double sy = slope(i, j > 0 ? j - 1 : j, i, j + 1 < ny ? j + 1 : j,
                               grid.dy * static_cast<double>((j > 0) + (j + 1 < ny)));
-      const Vec3 p{grid.x(i), grid.y(j), std::isfinite(zc) ? zc : top};
-      out.vertices.push_back(vertex(p, normalized(Vec3{-sx, -sy, 1}), colour_of(j * nx + i)));
+      const geometry::Vec3 p{grid.x(i), grid.y(j), std::isfinite(zc) ? zc : top};
+      out.vertices.push_back(vertex(p, normalized(geometry::Vec3{-sx, -sy, 1}), colour_of(j * nx + i)));
       if (std::isfinite(zc)) out.bounds.add(p);
     }
   // Two triangles per cell; a triangle touching a node without a value is left out.
@@ -163,29 +163,29 @@ TriangleMesh height_field_surface(const GridSpec& grid, const std::vector<float>
 
 }  // namespace
 
-CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const DesignHeights& design,
+CutSurface cut_surface(const cam::GridSpec& grid, const std::vector<float>& heights, const cam::DesignHeights& design,
                        double tolerance) {
   check_height_field(grid, heights);
   const double top = highest(heights);
-  const HeightFieldStock stock(grid, top, std::vector<double>(heights.begin(), heights.end()));
-  const DeviationResult dev = compare_to_design(stock, design, tolerance);
+  const cam::HeightFieldStock stock(grid, top, std::vector<double>(heights.begin(), heights.end()));
+  const cam::DeviationResult dev = cam::compare_to_design(stock, design, tolerance);
   CutSurface out;
   out.stats = dev.stats;
-  const DeviationScale scale{tolerance, dev.stats.has_gouge ? std::max(0.0, -dev.stats.largest_gouge.value) : 0.0,
+  const image::DeviationScale scale{tolerance, dev.stats.has_gouge ? std::max(0.0, -dev.stats.largest_gouge.value) : 0.0,
                              std::max(0.0, dev.stats.largest_excess.value)};
   out.mesh = height_field_surface(grid, heights, top, [&](std::size_t k) {
-    return dev.off_part[k] || !std::isfinite(dev.deviation[k]) ? DeviationPalette::off_part
+    return dev.off_part[k] || !std::isfinite(dev.deviation[k]) ? image::DeviationPalette::off_part
                                                                : scale.colour(dev.deviation[k]);
   });
   return out;
 }
 
-CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const Mesh& design, double tolerance) {
+CutSurface cut_surface(const cam::GridSpec& grid, const std::vector<float>& heights, const geometry::Mesh& design, double tolerance) {
   check_height_field(grid, heights);
-  return cut_surface(grid, heights, design_heights(design, grid), tolerance);
+  return cut_surface(grid, heights, cam::design_heights(design, grid), tolerance);
 }
 
-TriangleMesh stock_surface(const GridSpec& grid, const std::vector<float>& heights, Rgb colour) {
+TriangleMesh stock_surface(const cam::GridSpec& grid, const std::vector<float>& heights, image::Rgb colour) {
   check_height_field(grid, heights);
   return height_field_surface(grid, heights, highest(heights), [&](std::size_t) { return colour; });
 }

@@ -14,7 +14,7 @@
 
 namespace cncstream::viewer {
 
-Vec3 Toolpath::point_at(double t) const {
+geometry::Vec3 Toolpath::point_at(double t) const {
   if (segments.empty()) return {};
   const double n = static_cast<double>(segments.size());
   t = std::clamp(t, 0.0, n);
@@ -30,7 +30,7 @@ std::uint32_t Toolpath::vertices_done(double t) const {
   return segments[k - 1].vertex + 1;
 }
 
-void append_segment(Toolpath& path, const Vec3& from, const Vec3& to, bool rapid, double feed, std::uint32_t line,
+void append_segment(Toolpath& path, const geometry::Vec3& from, const geometry::Vec3& to, bool rapid, double feed, std::uint32_t line,
                     std::uint32_t operation) {
   const PathVertex a{static_cast<float>(from.x), static_cast<float>(from.y), static_cast<float>(from.z), 0, 0, 0, 0,
                      kJump};
@@ -94,7 +94,7 @@ Toolpath build_toolpath(std::string_view program, const ToolpathOptions& options
       continue;
     }
     if (r.state.tool != state.tool) pending_new = true;
-    const Vec3 shift = options.offset - r.state.wco();
+    const geometry::Vec3 shift = options.offset - r.state.wco();
     const auto line = static_cast<std::uint32_t>(i);
     for (const gcode::Action& a : r.actions) {
       const bool moves = std::holds_alternative<gcode::LinearMove>(a) || std::holds_alternative<gcode::ArcMove>(a) ||
@@ -116,8 +116,8 @@ Toolpath build_toolpath(std::string_view program, const ToolpathOptions& options
         append_segment(path, m->from + shift, m->to + shift, m->rapid, m->feed, line, operation);
       } else if (const auto* arc = std::get_if<gcode::ArcMove>(&a)) {
         const gcode::ArcChords chords = gcode::arc_chords(*arc, options.arc_tolerance);
-        Vec3 p = arc->from;
-        for (const Vec3& q : chords.points) {
+        geometry::Vec3 p = arc->from;
+        for (const geometry::Vec3& q : chords.points) {
           append_segment(path, p + shift, q + shift, false, chords.feed, line, operation);
           p = q;
         }
@@ -145,14 +145,14 @@ PathColouring parse_path_colouring(const std::string& name) {
 void colour_toolpath(Toolpath& path, PathColouring how) {
   const double span = path.max_feed - path.min_feed;
   for (std::size_t k = 0; k < path.segments.size(); ++k) {
-    Rgb c = kRapidColour;
+    image::Rgb c = kRapidColour;
     if (!path.rapid(k)) {
       if (how == PathColouring::Operation) {
-        c = category_colour(path.segments[k].operation);
+        c = image::category_colour(path.segments[k].operation);
       } else {
         // One feed only: the middle of the ramp.
         const double t = span > 0 ? (path.segments[k].feed - path.min_feed) / span : 0.5;
-        c = colormap_viridis(t);
+        c = image::colormap_viridis(t);
       }
     }
     PathVertex& v = path.vertices[path.segments[k].vertex];
@@ -169,18 +169,18 @@ std::vector<std::uint32_t> display_strip(const Toolpath& path, double tolerance)
   keep.reserve(n / 4 + 2);
   auto pos = [&](std::size_t v) {
     const PathVertex& p = path.vertices[v];
-    return Vec3{p.x, p.y, p.z};
+    return geometry::Vec3{p.x, p.y, p.z};
   };
   auto same_look = [&](std::size_t u, std::size_t v) {
     const PathVertex &a = path.vertices[u], &b = path.vertices[v];
     return a.kind == b.kind && a.kind != kJump && a.r == b.r && a.g == b.g && a.b == b.b;
   };
   // Squared distance of p from the segment a-b.
-  auto dist2 = [](const Vec3& p, const Vec3& a, const Vec3& b) {
-    const Vec3 ab = b - a;
+  auto dist2 = [](const geometry::Vec3& p, const geometry::Vec3& a, const geometry::Vec3& b) {
+    const geometry::Vec3 ab = b - a;
     const double l2 = dot(ab, ab);
     const double t = l2 > 0 ? std::clamp(dot(p - a, ab) / l2, 0.0, 1.0) : 0.0;
-    const Vec3 d = p - (a + ab * t);
+    const geometry::Vec3 d = p - (a + ab * t);
     return dot(d, d);
   };
   const double tol2 = tolerance * tolerance;
@@ -192,7 +192,7 @@ std::vector<std::uint32_t> display_strip(const Toolpath& path, double tolerance)
     // (The lines before v in the run already look like the one ending at v.)
     bool merge = v + 1 < n && v + 1 - anchor <= kMaxRun && same_look(v, v + 1);
     if (merge) {
-      const Vec3 a = pos(anchor), b = pos(v + 1);
+      const geometry::Vec3 a = pos(anchor), b = pos(v + 1);
       for (std::size_t u = anchor + 1; u <= v && merge; ++u) merge = dist2(pos(u), a, b) <= tol2;
     }
     if (!merge) {

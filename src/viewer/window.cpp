@@ -28,7 +28,7 @@ void LiveCursor::set(const std::function<void(Update&)>& change) {
   if (wake) wake();
 }
 
-void LiveCursor::set_cutter_position(const Vec3& tip) {
+void LiveCursor::set_cutter_position(const geometry::Vec3& tip) {
   set([&](Update& u) { u.cutter = tip; });
 }
 void LiveCursor::set_progress(double segments_done) {
@@ -37,7 +37,7 @@ void LiveCursor::set_progress(double segments_done) {
 void LiveCursor::set_cut(std::shared_ptr<const TriangleMesh> surface) {
   set([&](Update& u) { u.cut = std::move(surface); });
 }
-void LiveCursor::set_cutter(const Cutter& cutter) {
+void LiveCursor::set_cutter(const cam::Cutter& cutter) {
   set([&](Update& u) { u.tool = cutter; });
 }
 void LiveCursor::set_status(std::string text) {
@@ -71,7 +71,7 @@ struct WindowState {
   Renderer* renderer = nullptr;
   Toolpath* colour_target = nullptr;
   PathColouring colouring = PathColouring::Feed;
-  Box3 bounds;
+  geometry::Box3 bounds;
   double mouse_x = 0, mouse_y = 0;  // framebuffer pixels
   double pixel_scale = 1;           // framebuffer pixels per window unit (HiDPI)
   int dragging = -1;       // the mouse button held, or -1

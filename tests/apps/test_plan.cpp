@@ -58,11 +58,11 @@ double number_after(const std::string& text, const std::string& key) {
 TEST(Plan, PredictedResidualMatchesTheSimulatorAfterBothFiles) {
   // A dome on a plate: the radiused cutter removes more on the plate and the
   // dome's gentle top, the ball on its flanks.
-  const Mesh part = cl_test::dome_on_plate(40, 16);
+  const geometry::Mesh part = cl_test::dome_on_plate(40, 16);
   const fs::path dir = temp_dir() / "plan";
   fs::create_directories(dir);
   const fs::path stl = dir / "dome.stl";
-  write_stl_binary(stl, part, "dome");
+  geometry::write_stl_binary(stl, part, "dome");
   const auto r = run_cncstream({"plan", stl.string(), "--tools", "ball:6,bull:6:1.5", "--stepover", "1.5", "--step", "0.2",
                                 "--scallop-tol", "0.05", "-o", (dir / "out").string()});
   ASSERT_EQ(r.code, 0) << r.out;
@@ -73,15 +73,15 @@ TEST(Plan, PredictedResidualMatchesTheSimulatorAfterBothFiles) {
   ASSERT_TRUE(fs::exists(f2)) << r.out;
 
   // The design in work coordinates (XY origin at the part's minimum, Z0 on top).
-  Mesh work = part;
-  const Box3 b = part.bounds();
+  geometry::Mesh work = part;
+  const geometry::Box3 b = part.bounds();
   work.translate({-b.lo.x, -b.lo.y, -b.hi.z});
   cncsim::MachineOptions mo;
   mo.instant_waits = true;
   cncsim::Machine m(mo);
   const double res = 0.1;
   // The files select T1 and T2; the simulator's tool table mounts the cutters.
-  cncsim::MaterialRemoval removal(cncsim::stock_box_for(work, res), parse_cutter_spec("flat:1"));
+  cncsim::MaterialRemoval removal(cncsim::stock_box_for(work, res), cam::parse_cutter_spec("flat:1"));
   removal.set_tool_table(cncsim::parse_tool_table("1=bull:6:1.5,2=ball:6"));
   removal.attach(m);
   m.take_output();
@@ -91,7 +91,7 @@ TEST(Plan, PredictedResidualMatchesTheSimulatorAfterBothFiles) {
   EXPECT_EQ(removal.cutter().spec(), "ball:6");
   EXPECT_TRUE(removal.unknown_tools().empty());
 
-  const DesignHeights design = design_heights(work, removal.stock().grid());
+  const cam::DesignHeights design = cam::design_heights(work, removal.stock().grid());
   double measured = 0;
   for (std::size_t k = 0; k < design.z.size(); ++k)
     if (!design.off_part[k]) measured = std::max(measured, removal.stock().heights()[k] - design.z[k]);
@@ -108,22 +108,22 @@ TEST(Plan, PredictedResidualMatchesTheSimulatorAfterBothFiles) {
 TEST(Plan, StreamedFileCutsWithTheToolItSelects) {
   // A plate with a bump; one plan file streamed to PORT=sim with a tool table:
   // the file's T1 mounts the radiused cutter, and the cut is written out.
-  const Mesh part = cl_test::terrain(0, 0, 20, 80, [](double x, double y) {
+  const geometry::Mesh part = cl_test::terrain(0, 0, 20, 80, [](double x, double y) {
     const double r = std::hypot(x - 10, y - 10);
     return 2 + std::max(0.0, 3 - r / 2);
   });
   const fs::path dir = temp_dir() / "plan-stream";
   fs::create_directories(dir);
-  write_stl_binary(dir / "bump.stl", part, "bump");
+  geometry::write_stl_binary(dir / "bump.stl", part, "bump");
   const auto r = run_cncstream({"plan", (dir / "bump.stl").string(), "--tools", "ball:4,bull:4:1", "--stepover", "1",
                                 "--step", "0.25", "-o", (dir / "out").string()});
   ASSERT_EQ(r.code, 0) << r.out;
   const fs::path f1 = dir / "out" / "bump-1-bull_4_1.nc";
   ASSERT_TRUE(fs::exists(f1)) << r.out;
-  Mesh work = part;
-  const Box3 b = part.bounds();
+  geometry::Mesh work = part;
+  const geometry::Box3 b = part.bounds();
   work.translate({-b.lo.x, -b.lo.y, -b.hi.z});
-  write_stl_binary(dir / "bump-work.stl", work, "bump");
+  geometry::write_stl_binary(dir / "bump-work.stl", work, "bump");
   const fs::path result = dir / "cut.f32";
   const auto s = run_cncstream({f1.string(), "sim", "--yes", "--no-journal", "--sim-design", (dir / "bump-work.stl").string(),
                                 "--sim-tool", "flat:1", "--sim-tool-table", "1=bull:4:1,2=ball:4", "--sim-result",

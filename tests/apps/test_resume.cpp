@@ -16,7 +16,7 @@
 #include "sim/sim_test_util.hpp"
 
 using namespace apptest;
-using cncstream::Vec3;
+using cncstream::geometry::Vec3;
 
 namespace {
 
@@ -55,14 +55,14 @@ struct Machined {
 
 Machined straight(const std::vector<std::string>& prog) {
   auto m = fresh_machine();
-  cncsim::MaterialRemoval cut(cncsim::StockBox{{-5, -5, -3}, {30, 20, 0}, 0.2}, cncstream::parse_cutter_spec("ball:2"));
+  cncsim::MaterialRemoval cut(cncsim::StockBox{{-5, -5, -3}, {30, 20, 0}, 0.2}, cncstream::cam::parse_cutter_spec("ball:2"));
   cut.attach(m);
   run_lines(m, prog);
   return {m.work_position(), cncstream::gcode::format_modes(m.parser()), cut.stock().heights()};
 }
 
 Machined interrupted(const std::vector<std::string>& prog, std::size_t n) {
-  cncsim::MaterialRemoval cut(cncsim::StockBox{{-5, -5, -3}, {30, 20, 0}, 0.2}, cncstream::parse_cutter_spec("ball:2"));
+  cncsim::MaterialRemoval cut(cncsim::StockBox{{-5, -5, -3}, {30, 20, 0}, 0.2}, cncstream::cam::parse_cutter_spec("ball:2"));
   {
     auto first = fresh_machine();
     cut.attach(first);
@@ -175,8 +175,8 @@ TEST(Resume, CliResumesADisconnectedJobAndLinksIt) {
     for (const auto& s : cncstream::gcode::trace_program(text).segments) {
       if (s.source_line != static_cast<std::size_t>(job->from_line)) continue;
       const Vec3 a = s.work_from(), ab = s.work_to() - a;
-      const double t = std::clamp(cncstream::dot(p - a, ab) / std::max(cncstream::dot(ab, ab), 1e-300), 0.0, 1.0);
-      nearest = std::min(nearest, cncstream::norm(p - (a + ab * t)));
+      const double t = std::clamp(cncstream::geometry::dot(p - a, ab) / std::max(cncstream::geometry::dot(ab, ab), 1e-300), 0.0, 1.0);
+      nearest = std::min(nearest, cncstream::geometry::norm(p - (a + ab * t)));
     }
     EXPECT_LT(nearest, 0.01) << "the resumed line does not pass through the last reported position";
   }

@@ -18,10 +18,10 @@ using namespace cncstream;
 
 TEST(SelectReport, WritesNumbersMapsAndPerNodeData) {
   // A dome on a plate: flat ground (radiused wins) and steep flanks (ball wins).
-  const Mesh part = cl_test::dome_on_plate(30, 12);
+  const geometry::Mesh part = cl_test::dome_on_plate(30, 12);
   const fs::path dir = temp_dir() / "select";
   fs::create_directories(dir);
-  write_stl_binary(dir / "dome.stl", part, "dome");
+  geometry::write_stl_binary(dir / "dome.stl", part, "dome");
   const fs::path out = dir / "report";
   const auto r = run_cncstream({"select", (dir / "dome.stl").string(), "--tools", "ball:4,bull:4:1", "--stepover", "1",
                                 "--step", "0.2", "--nodes-csv", "-o", out.string()});

@@ -20,7 +20,7 @@ namespace {
 
 std::string v_groove_stl() {
   const auto path = temp_dir() / "v_groove.stl";
-  if (!fs::exists(path)) cncstream::write_stl_binary(path, cncstream::test::v_groove());
+  if (!fs::exists(path)) cncstream::geometry::write_stl_binary(path, cncstream::test::v_groove());
   return path.string();
 }
 

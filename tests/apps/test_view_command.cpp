@@ -83,12 +83,12 @@ TEST(ViewCommand, ScreenshotOfThePlaqueAndItsProgramWithoutAWindow) {
   EXPECT_TRUE(r.has("placed on the part by its work origin: offset X 0.000 Y 0.000 Z 10.500")) << r.out;
   EXPECT_TRUE(r.has("segments (3 rapid), 1 arc, 1 operation")) << r.out;
   EXPECT_TRUE(r.has("screenshot")) << r.out;
-  const cncstream::RgbImage img = cncstream::read_png(png);
+  const cncstream::image::RgbImage img = cncstream::image::read_png(png);
   ASSERT_EQ(img.width(), 160);
   ASSERT_EQ(img.height(), 120);
   int drawn = 0;
   for (int y = 0; y < img.height(); ++y)
-    for (int x = 0; x < img.width(); ++x) drawn += !(img.get(x, y) == cncstream::Rgb{245, 246, 248});
+    for (int x = 0; x < img.width(); ++x) drawn += !(img.get(x, y) == cncstream::image::Rgb{245, 246, 248});
   EXPECT_GT(drawn, 160 * 120 / 3);  // the plaque fills the fitted view
 }
 
@@ -128,13 +128,13 @@ TEST(ViewCommand, BadInputIsAClearError) {
 
 TEST(ViewCommand, CutScreenshotCarriesTheDeviationMapsLegend) {
   // A clean cut of the plaque: its design heights on a 2 mm grid.
-  const cncstream::Mesh plaque_mesh = cncstream::load_stl(plaque()).mesh;
-  const cncstream::GridSpec g = cncstream::GridSpec::covering(0, 0, 120, 100, 2, 2);
-  const cncstream::DesignHeights d = cncstream::design_heights(plaque_mesh, g);
+  const cncstream::geometry::Mesh plaque_mesh = cncstream::geometry::load_stl(plaque()).mesh;
+  const cncstream::cam::GridSpec g = cncstream::cam::GridSpec::covering(0, 0, 120, 100, 2, 2);
+  const cncstream::cam::DesignHeights d = cncstream::cam::design_heights(plaque_mesh, g);
   std::vector<double> z(g.size());
   for (std::size_t k = 0; k < g.size(); ++k) z[k] = d.off_part[k] ? plaque_mesh.bounds().lo.z : d.z[k];
   const fs::path cut = temp_dir() / "view_cut.f32";
-  cncstream::write_height_field(cut, g, z);
+  cncstream::cam::write_height_field(cut, g, z);
   const fs::path png = temp_dir() / "view_cut.png";
   const ScopedEnv asan("ASAN_OPTIONS", kRenderChildAsan);
   const auto r = run_cncstream({"view", "--cut", cut.string(), "--design", plaque(), "--screenshot", png.string(),
@@ -142,14 +142,14 @@ TEST(ViewCommand, CutScreenshotCarriesTheDeviationMapsLegend) {
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(r.has("61 x 51 nodes")) << r.out;
   EXPECT_TRUE(r.has(", 0 gouged,")) << r.out;
-  const cncstream::RgbImage img = cncstream::read_png(png);
+  const cncstream::image::RgbImage img = cncstream::image::read_png(png);
   ASSERT_EQ(img.width(), 1000);
   // The legend's swatches, in the map's own colours, right of the view.
   bool gouge_swatch = false, excess_swatch = false;
   for (int y = 0; y < img.height(); ++y)
     for (int x = img.width() / 2; x < img.width(); ++x) {
-      gouge_swatch = gouge_swatch || img.get(x, y) == cncstream::DeviationPalette::gouge(0.6);
-      excess_swatch = excess_swatch || img.get(x, y) == cncstream::DeviationPalette::excess(0.6);
+      gouge_swatch = gouge_swatch || img.get(x, y) == cncstream::image::DeviationPalette::gouge(0.6);
+      excess_swatch = excess_swatch || img.get(x, y) == cncstream::image::DeviationPalette::excess(0.6);
     }
   EXPECT_TRUE(gouge_swatch);
   EXPECT_TRUE(excess_swatch);
@@ -160,7 +160,7 @@ TEST(ViewCommand, CutScreenshotCarriesTheDeviationMapsLegend) {
   const double top = plaque_mesh.bounds().hi.z;
   std::vector<double> work(z);
   for (double& h : work) h -= top;
-  cncstream::write_height_field(cut, g, work, cncstream::Vec3{0, 0, -top});
+  cncstream::cam::write_height_field(cut, g, work, cncstream::geometry::Vec3{0, 0, -top});
   const auto w = run_cncstream({"view", "--cut", cut.string(), "--design", plaque(), "--screenshot", png.string(),
                                 "--view", "top", "--size", "320x200"});
   ASSERT_EQ(w.code, 0) << w.out;
@@ -227,7 +227,7 @@ TEST(ViewFollow, TheWindowFollowsADaemonJobThroughItsToolChangeToItsEnd) {
                                 "--size", "320x240"});
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NEAR(number_after(r.out, done + "6 of 6 segments run, "), slot, 0.03 * slot) << r.out;
-  const cncstream::RgbImage img = cncstream::read_png(png);
+  const cncstream::image::RgbImage img = cncstream::image::read_png(png);
   int stock = 0;
   for (int yy = 0; yy < img.height(); ++yy)
     for (int xx = 0; xx < img.width(); ++xx) {

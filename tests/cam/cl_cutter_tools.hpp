@@ -26,8 +26,8 @@ inline double tapered_ball_height(double ball_radius, double half_angle_deg, dou
   return r - r * std::sin(a) + (rho - rt) / std::tan(a);
 }
 
-inline Tool tool_of(const cncstream::Cutter& c) {
-  using cncstream::CutterType;
+inline Tool tool_of(const cncstream::cam::Cutter& c) {
+  using cncstream::cam::CutterType;
   if (c.grown != 0) throw std::invalid_argument("tool_of: grown cutters have no closed form here");
   switch (c.type) {
     case CutterType::Flat: return {c.radius, 0.0};

@@ -18,7 +18,7 @@
 
 namespace cl_oracle {
 
-using cncstream::Vec3;
+using cncstream::geometry::Vec3;
 
 inline constexpr double kNone = -std::numeric_limits<double>::infinity();
 
@@ -188,7 +188,7 @@ struct MeshDrop {
 };
 
 // Facet indices, highest top first.
-inline std::vector<std::size_t> facets_by_top(const cncstream::Mesh& m) {
+inline std::vector<std::size_t> facets_by_top(const cncstream::geometry::Mesh& m) {
   std::vector<std::size_t> order(m.triangles.size());
   for (std::size_t f = 0; f < order.size(); ++f) order[f] = f;
   auto top = [&](std::size_t f) { return std::max({m.corner(f, 0).z, m.corner(f, 1).z, m.corner(f, 2).z}); };
@@ -199,7 +199,7 @@ inline std::vector<std::size_t> facets_by_top(const cncstream::Mesh& m) {
 // Max over facets of the oracle's drop at (x, y). Facets are visited highest
 // first and skipped when even their top minus the profile height at their
 // nearest point cannot beat the best so far.
-inline MeshDrop mesh_drop(const cncstream::Mesh& m, const std::vector<std::size_t>& by_top, const Tool& t, double x,
+inline MeshDrop mesh_drop(const cncstream::geometry::Mesh& m, const std::vector<std::size_t>& by_top, const Tool& t, double x,
                           double y) {
   MeshDrop r;
   for (std::size_t f : by_top) {

@@ -13,8 +13,8 @@
 
 namespace cl_test {
 
-using cncstream::Mesh;
-using cncstream::Vec3;
+using cncstream::geometry::Mesh;
+using cncstream::geometry::Vec3;
 
 // Each triangle with its own three vertices (nothing shared).
 inline Mesh soup(const std::vector<std::array<Vec3, 3>>& tris) {

@@ -23,15 +23,15 @@ namespace {
 
 const double kPi = std::acos(-1.0);
 
-std::vector<Cutter> new_cutters() {
-  return {Cutter::vbit(60, 6), Cutter::vbit(90, 8, 1.5), Cutter::tapered_ball(1, 5, 3.175),
-          Cutter::tapered_ball(3, 20, 9), Cutter::vbit(150, 10)};
+std::vector<cam::Cutter> new_cutters() {
+  return {cam::Cutter::vbit(60, 6), cam::Cutter::vbit(90, 8, 1.5), cam::Cutter::tapered_ball(1, 5, 3.175),
+          cam::Cutter::tapered_ball(3, 20, 9), cam::Cutter::vbit(150, 10)};
 }
 
 // The profile of the cutter grown by g, by brute force: the lowest point of
 // the balls of radius g centred on its meridian curve (mirrored through the
 // axis, with the wall above the rim), heights from the grown tip.
-double grown_height_brute(const Cutter& c, double g, double rho) {
+double grown_height_brute(const cam::Cutter& c, double g, double rho) {
   const cl_oracle::Tool t = cl_oracle::tool_of(c);
   const double R = c.radius;
   auto f = [&](double p) {  // p in [-R, R]: a point of the meridian
@@ -45,13 +45,13 @@ double grown_height_brute(const Cutter& c, double g, double rho) {
 }
 
 // Max |engine - oracle| over nodes around one primitive mesh.
-double worst_error(const Mesh& m, const Cutter& c, const cl_oracle::Tool& t, std::mt19937& rng, int nodes) {
-  const Box3 b = m.bounds();
+double worst_error(const geometry::Mesh& m, const cam::Cutter& c, const cl_oracle::Tool& t, std::mt19937& rng, int nodes) {
+  const geometry::Box3 b = m.bounds();
   const double R = c.radius;
   std::uniform_real_distribution<double> X(b.lo.x - R, b.hi.x + R), Y(b.lo.y - R, b.hi.y + R);
-  ClOptions o;
+  cam::ClOptions o;
   o.floor = -100.0;
-  const ClEngine e(m, c, o);
+  const cam::ClEngine e(m, c, o);
   double worst = 0;
   for (int k = 0; k < nodes; ++k) {
     const double x = X(rng), y = Y(rng);
@@ -70,7 +70,7 @@ double worst_error(const Mesh& m, const Cutter& c, const cl_oracle::Tool& t, std
     worst = std::max(worst, std::fabs(z - best));
     // The grid node at the same place gives the same height (to rounding:
     // where two primitives meet, the one met first may win by an ulp).
-    const ClGrid g = e.compute(GridSpec{x, y, 1, 1, 1, 1});
+    const cam::ClGrid g = e.compute(cam::GridSpec{x, y, 1, 1, 1, 1});
     EXPECT_NEAR(g.z[0], z, 1e-12 * (1 + std::fabs(z))) << std::setprecision(17) << x << "," << y;
   }
   return worst;
@@ -79,35 +79,35 @@ double worst_error(const Mesh& m, const Cutter& c, const cl_oracle::Tool& t, std
 }  // namespace
 
 TEST(ClCutters, SpecsAndAngles) {
-  const Cutter v = parse_cutter_spec("vbit:60:12.7");
-  EXPECT_EQ(v.type, CutterType::VBit);
+  const cam::Cutter v = cam::parse_cutter_spec("vbit:60:12.7");
+  EXPECT_EQ(v.type, cam::CutterType::VBit);
   EXPECT_DOUBLE_EQ(v.radius, 6.35);
   EXPECT_DOUBLE_EQ(v.half_angle_deg, 30);
   EXPECT_EQ(v.spec(), "vbit:60:12.7");
-  EXPECT_EQ(parse_cutter_spec("vbit:30side:1/2in").spec(), "vbit:60:12.7");
-  const Cutter vt = parse_cutter_spec("vbit:90:6:0.5");
+  EXPECT_EQ(cam::parse_cutter_spec("vbit:30side:1/2in").spec(), "vbit:60:12.7");
+  const cam::Cutter vt = cam::parse_cutter_spec("vbit:90:6:0.5");
   EXPECT_DOUBLE_EQ(vt.tip_radius, 0.25);
-  EXPECT_EQ(parse_cutter_spec(vt.spec()).tip_radius, 0.25);
-  const Cutter t = parse_cutter_spec("taper:1:3.58:6.35");
-  EXPECT_EQ(t.type, CutterType::TaperedBall);
+  EXPECT_EQ(cam::parse_cutter_spec(vt.spec()).tip_radius, 0.25);
+  const cam::Cutter t = cam::parse_cutter_spec("taper:1:3.58:6.35");
+  EXPECT_EQ(t.type, cam::CutterType::TaperedBall);
   EXPECT_DOUBLE_EQ(t.corner_radius, 0.5);
   EXPECT_DOUBLE_EQ(t.half_angle_deg, 3.58);
   EXPECT_DOUBLE_EQ(t.radius, 3.175);
   EXPECT_EQ(t.spec(), "taper:1:3.58:6.35");
-  EXPECT_DOUBLE_EQ(parse_cutter_spec("taper:1:7.16incl:6.35").half_angle_deg, 3.58);
-  EXPECT_DOUBLE_EQ(parse_cutter_spec("taper:1:5").radius, 3.175 / 2);  // default top: 1/8 in
-  EXPECT_EQ(parse_cutter_spec("taper:1:5:1/8in").spec(), "taper:1:5:3.175");
+  EXPECT_DOUBLE_EQ(cam::parse_cutter_spec("taper:1:7.16incl:6.35").half_angle_deg, 3.58);
+  EXPECT_DOUBLE_EQ(cam::parse_cutter_spec("taper:1:5").radius, 3.175 / 2);  // default top: 1/8 in
+  EXPECT_EQ(cam::parse_cutter_spec("taper:1:5:1/8in").spec(), "taper:1:5:3.175");
   for (const char* bad : {"vbit:60", "vbit:180:6", "vbit:0:6", "vbit:60:6:6", "vbit:60:6:-1", "taper:1",
                           "taper:1:90:6", "taper:1:0:6", "taper:4:5", "taper:1:5:1", "taper:1:5:6:7", "vbit:x:6",
                           "taper:1:5deg:6incl"}) {
     SCOPED_TRACE(bad);
-    EXPECT_THROW(parse_cutter_spec(bad), CutterSpecError);
+    EXPECT_THROW(cam::parse_cutter_spec(bad), cam::CutterSpecError);
   }
-  EXPECT_NE(parse_cutter_spec("taper:1:5").description().find("tapered ball-nose"), std::string::npos);
+  EXPECT_NE(cam::parse_cutter_spec("taper:1:5").description().find("tapered ball-nose"), std::string::npos);
 }
 
 TEST(ClCutters, ProfilesFromGeometry) {
-  for (const Cutter& c : new_cutters()) {
+  for (const cam::Cutter& c : new_cutters()) {
     SCOPED_TRACE(c.spec());
     const cl_oracle::Tool t = cl_oracle::tool_of(c);
     for (int k = 0; k <= 1000; ++k) {
@@ -117,7 +117,7 @@ TEST(ClCutters, ProfilesFromGeometry) {
     EXPECT_NEAR(c.profile_top(), t.h(c.radius), 1e-12 * (1 + c.profile_top()));
     // Grown: the offset profile against its brute-force construction.
     for (double g : {0.05, 0.4}) {
-      const Cutter gc = grown_cutter(c, g);
+      const cam::Cutter gc = cam::grown_cutter(c, g);
       EXPECT_DOUBLE_EQ(gc.radius, c.radius + g);
       double worst = 0, at = 0;
       for (int k = 0; k < 400; ++k) {  // (at the rim itself h is steep: rounding)
@@ -130,7 +130,7 @@ TEST(ClCutters, ProfilesFromGeometry) {
     }
   }
   // The tapered ball's tangent point and its top: r cos a, r (1 - sin a).
-  const Cutter tb = Cutter::tapered_ball(1, 5, 3.175);
+  const cam::Cutter tb = cam::Cutter::tapered_ball(1, 5, 3.175);
   const double a = 5 * kPi / 180;
   EXPECT_NEAR(tb.profile_height(0.5 * std::cos(a)), 0.5 * (1 - std::sin(a)), 1e-12);
   EXPECT_NEAR(tb.profile_top(), 0.5 * (1 - std::sin(a)) + (1.5875 - 0.5 * std::cos(a)) / std::tan(a), 1e-9);
@@ -142,28 +142,28 @@ TEST(ClCutters, ProfilesFromGeometry) {
 TEST(ClCutters, ContactsAgainstBruteForce) {
   std::mt19937 rng(2811);
   std::uniform_real_distribution<double> U(0, 8), Z(0, 4), S(-1, 1);
-  std::vector<Cutter> cs = new_cutters();
-  cs.push_back(grown_cutter(Cutter::tapered_ball(1, 5, 3.175), 0.3));
-  cs.push_back(grown_cutter(Cutter::vbit(90, 8, 1.5), 0.4));
-  for (const Cutter& c : cs) {
+  std::vector<cam::Cutter> cs = new_cutters();
+  cs.push_back(cam::grown_cutter(cam::Cutter::tapered_ball(1, 5, 3.175), 0.3));
+  cs.push_back(cam::grown_cutter(cam::Cutter::vbit(90, 8, 1.5), 0.4));
+  for (const cam::Cutter& c : cs) {
     SCOPED_TRACE(c.description());
     cl_oracle::Tool t{c.radius, 0.0};
     if (c.grown > 0) t.profile = [c](double rho) { return c.profile_height(rho); };  // checked above
     else t = cl_oracle::tool_of(c);
     double worst_facet = 0, worst_edge = 0, worst_vertex = 0;
     for (int k = 0; k < 12; ++k) {
-      const Vec3 a{U(rng), U(rng), Z(rng)}, b{U(rng), U(rng), Z(rng)}, p{U(rng), U(rng), Z(rng)};
+      const geometry::Vec3 a{U(rng), U(rng), Z(rng)}, b{U(rng), U(rng), Z(rng)}, p{U(rng), U(rng), Z(rng)};
       worst_facet = std::max(worst_facet, worst_error(cl_test::soup({{a, b, p}}), c, t, rng, 12));
-      Vec3 e = b;
+      geometry::Vec3 e = b;
       if (k % 4 == 1) e.z = a.z;                                        // level
-      if (k % 4 == 2) e = Vec3{a.x + 0.3 * S(rng), a.y + 0.3 * S(rng), a.z + 3};  // steep
-      if (k % 4 == 3) e = Vec3{a.x + 1e-7, a.y, a.z + 2};               // near vertical
-      if (k == 11) e = Vec3{a.x, a.y, a.z + 2};                         // vertical
-      Mesh seg;
+      if (k % 4 == 2) e = geometry::Vec3{a.x + 0.3 * S(rng), a.y + 0.3 * S(rng), a.z + 3};  // steep
+      if (k % 4 == 3) e = geometry::Vec3{a.x + 1e-7, a.y, a.z + 2};               // near vertical
+      if (k == 11) e = geometry::Vec3{a.x, a.y, a.z + 2};                         // vertical
+      geometry::Mesh seg;
       seg.vertices = {a, e};
       seg.triangles = {{0, 1, 1}};
       worst_edge = std::max(worst_edge, worst_error(seg, c, t, rng, 16));
-      Mesh v;
+      geometry::Mesh v;
       v.vertices = {p};
       v.triangles = {{0, 0, 0}};
       worst_vertex = std::max(worst_vertex, worst_error(v, c, t, rng, 8));
@@ -178,18 +178,18 @@ TEST(ClCutters, ContactsAgainstBruteForce) {
 // the band: whichever point the engine reports, the height is right, and the
 // edges beside it are drawn (the 45-degree chamfer under a 90-degree V-bit).
 TEST(ClCutters, FacetAtTheConesSlope) {
-  for (const Cutter& c : {Cutter::vbit(90, 6), Cutter::tapered_ball(1, 45, 6)}) {
+  for (const cam::Cutter& c : {cam::Cutter::vbit(90, 6), cam::Cutter::tapered_ball(1, 45, 6)}) {
     SCOPED_TRACE(c.spec());
     // A ridge of two 45-degree chamfers and a flat top, welded.
     auto f = [](double x, double) { return std::min(3.0, std::min(x, 10 - x)); };
-    const Mesh m = cl_test::terrain(0, 0, 10, 10, f);
+    const geometry::Mesh m = cl_test::terrain(0, 0, 10, 10, f);
     const cl_oracle::Tool t = cl_oracle::tool_of(c);
     const std::vector<std::size_t> by_top = cl_oracle::facets_by_top(m);
-    const ClEngine e(m, c);
-    ClOptions every;
+    const cam::ClEngine e(m, c);
+    cam::ClOptions every;
     every.skip_concave_edges = false;
-    const ClGrid g = e.compute(GridSpec::covering(-1, 2, 11, 8, 0.61, 0.83));
-    const ClGrid full = ClEngine(m, c, every).compute(g.spec);
+    const cam::ClGrid g = e.compute(cam::GridSpec::covering(-1, 2, 11, 8, 0.61, 0.83));
+    const cam::ClGrid full = cam::ClEngine(m, c, every).compute(g.spec);
     double worst = 0;
     for (std::size_t k = 0; k < g.z.size(); ++k) {
       ASSERT_NEAR(g.z[k], full.z[k], 1e-9);
@@ -206,22 +206,22 @@ TEST(ClCutters, FacetAtTheConesSlope) {
 TEST(ClCutters, BandFormulasAgreeWithAptClosedForms) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> U(0, 8), Z(0, 4), N(-3, 11);
-  for (const Cutter& c : {Cutter::flat(4), Cutter::ball(5), Cutter::bull(6, 1), Cutter::bull(4, 1.9)}) {
+  for (const cam::Cutter& c : {cam::Cutter::flat(4), cam::Cutter::ball(5), cam::Cutter::bull(6, 1), cam::Cutter::bull(4, 1.9)}) {
     SCOPED_TRACE(c.spec());
-    const cl_detail::CutterShape apt(c), band(c, true);
+    const cam::cl_detail::CutterShape apt(c), band(c, true);
     ASSERT_FALSE(apt.general);
     ASSERT_TRUE(band.general);
     double worst = 0;
     for (int k = 0; k < 300; ++k) {
-      const Vec3 a{U(rng), U(rng), Z(rng)}, b{U(rng), U(rng), Z(rng)}, p{U(rng), U(rng), Z(rng)};
-      const cl_detail::EdgeGeom e = cl_detail::make_edge(a, b);
-      const cl_detail::FaceOffset fa = cl_detail::face_offset(a, b, p, apt), fb = cl_detail::face_offset(a, b, p, band);
+      const geometry::Vec3 a{U(rng), U(rng), Z(rng)}, b{U(rng), U(rng), Z(rng)}, p{U(rng), U(rng), Z(rng)};
+      const cam::cl_detail::EdgeGeom e = cam::cl_detail::make_edge(a, b);
+      const cam::cl_detail::FaceOffset fa = cam::cl_detail::face_offset(a, b, p, apt), fb = cam::cl_detail::face_offset(a, b, p, band);
       ASSERT_EQ(fa.active, fb.active);
       for (int n = 0; n < 10; ++n) {
         const double x = N(rng), y = N(rng);
-        const double ea = cl_detail::edge_drop(e, apt, x, y), eb = cl_detail::edge_drop(e, band, x, y);
-        ASSERT_EQ(ea == cl_detail::kNoContact, eb == cl_detail::kNoContact) << x << "," << y;
-        if (ea != cl_detail::kNoContact) worst = std::max(worst, std::fabs(ea - eb));
+        const double ea = cam::cl_detail::edge_drop(e, apt, x, y), eb = cam::cl_detail::edge_drop(e, band, x, y);
+        ASSERT_EQ(ea == cam::cl_detail::kNoContact, eb == cam::cl_detail::kNoContact) << x << "," << y;
+        if (ea != cam::cl_detail::kNoContact) worst = std::max(worst, std::fabs(ea - eb));
         if (fa.active && !fa.horizontal && fa.contains(x, y) && fb.contains(x, y))
           worst = std::max(worst, std::fabs(fa.value(x, y) - fb.value(x, y)));
         EXPECT_NEAR(apt.h(std::hypot(x - a.x, y - a.y)), band.h(std::hypot(x - a.x, y - a.y)), 1e-12);
@@ -236,13 +236,13 @@ TEST(ClCutters, BandFormulasAgreeWithAptClosedForms) {
 // from an edge of slope 0.3) against brute force, and the contact on the
 // hyperbola in closed form: v = t d / sqrt(m^2 - t^2).
 TEST(ClCutters, ConeEdgeContact) {
-  const Cutter c = Cutter::vbit(90, 10);
+  const cam::Cutter c = cam::Cutter::vbit(90, 10);
   const double t = 0.3, d = 2;
-  const Vec3 A{-20, d, 0}, B{20, d, 40 * t};
-  Mesh m;
+  const geometry::Vec3 A{-20, d, 0}, B{20, d, 40 * t};
+  geometry::Mesh m;
   m.vertices = {A, B};
   m.triangles = {{0, 1, 1}};
-  const double z = ClEngine(m, c).height_at(0, 0);
+  const double z = cam::ClEngine(m, c).height_at(0, 0);
   const double oracle = cl_oracle::segment_drop(A, B, cl_oracle::tool_of(c), 0, 0);
   EXPECT_NEAR(z, oracle, 1e-9);
   const double v = t * d / std::sqrt(1 - t * t);  // m = 1
@@ -256,16 +256,16 @@ TEST(ClCutters, InclinedPlanes) {
     for (double phi_deg : {0.0, 37.0, 210.0}) {
       const double a = a_deg * kPi / 180, phi = phi_deg * kPi / 180;
       auto plane = [&](double x, double y) { return 5 + std::tan(a) * (x * std::cos(phi) + y * std::sin(phi)); };
-      auto P = [&](double x, double y) { return Vec3{x, y, plane(x, y)}; };
-      const Mesh m = cl_test::welded({{P(-50, -50), P(50, -50), P(50, 50)}, {P(-50, -50), P(-50, 50), P(50, 50)}});
-      for (const Cutter& c : new_cutters()) {
+      auto P = [&](double x, double y) { return geometry::Vec3{x, y, plane(x, y)}; };
+      const geometry::Mesh m = cl_test::welded({{P(-50, -50), P(50, -50), P(50, 50)}, {P(-50, -50), P(-50, 50), P(50, 50)}});
+      for (const cam::Cutter& c : new_cutters()) {
         SCOPED_TRACE(c.spec() + " a=" + std::to_string(a_deg) + " phi=" + std::to_string(phi_deg));
         const double cone = (90 - c.half_angle_deg) * kPi / 180;  // the cone's own slope
         double offset;
         if (a > cone) offset = c.radius * std::tan(a) - c.profile_top();
-        else if (c.type == CutterType::VBit) offset = c.tip_radius * std::tan(a);
+        else if (c.type == cam::CutterType::VBit) offset = c.tip_radius * std::tan(a);
         else offset = c.corner_radius * (1 / std::cos(a) - 1);
-        const ClGrid g = ClEngine(m, c).compute(GridSpec::covering(-30, -30, 30, 30, 1.7, 1.3));
+        const cam::ClGrid g = cam::ClEngine(m, c).compute(cam::GridSpec::covering(-30, -30, 30, 30, 1.7, 1.3));
         for (std::size_t j = 0; j < g.spec.ny; ++j)
           for (std::size_t i = 0; i < g.spec.nx; ++i)
             ASSERT_NEAR(g.at(i, j), plane(g.spec.x(i), g.spec.y(j)) + offset, 1e-9 * (1 + std::tan(a)));
@@ -280,25 +280,25 @@ TEST(ClCutters, InclinedPlanes) {
 TEST(ClCutters, SweptRemovalAgainstBruteForce) {
   std::mt19937 rng(77);
   std::uniform_real_distribution<double> U(0, 6), Z(-2, 2);
-  for (const Cutter& c : new_cutters()) {
+  for (const cam::Cutter& c : new_cutters()) {
     SCOPED_TRACE(c.spec());
     const cl_oracle::Tool t = cl_oracle::tool_of(c);
     double worst = 0;
     int reached = 0;
     for (int k = 0; k < 200; ++k) {
-      const Vec3 a{U(rng), U(rng), Z(rng)};
-      const Vec3 b = k % 5 == 0 ? Vec3{a.x, a.y, a.z + 1} : k % 5 == 1 ? Vec3{U(rng), U(rng), a.z} : Vec3{U(rng), U(rng), Z(rng)};
+      const geometry::Vec3 a{U(rng), U(rng), Z(rng)};
+      const geometry::Vec3 b = k % 5 == 0 ? geometry::Vec3{a.x, a.y, a.z + 1} : k % 5 == 1 ? geometry::Vec3{U(rng), U(rng), a.z} : geometry::Vec3{U(rng), U(rng), Z(rng)};
       const double x = U(rng), y = U(rng);
       auto surface = [&](double s) {
-        const Vec3 p = a + (b - a) * s;
+        const geometry::Vec3 p = a + (b - a) * s;
         const double rho = std::hypot(x - p.x, y - p.y);
         return rho > c.radius ? HUGE_VAL : p.z + t.h(rho);
       };
       // Where the disc covers the point: an interval of s; bisect its ends, then golden section.
-      const double got = swept_lowest_height(a, b, c, x, y);
+      const double got = cam::swept_lowest_height(a, b, c, x, y);
       double best = std::min(surface(0), surface(1));
       const double s_min = cl_oracle::golden_argmin([&](double s) {
-        const Vec3 p = a + (b - a) * s;
+        const geometry::Vec3 p = a + (b - a) * s;
         return std::hypot(x - p.x, y - p.y);
       }, 0, 1, 200);
       if (std::isfinite(surface(s_min))) {
@@ -329,7 +329,7 @@ TEST(ClCutters, SweptRemovalAgainstBruteForce) {
 
 TEST(ClCutters, DepthLimitFromGeometry) {
   // As deep as a ball of the top diameter, never deeper than the flutes.
-  EXPECT_DOUBLE_EQ(jobs::default_max_depth(Cutter::tapered_ball(1, 5, 3.175)), 3.175 / 2);
-  const Cutter shallow = Cutter::vbit(150, 10);  // a cone 1.34 mm high
+  EXPECT_DOUBLE_EQ(jobs::default_max_depth(cam::Cutter::tapered_ball(1, 5, 3.175)), 3.175 / 2);
+  const cam::Cutter shallow = cam::Cutter::vbit(150, 10);  // a cone 1.34 mm high
   EXPECT_NEAR(jobs::default_max_depth(shallow), 5 / std::tan(75 * kPi / 180), 1e-12);
 }

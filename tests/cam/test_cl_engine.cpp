@@ -15,7 +15,7 @@ using namespace cncstream;
 
 namespace {
 
-Mesh bumpy() {
+geometry::Mesh bumpy() {
   return cl_test::terrain(0, 0, 40, 60, [](double x, double y) {
     double z = 3 + std::sin(x / 3) * std::cos(y / 4) + 0.2 * std::sin(1.7 * x + y);
     if (std::hypot(x - 25, y - 15) < 6) z = 5.5;  // plateau with near-vertical sides
@@ -23,23 +23,23 @@ Mesh bumpy() {
   });
 }
 
-std::vector<Cutter> cutters() { return {Cutter::ball(6), Cutter::flat(3), Cutter::bull(8, 1.5)}; }
+std::vector<cam::Cutter> cutters() { return {cam::Cutter::ball(6), cam::Cutter::flat(3), cam::Cutter::bull(8, 1.5)}; }
 
 }  // namespace
 
 TEST(ClEngine, SameResultForAnyThreadCount) {
-  const Mesh m = bumpy();
+  const geometry::Mesh m = bumpy();
   // Big enough for many tiles (128 x 128 nodes each).
-  const GridSpec spec = GridSpec::covering(-3, -3, 43, 43, 0.13, 0.11);
-  for (const Cutter& c : cutters()) {
+  const cam::GridSpec spec = cam::GridSpec::covering(-3, -3, 43, 43, 0.13, 0.11);
+  for (const cam::Cutter& c : cutters()) {
     SCOPED_TRACE(c.spec());
-    ClOptions one;
+    cam::ClOptions one;
     one.threads = 1;
-    const ClGrid a = ClEngine(m, c, one).compute(spec);
+    const cam::ClGrid a = cam::ClEngine(m, c, one).compute(spec);
     for (unsigned n : {2u, 3u, 0u}) {
-      ClOptions o;
+      cam::ClOptions o;
       o.threads = n;
-      const ClGrid b = ClEngine(m, c, o).compute(spec);
+      const cam::ClGrid b = cam::ClEngine(m, c, o).compute(spec);
       EXPECT_EQ(a.z, b.z) << n << " threads";
       EXPECT_EQ(a.on_floor, b.on_floor) << n << " threads";
     }
@@ -47,18 +47,18 @@ TEST(ClEngine, SameResultForAnyThreadCount) {
 }
 
 TEST(ClEngine, TilesConcatenateToTheWholeGrid) {
-  const Mesh m = bumpy();
-  const GridSpec spec = GridSpec::covering(-3, -3, 43, 43, 0.17, 0.19);
-  for (const Cutter& c : cutters()) {
+  const geometry::Mesh m = bumpy();
+  const cam::GridSpec spec = cam::GridSpec::covering(-3, -3, 43, 43, 0.17, 0.19);
+  for (const cam::Cutter& c : cutters()) {
     SCOPED_TRACE(c.spec());
-    ClOptions o;
+    cam::ClOptions o;
     o.max_tile_bytes = spec.nx * 9 * 37 + 5;  // 37 rows per tile, last one short
-    const ClEngine e(m, c, o);
-    const ClGrid whole = e.compute(spec);
+    const cam::ClEngine e(m, c, o);
+    const cam::ClGrid whole = e.compute(spec);
     std::vector<double> z;
     std::vector<std::uint8_t> fl;
     std::size_t expect_j0 = 0, tiles = 0;
-    e.compute_tiles(spec, [&](const ClTile& t) {
+    e.compute_tiles(spec, [&](const cam::ClTile& t) {
       EXPECT_EQ(t.j0, expect_j0);
       EXPECT_LE(t.grid.spec.ny, 37u);
       EXPECT_EQ(t.grid.spec.nx, spec.nx);
@@ -76,12 +76,12 @@ TEST(ClEngine, TilesConcatenateToTheWholeGrid) {
 }
 
 TEST(ClEngine, HeightAtAgreesWithGridNodes) {
-  const Mesh m = bumpy();
-  const GridSpec spec = GridSpec::covering(-4, -4, 44, 44, 0.7, 0.9);
-  for (const Cutter& c : cutters()) {
+  const geometry::Mesh m = bumpy();
+  const cam::GridSpec spec = cam::GridSpec::covering(-4, -4, 44, 44, 0.7, 0.9);
+  for (const cam::Cutter& c : cutters()) {
     SCOPED_TRACE(c.spec());
-    const ClEngine e(m, c);
-    const ClGrid g = e.compute(spec);
+    const cam::ClEngine e(m, c);
+    const cam::ClGrid g = e.compute(spec);
     int touched = 0;
     for (std::size_t j = 0; j < spec.ny; ++j)
       for (std::size_t i = 0; i < spec.nx; ++i) {
@@ -93,37 +93,37 @@ TEST(ClEngine, HeightAtAgreesWithGridNodes) {
       }
     EXPECT_GT(touched, 100);
     // Off the nodes: a fine grid shifted by a fraction of the step.
-    GridSpec fine = spec;
+    cam::GridSpec fine = spec;
     fine.x0 += 0.31;
     fine.y0 += 0.47;
     fine.nx -= 1;
     fine.ny -= 1;
-    const ClGrid f = e.compute(fine);
+    const cam::ClGrid f = e.compute(fine);
     for (std::size_t j = 0; j < fine.ny; j += 3)
       for (std::size_t i = 0; i < fine.nx; i += 3) ASSERT_NEAR(e.height_at(fine.x(i), fine.y(j)), f.at(i, j), 1e-9);
   }
 }
 
 TEST(ClEngine, FloorAndUntouchedNodes) {
-  const Mesh m = cl_test::box({0, 0, 2}, {10, 10, 5});
-  const GridSpec spec = GridSpec::covering(-20, -20, 30, 30, 1, 1);
-  const ClEngine by_default(m, Cutter::ball(4));
+  const geometry::Mesh m = cl_test::box({0, 0, 2}, {10, 10, 5});
+  const cam::GridSpec spec = cam::GridSpec::covering(-20, -20, 30, 30, 1, 1);
+  const cam::ClEngine by_default(m, cam::Cutter::ball(4));
   EXPECT_EQ(by_default.floor(), 2.0);  // the mesh's lowest z
-  const ClGrid g = by_default.compute(spec);
+  const cam::ClGrid g = by_default.compute(spec);
   EXPECT_EQ(g.floor, 2.0);
   EXPECT_EQ(g.at(0, 0), 2.0);
   EXPECT_EQ(g.on_floor[0], 1);
   EXPECT_EQ(g.at(25, 25), 5.0);  // (5, 5): on the top
   EXPECT_EQ(g.on_floor[25 * spec.nx + 25], 0);
-  ClOptions o;
+  cam::ClOptions o;
   o.floor = -1.5;
-  const ClEngine low(m, Cutter::ball(4), o);
+  const cam::ClEngine low(m, cam::Cutter::ball(4), o);
   EXPECT_EQ(low.compute(spec).at(0, 0), -1.5);
   EXPECT_EQ(low.height_at(-15, 3), -1.5);
   // Touched but below the floor stays where it touches (never raised into the part).
-  ClOptions high;
+  cam::ClOptions high;
   high.floor = 4.5;
-  const ClGrid h = ClEngine(m, Cutter::ball(4), high).compute(spec);
+  const cam::ClGrid h = cam::ClEngine(m, cam::Cutter::ball(4), high).compute(spec);
   EXPECT_NEAR(h.at(19, 25), 5 - (2 - std::sqrt(4 - 1.0)), 1e-12);  // (-1, 5): 1 mm outside the wall
   EXPECT_EQ(h.on_floor[25 * spec.nx + 19], 0);
 }
@@ -134,14 +134,14 @@ TEST(ClEngine, FloorAndUntouchedNodes) {
 // (still touched), in the grid and the point query alike; nodes above it
 // and untouched ones are as before.
 TEST(ClEngine, FloorIsLowestRaisesTouchedNodesBelowTheFloorToIt) {
-  const Mesh m = cl_test::box({0, 0, 0}, {10, 10, 3});
-  const Cutter taper = parse_cutter_spec("taper:1:5:3.175");
-  const GridSpec spec = GridSpec::covering(-2, -2, 12, 12, 0.1, 0.1);
-  const ClEngine surface(m, taper);
-  ClOptions o;
+  const geometry::Mesh m = cl_test::box({0, 0, 0}, {10, 10, 3});
+  const cam::Cutter taper = cam::parse_cutter_spec("taper:1:5:3.175");
+  const cam::GridSpec spec = cam::GridSpec::covering(-2, -2, 12, 12, 0.1, 0.1);
+  const cam::ClEngine surface(m, taper);
+  cam::ClOptions o;
   o.floor_is_lowest = true;
-  const ClEngine lowest(m, taper, o);
-  const ClGrid a = surface.compute(spec), b = lowest.compute(spec);
+  const cam::ClEngine lowest(m, taper, o);
+  const cam::ClGrid a = surface.compute(spec), b = lowest.compute(spec);
   // (-1.5, 5): 1.5 mm outside the wall, the cone touches the rim 11.3 mm above the tip.
   const std::size_t i = 5, j = 70, k = j * spec.nx + i;
   ASSERT_NEAR(spec.x(i), -1.5, 1e-9);
@@ -161,9 +161,9 @@ TEST(ClEngine, FloorIsLowestRaisesTouchedNodesBelowTheFloorToIt) {
 }
 
 TEST(ClEngine, EmptyMeshIsAllFloor) {
-  const Mesh m;
-  const ClEngine e(m, Cutter::flat(6));
-  const ClGrid g = e.compute(GridSpec::covering(0, 0, 5, 5, 1, 1));
+  const geometry::Mesh m;
+  const cam::ClEngine e(m, cam::Cutter::flat(6));
+  const cam::ClGrid g = e.compute(cam::GridSpec::covering(0, 0, 5, 5, 1, 1));
   for (std::size_t k = 0; k < g.z.size(); ++k) {
     EXPECT_EQ(g.z[k], 0.0);
     EXPECT_EQ(g.on_floor[k], 1);
@@ -172,36 +172,36 @@ TEST(ClEngine, EmptyMeshIsAllFloor) {
 }
 
 TEST(ClEngine, RejectsBadInput) {
-  const Mesh m = cl_test::box({0, 0, 0}, {1, 1, 1});
-  EXPECT_THROW(ClEngine(m, Cutter::ball(0)), std::invalid_argument);
-  EXPECT_THROW(ClEngine(m, Cutter{CutterType::Bull, 3, 4}), std::invalid_argument);
-  Mesh bad = m;
+  const geometry::Mesh m = cl_test::box({0, 0, 0}, {1, 1, 1});
+  EXPECT_THROW(cam::ClEngine(m, cam::Cutter::ball(0)), std::invalid_argument);
+  EXPECT_THROW(cam::ClEngine(m, cam::Cutter{cam::CutterType::Bull, 3, 4}), std::invalid_argument);
+  geometry::Mesh bad = m;
   bad.triangles.push_back({0, 1, 99});
   try {
-    ClEngine e(bad, Cutter::ball(2));
+    cam::ClEngine e(bad, cam::Cutter::ball(2));
     FAIL() << "accepted a facet with a vertex index out of range";
   } catch (const std::invalid_argument& err) {
     EXPECT_NE(std::string(err.what()).find("facet 12"), std::string::npos) << err.what();
   }
-  Mesh nan = m;
+  geometry::Mesh nan = m;
   nan.vertices[3].y = std::nan("");
-  EXPECT_THROW(ClEngine(nan, Cutter::ball(2)), std::invalid_argument);
-  const ClEngine e(m, Cutter::ball(2));
-  GridSpec s = GridSpec::covering(0, 0, 1, 1, 0.5, 0.5);
+  EXPECT_THROW(cam::ClEngine(nan, cam::Cutter::ball(2)), std::invalid_argument);
+  const cam::ClEngine e(m, cam::Cutter::ball(2));
+  cam::GridSpec s = cam::GridSpec::covering(0, 0, 1, 1, 0.5, 0.5);
   s.dx = 0;
   EXPECT_THROW(e.compute(s), std::invalid_argument);
   s.dx = 0.5;
   s.y0 = HUGE_VAL;
-  EXPECT_THROW(e.compute_tiles(s, [](const ClTile&) {}), std::invalid_argument);
-  ClOptions o;
+  EXPECT_THROW(e.compute_tiles(s, [](const cam::ClTile&) {}), std::invalid_argument);
+  cam::ClOptions o;
   o.floor = std::nan("");
-  EXPECT_THROW(ClEngine(m, Cutter::ball(2), o), std::invalid_argument);
+  EXPECT_THROW(cam::ClEngine(m, cam::Cutter::ball(2), o), std::invalid_argument);
 }
 
 TEST(ClEngine, StatsCountWhatIsDrawn) {
-  const Mesh m = cl_test::box({0, 0, 0}, {10, 10, 3});
-  const ClEngine e(m, Cutter::ball(2));
-  const ClEngineStats& s = e.stats();
+  const geometry::Mesh m = cl_test::box({0, 0, 0}, {10, 10, 3});
+  const cam::ClEngine e(m, cam::Cutter::ball(2));
+  const cam::ClEngineStats& s = e.stats();
   EXPECT_EQ(s.facets, 12u);
   EXPECT_EQ(s.face_offsets, 4u);  // top and bottom; the walls are vertical
   EXPECT_EQ(s.edges, 18u);        // 12 box edges + 6 face diagonals
@@ -215,15 +215,15 @@ TEST(ClEngine, StatsCountWhatIsDrawn) {
 // Streamed tiles report the fraction of the whole grid inside each tile, and
 // a checkpoint that throws stops the grid there (a cancelled `clgrid`).
 TEST(ClEngine, TilesCheckpointSpansTheWholeGridAndCanStopIt) {
-  const Mesh m = bumpy();
-  const GridSpec spec = GridSpec::covering(-3, -3, 43, 43, 0.17, 0.19);
-  ClOptions o;
+  const geometry::Mesh m = bumpy();
+  const cam::GridSpec spec = cam::GridSpec::covering(-3, -3, 43, 43, 0.17, 0.19);
+  cam::ClOptions o;
   o.max_tile_bytes = spec.nx * 9 * 37 + 5;  // several tiles
-  const ClEngine e(m, Cutter::ball(6), o);
+  const cam::ClEngine e(m, cam::Cutter::ball(6), o);
   std::mutex mu;
   double lo = 2, hi = -1;
   std::size_t tiles = 0;
-  e.compute_tiles(spec, [&](const ClTile&) { ++tiles; }, [&](double f) {
+  e.compute_tiles(spec, [&](const cam::ClTile&) { ++tiles; }, [&](double f) {
     std::lock_guard<std::mutex> l(mu);
     lo = std::min(lo, f);
     hi = std::max(hi, f);
@@ -235,7 +235,7 @@ TEST(ClEngine, TilesCheckpointSpansTheWholeGridAndCanStopIt) {
 
   struct Stop {};
   std::size_t tiles_before_stop = 0;
-  EXPECT_THROW(e.compute_tiles(spec, [&](const ClTile&) { ++tiles_before_stop; },
+  EXPECT_THROW(e.compute_tiles(spec, [&](const cam::ClTile&) { ++tiles_before_stop; },
                                [](double f) {
                                  if (f > 0.5) throw Stop{};
                                }),

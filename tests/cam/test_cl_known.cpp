@@ -15,24 +15,24 @@ namespace {
 
 const double kPi = std::acos(-1.0);
 
-std::vector<Cutter> cutters() {
-  return {Cutter::flat(6), Cutter::ball(6), Cutter::bull(6, 1), Cutter::bull(6, 2.5), Cutter::ball(1.5),
-          Cutter::bull(10, 0.2)};
+std::vector<cam::Cutter> cutters() {
+  return {cam::Cutter::flat(6), cam::Cutter::ball(6), cam::Cutter::bull(6, 1), cam::Cutter::bull(6, 2.5), cam::Cutter::ball(1.5),
+          cam::Cutter::bull(10, 0.2)};
 }
 
 // The same and the cone-based cutters (for the tests that need only h).
-std::vector<Cutter> all_cutters() {
-  std::vector<Cutter> c = cutters();
-  for (const Cutter& n : {Cutter::vbit(60, 6), Cutter::vbit(90, 8, 1.5), Cutter::tapered_ball(1, 5, 3.175),
-                          Cutter::tapered_ball(3, 20, 9)})
+std::vector<cam::Cutter> all_cutters() {
+  std::vector<cam::Cutter> c = cutters();
+  for (const cam::Cutter& n : {cam::Cutter::vbit(60, 6), cam::Cutter::vbit(90, 8, 1.5), cam::Cutter::tapered_ball(1, 5, 3.175),
+                          cam::Cutter::tapered_ball(3, 20, 9)})
     c.push_back(n);
   return c;
 }
 
 using cl_oracle::tool_of;
 
-double rk_of(const Cutter& c) { return tool_of(c).rk; }
-double rc_of(const Cutter& c) { return c.radius - rk_of(c); }
+double rk_of(const cam::Cutter& c) { return tool_of(c).rk; }
+double rc_of(const cam::Cutter& c) { return c.radius - rk_of(c); }
 
 }  // namespace
 
@@ -41,13 +41,13 @@ TEST(ClKnown, BoxTopAndVerticalWalls) {
   // every cutter sits on it; beside a wall the cutter's profile rests on the
   // top edge: z = 10 - h(d), d the distance to the top rectangle; beyond R
   // nothing is touched. (The thesis's bounding-space trimming gouges here.)
-  const Mesh m = cl_test::box({10, 10, 0}, {30, 30, 10});
-  for (const Cutter& c : all_cutters()) {
+  const geometry::Mesh m = cl_test::box({10, 10, 0}, {30, 30, 10});
+  for (const cam::Cutter& c : all_cutters()) {
     SCOPED_TRACE(c.spec());
     const cl_oracle::Tool t = tool_of(c);
-    ClOptions o;
+    cam::ClOptions o;
     o.floor = -5.0;
-    const ClGrid g = ClEngine(m, c, o).compute(GridSpec::covering(0.25, 0.25, 39.75, 39.75, 0.5, 0.5));
+    const cam::ClGrid g = cam::ClEngine(m, c, o).compute(cam::GridSpec::covering(0.25, 0.25, 39.75, 39.75, 0.5, 0.5));
     for (std::size_t j = 0; j < g.spec.ny; ++j)
       for (std::size_t i = 0; i < g.spec.nx; ++i) {
         const double x = g.spec.x(i), y = g.spec.y(j);
@@ -74,14 +74,14 @@ TEST(ClKnown, InclinedPlaneEveryCutter) {
     for (double phi_deg : {0.0, 37.0, 210.0}) {
       const double a = a_deg * kPi / 180, phi = phi_deg * kPi / 180;
       auto plane = [&](double x, double y) { return 5 + std::tan(a) * (x * std::cos(phi) + y * std::sin(phi)); };
-      auto P = [&](double x, double y) { return Vec3{x, y, plane(x, y)}; };
-      const Mesh m = cl_test::welded({{P(-50, -50), P(50, -50), P(50, 50)}, {P(-50, -50), P(-50, 50), P(50, 50)}});
-      for (const Cutter& c : cutters()) {
+      auto P = [&](double x, double y) { return geometry::Vec3{x, y, plane(x, y)}; };
+      const geometry::Mesh m = cl_test::welded({{P(-50, -50), P(50, -50), P(50, 50)}, {P(-50, -50), P(-50, 50), P(50, 50)}});
+      for (const cam::Cutter& c : cutters()) {
         SCOPED_TRACE(c.spec() + " a=" + std::to_string(a_deg) + " phi=" + std::to_string(phi_deg));
         const double rk = rk_of(c), rc = rc_of(c);
         const double offset = rc * std::tan(a) + rk * (1 / std::cos(a) - 1);
-        const ClEngine e(m, c);
-        const ClGrid g = e.compute(GridSpec::covering(-30, -30, 30, 30, 1.7, 1.3));
+        const cam::ClEngine e(m, c);
+        const cam::ClGrid g = e.compute(cam::GridSpec::covering(-30, -30, 30, 30, 1.7, 1.3));
         for (std::size_t j = 0; j < g.spec.ny; ++j)
           for (std::size_t i = 0; i < g.spec.nx; ++i) {
             const double x = g.spec.x(i), y = g.spec.y(j);
@@ -104,19 +104,19 @@ TEST(ClKnown, Hemisphere) {
   // flat: the highest sphere point within the disc, sqrt(S^2 - (r-R)^2).
   // The mesh is inscribed, so the engine lies below by at most the sagitta.
   const double S = 20;
-  const Mesh m = cl_test::hemisphere(S, 60, 240);
+  const geometry::Mesh m = cl_test::hemisphere(S, 60, 240);
   const double sagitta = 0.01;
-  for (const Cutter& c : cutters()) {
+  for (const cam::Cutter& c : cutters()) {
     SCOPED_TRACE(c.spec());
     const double R = c.radius, rk = rk_of(c), rc = rc_of(c);
-    const ClEngine e(m, c);
-    const ClGrid g = e.compute(GridSpec::covering(-17.3, -17.3, 17.3, 17.3, 0.9, 0.9));
+    const cam::ClEngine e(m, c);
+    const cam::ClGrid g = e.compute(cam::GridSpec::covering(-17.3, -17.3, 17.3, 17.3, 0.9, 0.9));
     for (std::size_t j = 0; j < g.spec.ny; ++j)
       for (std::size_t i = 0; i < g.spec.nx; ++i) {
         const double r = std::hypot(g.spec.x(i), g.spec.y(j));
         if (r > S - R) continue;  // keep the contact on the hemisphere
         double exact;
-        if (c.type == CutterType::Flat) exact = r <= R ? S : std::sqrt(S * S - (r - R) * (r - R));
+        if (c.type == cam::CutterType::Flat) exact = r <= R ? S : std::sqrt(S * S - (r - R) * (r - R));
         else exact = r <= rc ? S : std::sqrt((S + rk) * (S + rk) - (r - rc) * (r - rc)) - rk;
         const double z = g.at(i, j);
         EXPECT_LE(z, exact + 1e-9) << r;
@@ -129,16 +129,16 @@ TEST(ClKnown, Hemisphere) {
 
 TEST(ClKnown, SingleVertex) {
   // A facet collapsed to one point is drawn as that vertex: z = v.z - h(rho).
-  Mesh m;
+  geometry::Mesh m;
   m.vertices = {{3.3, -1.2, 7.5}};
   m.triangles = {{0, 0, 0}};
-  for (const Cutter& c : all_cutters()) {
+  for (const cam::Cutter& c : all_cutters()) {
     SCOPED_TRACE(c.spec());
     const cl_oracle::Tool t = tool_of(c);
-    ClOptions o;
+    cam::ClOptions o;
     o.floor = 0.0;
-    const ClEngine e(m, c, o);
-    const ClGrid g = e.compute(GridSpec::covering(-3, -7, 9, 5, 0.37, 0.41));
+    const cam::ClEngine e(m, c, o);
+    const cam::ClGrid g = e.compute(cam::GridSpec::covering(-3, -7, 9, 5, 0.37, 0.41));
     for (std::size_t j = 0; j < g.spec.ny; ++j)
       for (std::size_t i = 0; i < g.spec.nx; ++i) {
         const double rho = std::hypot(g.spec.x(i) - 3.3, g.spec.y(j) + 1.2);
@@ -160,17 +160,17 @@ TEST(ClKnown, SingleEdgeAtSlopes) {
   // bull-nose) against the independent 1-D oracle.
   for (double b_deg : {0.0, 10.0, 30.0, 45.0, 60.0, 80.0, 89.0, 89.99}) {
     const double b = b_deg * kPi / 180;
-    const Vec3 A{-5, -2, 1}, dir = normalized(Vec3{11, 6, 0});
+    const geometry::Vec3 A{-5, -2, 1}, dir = normalized(geometry::Vec3{11, 6, 0});
     const double L = 12.5;
-    const Vec3 B = A + dir * L + Vec3{0, 0, L * std::tan(b)};
-    Mesh m;
+    const geometry::Vec3 B = A + dir * L + geometry::Vec3{0, 0, L * std::tan(b)};
+    geometry::Mesh m;
     m.vertices = {A, B};
     m.triangles = {{0, 1, 1}};
-    for (const Cutter& c : all_cutters()) {
+    for (const cam::Cutter& c : all_cutters()) {
       SCOPED_TRACE(c.spec() + " slope " + std::to_string(b_deg));
       const double R = c.radius;
       const cl_oracle::Tool t = tool_of(c);
-      const ClGrid g = ClEngine(m, c).compute(GridSpec::covering(-9, -6, 11, 9, 0.53, 0.47));
+      const cam::ClGrid g = cam::ClEngine(m, c).compute(cam::GridSpec::covering(-9, -6, 11, 9, 0.53, 0.47));
       int closed_form_checks = 0;
       for (std::size_t j = 0; j < g.spec.ny; ++j)
         for (std::size_t i = 0; i < g.spec.nx; ++i) {
@@ -187,20 +187,20 @@ TEST(ClKnown, SingleEdgeAtSlopes) {
           EXPECT_LE(z, oracle + 1e-6) << x << "," << y;
           if (d >= R) continue;
           const double w = std::sqrt(R * R - d * d);
-          if (c.type == CutterType::Ball) {
+          if (c.type == cam::CutterType::Ball) {
             const double v = w * std::sin(b);  // contact offset along the segment
             if (s0 + v > 1e-6 && s0 + v < L - 1e-6) {
               EXPECT_NEAR(z, A.z + s0 * std::tan(b) + w / std::cos(b) - R, 1e-9 / std::cos(b)) << x << "," << y;
               ++closed_form_checks;
             }
-          } else if (c.type == CutterType::Flat && b > 0) {
+          } else if (c.type == cam::CutterType::Flat && b > 0) {
             if (s0 + w > 1e-6 && s0 + w < L - 1e-6) {
               EXPECT_NEAR(z, A.z + (s0 + w) * std::tan(b), 1e-9 / std::cos(b)) << x << "," << y;
               ++closed_form_checks;
             }
           }
         }
-      if (c.type == CutterType::Ball || (c.type == CutterType::Flat && b > 0)) {
+      if (c.type == cam::CutterType::Ball || (c.type == cam::CutterType::Flat && b > 0)) {
         EXPECT_GT(closed_form_checks, 50);
       }
     }

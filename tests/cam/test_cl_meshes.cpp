@@ -27,10 +27,10 @@ struct RealMesh {
 
 void PrintTo(const RealMesh& r, std::ostream* os) { *os << r.file; }
 
-Mesh load(const RealMesh& r) {
+geometry::Mesh load(const RealMesh& r) {
   const std::string dir = CNCSTREAM_SHARED_MESHES;
   const std::string path = r.file == "plaque" ? std::string(CNCSTREAM_SOURCE_DIR) + "/examples/plaque.stl" : dir + "/" + r.file;
-  Mesh m = load_stl(path).mesh;
+  geometry::Mesh m = geometry::load_stl(path).mesh;
   if (r.y_up)
     for (auto& v : m.vertices) v = {v.x, -v.z, v.y};
   m.scale(r.scale);
@@ -42,24 +42,24 @@ using cl_oracle::tool_of;
 class ClRealMesh : public ::testing::TestWithParam<RealMesh> {};
 
 TEST_P(ClRealMesh, NoGougeTouchedAndConcaveEdgesRedundant) {
-  const Mesh m = load(GetParam());
+  const geometry::Mesh m = load(GetParam());
   ASSERT_GT(m.triangles.size(), 0u);
-  const Box3 b = m.bounds();
+  const geometry::Box3 b = m.bounds();
   const double span = std::fmax(b.size().x, b.size().y);
   const std::vector<std::size_t> by_top = cl_oracle::facets_by_top(m);
   std::mt19937 rng(42);
-  for (const Cutter& c : {Cutter::ball(6), Cutter::flat(6), Cutter::bull(6, 1), Cutter::vbit(60, 6),
-                         Cutter::tapered_ball(1, 5, 6)}) {
+  for (const cam::Cutter& c : {cam::Cutter::ball(6), cam::Cutter::flat(6), cam::Cutter::bull(6, 1), cam::Cutter::vbit(60, 6),
+                         cam::Cutter::tapered_ball(1, 5, 6)}) {
     SCOPED_TRACE(GetParam().file + " " + c.spec());
     const double step = span / 90;
-    const GridSpec spec = GridSpec::covering(b.lo.x - 2, b.lo.y - 2, b.hi.x + 2, b.hi.y + 2, step, step * 1.07);
-    const ClEngine engine(m, c);
-    const ClGrid g = engine.compute(spec);
+    const cam::GridSpec spec = cam::GridSpec::covering(b.lo.x - 2, b.lo.y - 2, b.hi.x + 2, b.hi.y + 2, step, step * 1.07);
+    const cam::ClEngine engine(m, c);
+    const cam::ClGrid g = engine.compute(spec);
     // Every edge drawn in full, versus valley edges left out and ridge edges
     // trimmed to their normal-cone band (the default).
-    ClOptions every_edge;
+    cam::ClOptions every_edge;
     every_edge.skip_concave_edges = false;
-    const ClGrid full = ClEngine(m, c, every_edge).compute(spec);
+    const cam::ClGrid full = cam::ClEngine(m, c, every_edge).compute(spec);
     double worst = 0;
     for (std::size_t k = 0; k < g.z.size(); ++k) worst = std::fmax(worst, std::fabs(g.z[k] - full.z[k]));
     EXPECT_LE(worst, 1e-8) << "leaving out concave edges changed the envelope";

@@ -19,7 +19,7 @@ namespace {
 using cl_oracle::tool_of;
 
 // Every node: touched exactly as the oracle says (within tol), else floor.
-void expect_matches_oracle(const Mesh& m, const Cutter& c, const ClGrid& g, double tol) {
+void expect_matches_oracle(const geometry::Mesh& m, const cam::Cutter& c, const cam::ClGrid& g, double tol) {
   const cl_oracle::Tool t = tool_of(c);
   const std::vector<std::size_t> by_top = cl_oracle::facets_by_top(m);
   int touched = 0;
@@ -43,52 +43,52 @@ void expect_matches_oracle(const Mesh& m, const Cutter& c, const ClGrid& g, doub
   EXPECT_GT(touched, 0);
 }
 
-std::vector<Cutter> cutters() {
-  return {Cutter::flat(2),          Cutter::ball(3),        Cutter::bull(4, 1),
-          Cutter::bull(6, 2.5),     Cutter::ball(0.6),      Cutter::flat(7),
-          Cutter::vbit(60, 5),      Cutter::vbit(90, 6, 1), Cutter::tapered_ball(1, 5, 4)};
+std::vector<cam::Cutter> cutters() {
+  return {cam::Cutter::flat(2),          cam::Cutter::ball(3),        cam::Cutter::bull(4, 1),
+          cam::Cutter::bull(6, 2.5),     cam::Cutter::ball(0.6),      cam::Cutter::flat(7),
+          cam::Cutter::vbit(60, 5),      cam::Cutter::vbit(90, 6, 1), cam::Cutter::tapered_ball(1, 5, 4)};
 }
 
 // A soup with the facets that break naive code: generic, vertical, nearly
 // vertical, horizontal, slivers, tiny, collinear, repeated vertex.
-Mesh awkward_soup(unsigned seed) {
+geometry::Mesh awkward_soup(unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> U(0, 10), Z(0, 5), S(-1, 1);
-  auto P = [&] { return Vec3{U(rng), U(rng), Z(rng)}; };
-  std::vector<std::array<Vec3, 3>> t;
+  auto P = [&] { return geometry::Vec3{U(rng), U(rng), Z(rng)}; };
+  std::vector<std::array<geometry::Vec3, 3>> t;
   for (int k = 0; k < 4; ++k) t.push_back({P(), P(), P()});
   {  // vertical facet
-    const Vec3 a = P(), b = P();
+    const geometry::Vec3 a = P(), b = P();
     const double s = 0.3 + 0.4 * (S(rng) + 1) / 2;
-    t.push_back({a, b, Vec3{a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), Z(rng) + 2}});
+    t.push_back({a, b, geometry::Vec3{a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), Z(rng) + 2}});
   }
   {  // nearly vertical facet
-    const Vec3 a = P(), b = P();
-    t.push_back({a, b, Vec3{a.x + 0.5 * (b.x - a.x) + 1e-9, a.y + 0.5 * (b.y - a.y), Z(rng) + 3}});
+    const geometry::Vec3 a = P(), b = P();
+    t.push_back({a, b, geometry::Vec3{a.x + 0.5 * (b.x - a.x) + 1e-9, a.y + 0.5 * (b.y - a.y), Z(rng) + 3}});
   }
   {  // horizontal facet
     const double z = Z(rng);
-    Vec3 a = P(), b = P(), c = P();
+    geometry::Vec3 a = P(), b = P(), c = P();
     a.z = b.z = c.z = z;
     t.push_back({a, b, c});
   }
   {  // sliver
-    const Vec3 a = P(), b = P();
-    t.push_back({a, b, Vec3{0.5 * (a.x + b.x) + 1e-3 * S(rng), 0.5 * (a.y + b.y) + 1e-3 * S(rng), 0.5 * (a.z + b.z) + S(rng)}});
+    const geometry::Vec3 a = P(), b = P();
+    t.push_back({a, b, geometry::Vec3{0.5 * (a.x + b.x) + 1e-3 * S(rng), 0.5 * (a.y + b.y) + 1e-3 * S(rng), 0.5 * (a.z + b.z) + S(rng)}});
   }
   {  // tiny facet
-    const Vec3 a = P();
-    t.push_back({a, a + Vec3{1e-3 * S(rng), 1e-3 * S(rng), 1e-3 * S(rng)}, a + Vec3{1e-3 * S(rng), 1e-3 * S(rng), 1e-3}});
+    const geometry::Vec3 a = P();
+    t.push_back({a, a + geometry::Vec3{1e-3 * S(rng), 1e-3 * S(rng), 1e-3 * S(rng)}, a + geometry::Vec3{1e-3 * S(rng), 1e-3 * S(rng), 1e-3}});
   }
   {  // collinear (zero area) and a nearly horizontal one
-    const Vec3 a = P(), b = P();
+    const geometry::Vec3 a = P(), b = P();
     t.push_back({a, b, a + (b - a) * 0.25});
-    Vec3 c = P(), d = P(), e = P();
+    geometry::Vec3 c = P(), d = P(), e = P();
     c.z = d.z = 4;
     e.z = 4 + 1e-11;
     t.push_back({c, d, e});
   }
-  Mesh m = cl_test::soup(t);
+  geometry::Mesh m = cl_test::soup(t);
   // One facet that repeats a vertex index.
   m.triangles.push_back({0, 0, 1});
   return m;
@@ -98,12 +98,12 @@ Mesh awkward_soup(unsigned seed) {
 
 TEST(ClOracle, AwkwardSoups) {
   for (unsigned seed : {1u, 2u, 3u}) {
-    const Mesh m = awkward_soup(seed);
-    for (const Cutter& c : cutters()) {
+    const geometry::Mesh m = awkward_soup(seed);
+    for (const cam::Cutter& c : cutters()) {
       SCOPED_TRACE(c.spec() + " seed " + std::to_string(seed));
-      ClOptions o;
+      cam::ClOptions o;
       o.floor = -10.0;
-      const ClGrid g = ClEngine(m, c, o).compute(GridSpec::covering(-2, -2, 12, 12, 0.61, 0.59));
+      const cam::ClGrid g = cam::ClEngine(m, c, o).compute(cam::GridSpec::covering(-2, -2, 12, 12, 0.61, 0.59));
       expect_matches_oracle(m, c, g, 1e-6);
     }
   }
@@ -120,10 +120,10 @@ TEST(ClOracle, ManifoldTerrainWithPlateausValleysAndCliff) {
     if (x > 8 && y < 3) z += 6;              // cliff
     return z;
   };
-  const Mesh m = cl_test::terrain(0, 0, 10, 12, f);
-  for (const Cutter& c : cutters()) {
+  const geometry::Mesh m = cl_test::terrain(0, 0, 10, 12, f);
+  for (const cam::Cutter& c : cutters()) {
     SCOPED_TRACE(c.spec());
-    const ClGrid g = ClEngine(m, c).compute(GridSpec::covering(-1, -1, 11, 11, 0.53, 0.57));
+    const cam::ClGrid g = cam::ClEngine(m, c).compute(cam::GridSpec::covering(-1, -1, 11, 11, 0.53, 0.57));
     expect_matches_oracle(m, c, g, 1e-6);
   }
 }
@@ -137,16 +137,16 @@ TEST(ClOracle, LeavingOutConcaveEdgesChangesNothing) {
     if (std::hypot(x - 5, y - 5) < 2) z = 1.5;
     return z;
   };
-  const Mesh m = cl_test::terrain(0, 0, 10, 40, f);
-  for (const Cutter& c : cutters()) {
+  const geometry::Mesh m = cl_test::terrain(0, 0, 10, 40, f);
+  for (const cam::Cutter& c : cutters()) {
     SCOPED_TRACE(c.spec());
-    ClOptions all;
+    cam::ClOptions all;
     all.skip_concave_edges = false;
-    const ClEngine skip(m, c), full(m, c, all);
+    const cam::ClEngine skip(m, c), full(m, c, all);
     EXPECT_LT(skip.stats().edges_drawn, full.stats().edges_drawn * 3 / 4);
     EXPECT_EQ(full.stats().edges_drawn, full.stats().edges);
-    const GridSpec spec = GridSpec::covering(-1, -1, 11, 11, 0.07, 0.09);
-    const ClGrid a = skip.compute(spec), b = full.compute(spec);
+    const cam::GridSpec spec = cam::GridSpec::covering(-1, -1, 11, 11, 0.07, 0.09);
+    const cam::ClGrid a = skip.compute(spec), b = full.compute(spec);
     double worst = 0;
     for (std::size_t k = 0; k < a.z.size(); ++k) worst = std::fmax(worst, std::fabs(a.z[k] - b.z[k]));
     EXPECT_LE(worst, 1e-8);  // rounding of near-tangent contacts
@@ -164,10 +164,10 @@ TEST(ClOracle, RandomTerrainsAllCutters) {
       const int i = static_cast<int>(std::lround(x)), j = static_cast<int>(std::lround(y));
       return h[static_cast<std::size_t>(j * 9 + i)];
     };
-    const Mesh m = cl_test::terrain(0, 0, 8, 8, f);
-    for (const Cutter& c : cutters()) {
+    const geometry::Mesh m = cl_test::terrain(0, 0, 8, 8, f);
+    for (const cam::Cutter& c : cutters()) {
       SCOPED_TRACE(c.spec() + " seed " + std::to_string(seed));
-      const ClGrid g = ClEngine(m, c).compute(GridSpec::covering(-1.5, -1.5, 9.5, 9.5, 0.5, 0.5));
+      const cam::ClGrid g = cam::ClEngine(m, c).compute(cam::GridSpec::covering(-1.5, -1.5, 9.5, 9.5, 0.5, 0.5));
       expect_matches_oracle(m, c, g, 1e-6);
     }
   }

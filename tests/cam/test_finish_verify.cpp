@@ -17,23 +17,23 @@ using namespace cncstream;
 class PlaqueFinish : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(PlaqueFinish, MachinedSurfaceHasNoGouge) {
-  const auto part = load_stl(std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "examples/plaque.stl");
-  const Cutter cutter = parse_cutter_spec(GetParam());
-  const ClEngine engine(part.mesh, cutter);
-  RasterOptions o;
+  const auto part = geometry::load_stl(std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "examples/plaque.stl");
+  const cam::Cutter cutter = cam::parse_cutter_spec(GetParam());
+  const cam::ClEngine engine(part.mesh, cutter);
+  cam::RasterOptions o;
   o.stepover = 1.0;
   o.step = 0.1;
-  const XYBounds b = default_bounds(part.mesh, cutter);
-  const RasterPath path = build_raster(engine, b, o);
+  const cam::XYBounds b = cam::default_bounds(part.mesh, cutter);
+  const cam::RasterPath path = cam::build_raster(engine, b, o);
 
   // Stock over the part, nodes off any round number so none sits exactly on
   // a wall of the design.
-  const Box3 box = part.mesh.bounds();
-  const GridSpec g = GridSpec::covering(box.lo.x + 0.0373, box.lo.y + 0.0411, box.hi.x, box.hi.y, 0.2, 0.2);
-  HeightFieldStock stock(g, box.hi.z + 1);
-  const Vec3 start = path.rows.front().front();
-  stock.cut_segment(start + Vec3{0, 0, 20}, start, cutter);
-  Vec3 at = start;
+  const geometry::Box3 box = part.mesh.bounds();
+  const cam::GridSpec g = cam::GridSpec::covering(box.lo.x + 0.0373, box.lo.y + 0.0411, box.hi.x, box.hi.y, 0.2, 0.2);
+  cam::HeightFieldStock stock(g, box.hi.z + 1);
+  const geometry::Vec3 start = path.rows.front().front();
+  stock.cut_segment(start + geometry::Vec3{0, 0, 20}, start, cutter);
+  geometry::Vec3 at = start;
   for (std::size_t r = 0; r < path.rows.size(); ++r) {
     for (const auto& p : path.rows[r]) {
       stock.cut_segment(at, p, cutter);
@@ -45,8 +45,8 @@ TEST_P(PlaqueFinish, MachinedSurfaceHasNoGouge) {
         at = p;
       }
   }
-  const DesignHeights design = design_heights(part.mesh, g);
-  const DeviationResult dev = compare_to_design(stock, design, 1e-3);
+  const cam::DesignHeights design = cam::design_heights(part.mesh, g);
+  const cam::DeviationResult dev = cam::compare_to_design(stock, design, 1e-3);
   SCOPED_TRACE(dev.stats.summary());
   EXPECT_GT(dev.stats.on_part, g.size() / 2);
   // 1 um: the raster's accepted chord sag is 0.1 um-scale on this part.
@@ -59,7 +59,7 @@ TEST_P(PlaqueFinish, MachinedSurfaceHasNoGouge) {
   EXPECT_LT(dev.stats.mean_excess, 1.0);
   const auto out = std::filesystem::path(CNCSTREAM_BINARY_DIR) / "test-output";
   std::filesystem::create_directories(out);
-  write_deviation_png(out / (std::string("plaque-deviation-") + cutter.spec().substr(0, 4) + ".png"), dev,
+  cam::write_deviation_png(out / (std::string("plaque-deviation-") + cutter.spec().substr(0, 4) + ".png"), dev,
                       "Plaque finished with " + cutter.description(), "stepover 1 mm, stock grid 0.2 mm");
 }
 

@@ -13,8 +13,8 @@ namespace {
 // Points on a circle of radius r about the origin at level z, every `spacing`
 // along it, over `sweep` radians from angle a0; clockwise: the inside (the
 // part) on the right.
-Polyline arc_points(double r, double a0, double sweep, double spacing, bool clockwise, double z = -1) {
-  Polyline p;
+cam::Polyline arc_points(double r, double a0, double sweep, double spacing, bool clockwise, double z = -1) {
+  cam::Polyline p;
   const auto n = static_cast<int>(std::ceil(r * sweep / spacing));
   for (int k = 0; k <= n; ++k) {
     const double a = a0 + (clockwise ? -1 : 1) * sweep * double(k) / n;
@@ -24,17 +24,17 @@ Polyline arc_points(double r, double a0, double sweep, double spacing, bool cloc
 }
 
 // Signed distance of q from the move a -> b: positive left of it.
-double side_of(const Vec3& a, const Vec3& b, const Vec3& q) {
+double side_of(const geometry::Vec3& a, const geometry::Vec3& b, const geometry::Vec3& q) {
   return ((b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x)) / std::hypot(b.x - a.x, b.y - a.y);
 }
 
 // Every point of the run lies right of the fitted path, within tol of it:
 // measured from the nearest move it projects onto.
-void expect_right_within(const Polyline& run, const Polyline& fit, double tol) {
-  for (const Vec3& q : run) {
+void expect_right_within(const cam::Polyline& run, const cam::Polyline& fit, double tol) {
+  for (const geometry::Vec3& q : run) {
     double best = HUGE_VAL, side = 0;
     for (std::size_t m = 0; m + 1 < fit.size(); ++m) {
-      const Vec3 &a = fit[m], &b = fit[m + 1];
+      const geometry::Vec3 &a = fit[m], &b = fit[m + 1];
       const double len = std::hypot(b.x - a.x, b.y - a.y);
       const double t = std::clamp(((q.x - a.x) * (b.x - a.x) + (q.y - a.y) * (b.y - a.y)) / (len * len), 0.0, 1.0);
       const double d = std::hypot(q.x - (a.x + t * (b.x - a.x)), q.y - (a.y + t * (b.y - a.y)));
@@ -53,13 +53,13 @@ TEST(FitLevelRunInBand, OutsideCornerIsCircumscribedWithMovesOfSqrt8RT) {
   // of them cannot merge; vertices out to T away take sqrt(8 R T).
   for (const double tol : {0.002, 0.005}) {
     const double r = 1.6;
-    const Polyline run = arc_points(r, std::numbers::pi, std::numbers::pi, 0.005, true);
-    const Polyline fit = fit_level_run_in_band(run, tol);
+    const cam::Polyline run = arc_points(r, std::numbers::pi, std::numbers::pi, 0.005, true);
+    const cam::Polyline fit = cam::fit_level_run_in_band(run, tol);
     ASSERT_GE(fit.size(), 3u);
     EXPECT_EQ(fit.front().x, run.front().x);
     EXPECT_EQ(fit.back().y, run.back().y);
     expect_right_within(run, fit, tol);
-    for (const Vec3& v : fit) {
+    for (const geometry::Vec3& v : fit) {
       EXPECT_EQ(v.z, -1);
       const double d = std::hypot(v.x, v.y);
       EXPECT_GE(d, r - 1e-9);
@@ -67,7 +67,7 @@ TEST(FitLevelRunInBand, OutsideCornerIsCircumscribedWithMovesOfSqrt8RT) {
     }
     std::vector<double> lengths;
     // Inner moves: those by the kept ends start on the circle, not out from it.
-    for (std::size_t m = 2; m + 3 < fit.size(); ++m) lengths.push_back(xy_dist(fit[m], fit[m + 1]));
+    for (std::size_t m = 2; m + 3 < fit.size(); ++m) lengths.push_back(cam::xy_dist(fit[m], fit[m + 1]));
     std::sort(lengths.begin(), lengths.end());
     const double expected = std::sqrt(8 * r * tol);
     EXPECT_NEAR(lengths[lengths.size() / 2], expected, 0.1 * expected) << tol;
@@ -79,31 +79,31 @@ TEST(FitLevelRunInBand, InsideCornerChordsStayOnTheFreeSide) {
   // Counter-clockwise round a circle with the part on the right: the part
   // is outside the circle, chords between points pass on the free side.
   const double tol = 0.005, r = 2.0;
-  const Polyline run = arc_points(r, 0, std::numbers::pi / 2, 0.01, false);
-  const Polyline fit = fit_level_run_in_band(run, tol);
+  const cam::Polyline run = arc_points(r, 0, std::numbers::pi / 2, 0.01, false);
+  const cam::Polyline fit = cam::fit_level_run_in_band(run, tol);
   expect_right_within(run, fit, tol);
   const double expected = std::sqrt(8 * r * tol);
   EXPECT_LE(fit.size(), std::size_t(r * std::numbers::pi / 2 / (0.8 * expected)) + 2);
 }
 
 TEST(FitLevelRunInBand, LiftedPointsAndLevelChangesAreKept) {
-  Polyline run = arc_points(1.6, std::numbers::pi, 1.0, 0.005, true);
+  cam::Polyline run = arc_points(1.6, std::numbers::pi, 1.0, 0.005, true);
   const std::size_t mid = run.size() / 2;
   run[mid].z = -0.5;  // lifted over the part
-  const Polyline fit = fit_level_run_in_band(run, 0.005);
-  EXPECT_NE(std::find_if(fit.begin(), fit.end(), [&](const Vec3& v) { return v.x == run[mid].x && v.y == run[mid].y && v.z == -0.5; }), fit.end());
+  const cam::Polyline fit = cam::fit_level_run_in_band(run, 0.005);
+  EXPECT_NE(std::find_if(fit.begin(), fit.end(), [&](const geometry::Vec3& v) { return v.x == run[mid].x && v.y == run[mid].y && v.z == -0.5; }), fit.end());
   // Either side of it: the level stretches' ends, exactly.
-  EXPECT_NE(std::find_if(fit.begin(), fit.end(), [&](const Vec3& v) { return v.x == run[mid - 1].x && v.y == run[mid - 1].y; }), fit.end());
-  EXPECT_NE(std::find_if(fit.begin(), fit.end(), [&](const Vec3& v) { return v.x == run[mid + 1].x && v.y == run[mid + 1].y; }), fit.end());
-  const Polyline before(run.begin(), run.begin() + std::ptrdiff_t(mid));
-  expect_right_within(before, Polyline(fit.begin(), std::find_if(fit.begin(), fit.end(), [](const Vec3& v) { return v.z != -1; })), 0.005);
+  EXPECT_NE(std::find_if(fit.begin(), fit.end(), [&](const geometry::Vec3& v) { return v.x == run[mid - 1].x && v.y == run[mid - 1].y; }), fit.end());
+  EXPECT_NE(std::find_if(fit.begin(), fit.end(), [&](const geometry::Vec3& v) { return v.x == run[mid + 1].x && v.y == run[mid + 1].y; }), fit.end());
+  const cam::Polyline before(run.begin(), run.begin() + std::ptrdiff_t(mid));
+  expect_right_within(before, cam::Polyline(fit.begin(), std::find_if(fit.begin(), fit.end(), [](const geometry::Vec3& v) { return v.z != -1; })), 0.005);
 }
 
 TEST(FitLevelRunInBand, VerticesOnTheLatticeWhereTheBandAllows) {
-  const XYLattice lat{0.001, 0.0003, -0.0007};
+  const cam::XYLattice lat{0.001, 0.0003, -0.0007};
   const double tol = 0.005;
-  const Polyline run = arc_points(1.6, std::numbers::pi, std::numbers::pi, 0.005, true);
-  const Polyline fit = fit_level_run_in_band(run, tol, lat);
+  const cam::Polyline run = arc_points(1.6, std::numbers::pi, std::numbers::pi, 0.005, true);
+  const cam::Polyline fit = cam::fit_level_run_in_band(run, tol, lat);
   expect_right_within(run, fit, tol);
   std::size_t on = 0;
   for (std::size_t m = 1; m + 1 < fit.size(); ++m) {

@@ -39,7 +39,7 @@ TEST(SimplifyProfile, CollinearCollapsesToEnds) {
     s.push_back(i * 0.1);
     z.push_back(2.0 - 0.3 * i * 0.1);
   }
-  const auto kept = simplify_profile_above(s, z, 0.002);
+  const auto kept = cam::simplify_profile_above(s, z, 0.002);
   EXPECT_EQ(kept, (std::vector<std::size_t>{0, 100}));
 }
 
@@ -50,7 +50,7 @@ TEST(SimplifyProfile, KeepsCornersAndNarrowPeaks) {
     s.push_back(i);
     z.push_back(i == 25 ? 1.0 : 0.0);
   }
-  const auto kept = simplify_profile_above(s, z, 0.5);
+  const auto kept = cam::simplify_profile_above(s, z, 0.5);
   EXPECT_NE(std::find(kept.begin(), kept.end(), 25u), kept.end());
   for (std::size_t k = 0; k < s.size(); ++k) EXPECT_GE(chord_at(s, z, kept, k), z[k] - 1e-9);
 }
@@ -61,7 +61,7 @@ TEST(SimplifyProfile, NeverBelowAndWithinToleranceOnRandomProfiles) {
     std::vector<double> s, z;
     random_profile(rng, s, z);
     const double tol = trial % 2 ? 0.002 : 0.05;
-    const auto kept = simplify_profile_above(s, z, tol);
+    const auto kept = cam::simplify_profile_above(s, z, tol);
     ASSERT_EQ(kept.front(), 0u);
     ASSERT_EQ(kept.back(), s.size() - 1);
     for (std::size_t k = 0; k < s.size(); ++k) {
@@ -75,7 +75,7 @@ TEST(SimplifyProfile, NeverBelowAndWithinToleranceOnRandomProfiles) {
 
 namespace {
 // Height of the band-fitted polyline at s (between its vertices).
-double band_at(const std::vector<double>& s, const std::vector<BandVertex>& v, double at) {
+double band_at(const std::vector<double>& s, const std::vector<cam::BandVertex>& v, double at) {
   for (std::size_t m = 0; m + 1 < v.size(); ++m) {
     const double sa = s[v[m].index], sb = s[v[m + 1].index];
     if (at >= sa - 1e-12 && at <= sb + 1e-12) return v[m].z + (v[m + 1].z - v[m].z) * (at - sa) / (sb - sa);
@@ -84,7 +84,7 @@ double band_at(const std::vector<double>& s, const std::vector<BandVertex>& v, d
   return NAN;
 }
 
-void expect_in_band(const std::vector<double>& s, const std::vector<double>& z, const std::vector<BandVertex>& v,
+void expect_in_band(const std::vector<double>& s, const std::vector<double>& z, const std::vector<cam::BandVertex>& v,
                     double tol) {
   ASSERT_GE(v.size(), 2u);
   EXPECT_EQ(v.front().index, 0u);
@@ -114,7 +114,7 @@ TEST(FitProfileInBand, ConvexArcGivesMovesOfSqrt8RT) {
         s.push_back(x);
         z.push_back(std::sqrt(r * r - x * x));
       }
-      const auto v = fit_profile_in_band(s, z, tol);
+      const auto v = cam::fit_profile_in_band(s, z, tol);
       expect_in_band(s, z, v, tol);
       std::vector<double> lengths;
       // Inner moves only: the pinned ends start on the circle, not T above it.
@@ -128,7 +128,7 @@ TEST(FitProfileInBand, ConvexArcGivesMovesOfSqrt8RT) {
       const double median = lengths[lengths.size() / 2];
       EXPECT_NEAR(median, expected, 0.1 * expected) << "R " << r << " T " << tol;
       EXPECT_GT(lengths.front(), 0.8 * expected) << "R " << r << " T " << tol;
-      EXPECT_GT(simplify_profile_above(s, z, tol).size(), 10 * v.size());
+      EXPECT_GT(cam::simplify_profile_above(s, z, tol).size(), 10 * v.size());
     }
   }
 }
@@ -142,12 +142,12 @@ TEST(FitProfileInBand, VCreaseKeepsItsVertex) {
     z.push_back(std::fabs(i * 0.01) * 0.8 - 2.0);
   }
   const double tol = 0.01;
-  const auto v = fit_profile_in_band(s, z, tol);
+  const auto v = cam::fit_profile_in_band(s, z, tol);
   expect_in_band(s, z, v, tol);
   EXPECT_LE(band_at(s, v, 0.0), -2.0 + tol + 1e-9);
   EXPECT_LE(v.size(), 4u);  // straight flanks: one move down, one up
   bool near_crease = false;
-  for (const BandVertex& b : v) near_crease = near_crease || std::fabs(s[b.index]) <= tol / 0.8 + 1e-9;
+  for (const cam::BandVertex& b : v) near_crease = near_crease || std::fabs(s[b.index]) <= tol / 0.8 + 1e-9;
   EXPECT_TRUE(near_crease);
 }
 
@@ -159,7 +159,7 @@ TEST(FitProfileInBand, RidgeIsPassedAboveWithinTheBand) {
     s.push_back(i * 0.01);
     z.push_back(-std::fabs(i * 0.01) * 1.5);
   }
-  const auto v = fit_profile_in_band(s, z, 0.005);
+  const auto v = cam::fit_profile_in_band(s, z, 0.005);
   expect_in_band(s, z, v, 0.005);
   EXPECT_GE(band_at(s, v, 0.0), 0.0 - 1e-9);
 }
@@ -171,17 +171,17 @@ TEST(FitProfileInBand, InBandAndNoMoreVerticesThanSimplifyOnRandomProfiles) {
     std::vector<double> s, z;
     random_profile(rng, s, z);
     const double tol = trial % 2 ? 0.002 : 0.05;
-    const auto v = fit_profile_in_band(s, z, tol);
+    const auto v = cam::fit_profile_in_band(s, z, tol);
     expect_in_band(s, z, v, tol);
     fitted += v.size();
-    kept += simplify_profile_above(s, z, tol).size();
+    kept += cam::simplify_profile_above(s, z, tol).size();
   }
   EXPECT_LT(fitted, kept);
 }
 
 TEST(FitProfileInBand, ZeroToleranceMergesOnlyCollinearSamples) {
   std::vector<double> s{0, 1, 2, 3, 4}, z{0, 1, 2, 2, 2};
-  const auto v = fit_profile_in_band(s, z, 0);
+  const auto v = cam::fit_profile_in_band(s, z, 0);
   ASSERT_EQ(v.size(), 3u);
   EXPECT_EQ(v[1].index, 2u);
   EXPECT_EQ(v[1].z, 2.0);

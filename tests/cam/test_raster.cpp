@@ -20,9 +20,9 @@ namespace {
 
 // A closed box [x0,x1]x[y0,y1]x[0,h] with a raised block on top: vertical walls
 // and sharp edges are where links are most likely to cut below the CL.
-Mesh stepped_part() {
-  Mesh m;
-  auto box = [&](Vec3 lo, Vec3 hi) {
+geometry::Mesh stepped_part() {
+  geometry::Mesh m;
+  auto box = [&](geometry::Vec3 lo, geometry::Vec3 hi) {
     const std::uint32_t b = static_cast<std::uint32_t>(m.vertices.size());
     for (int k = 0; k < 8; ++k)
       m.vertices.push_back({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z});
@@ -44,7 +44,7 @@ Mesh stepped_part() {
 // at most its vertical dip, and at most the horizontal distance to a place
 // where the surface is no higher than p (the CL surface has vertical steps
 // beside vertical walls, where the dip is sideways).
-double penetration(const ClEngine& e, const Vec3& p) {
+double penetration(const cam::ClEngine& e, const geometry::Vec3& p) {
   const double vertical = e.height_at(p.x, p.y) - p.z;
   if (vertical <= 0) return 0;
   double best = vertical;
@@ -60,7 +60,7 @@ double penetration(const ClEngine& e, const Vec3& p) {
 }
 
 // Deepest penetration along a straight move from a to b.
-double worst_dip(const ClEngine& e, const Vec3& a, const Vec3& b, int samples) {
+double worst_dip(const cam::ClEngine& e, const geometry::Vec3& a, const geometry::Vec3& b, int samples) {
   double worst = 0;
   for (int k = 0; k <= samples; ++k) worst = std::max(worst, penetration(e, a + (b - a) * (double(k) / samples)));
   return worst;
@@ -69,7 +69,7 @@ double worst_dip(const ClEngine& e, const Vec3& a, const Vec3& b, int samples) {
 // Every vertex in the band [CL, CL + tolerance] above its exact CL point;
 // the deepest dip of any move below the CL surface (rows and links), with
 // where it happened.
-double worst_path_dip(const ClEngine& engine, const RasterPath& path, double tolerance, std::string* where,
+double worst_path_dip(const cam::ClEngine& engine, const cam::RasterPath& path, double tolerance, std::string* where,
                       std::size_t* moves) {
   double worst = 0;
   for (const auto* set : {&path.rows, &path.links}) {
@@ -105,14 +105,14 @@ double worst_path_dip(const ClEngine& engine, const RasterPath& path, double tol
 class RasterPerCutter : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(RasterPerCutter, RowsVerticesAndLinksAreGougeFree) {
-  const Mesh mesh = stepped_part();
-  const Cutter cutter = parse_cutter_spec(GetParam());
-  const ClEngine engine(mesh, cutter);
-  RasterOptions o;
+  const geometry::Mesh mesh = stepped_part();
+  const cam::Cutter cutter = cam::parse_cutter_spec(GetParam());
+  const cam::ClEngine engine(mesh, cutter);
+  cam::RasterOptions o;
   o.stepover = 0.7;
   o.step = 0.1;
-  const XYBounds b = default_bounds(mesh, cutter);
-  const RasterPath path = build_raster(engine, b, o);
+  const cam::XYBounds b = cam::default_bounds(mesh, cutter);
+  const cam::RasterPath path = cam::build_raster(engine, b, o);
 
   // Rows evenly spread, never wider than asked, alternating direction.
   const std::size_t expect_rows = static_cast<std::size_t>(std::ceil((b.y1 - b.y0) / 0.7 - 1e-9)) + 1;
@@ -140,15 +140,15 @@ TEST_P(RasterPerCutter, RowsVerticesAndLinksAreGougeFree) {
 // With the G-code's decimal lattice every XY is printable exactly, and the
 // moves stay gouge-free (a step is resolved to one lattice step at most).
 TEST_P(RasterPerCutter, LatticePathIsPrintableAndGougeFree) {
-  const Mesh mesh = stepped_part();
-  const Cutter cutter = parse_cutter_spec(GetParam());
-  const ClEngine engine(mesh, cutter);
-  RasterOptions o;
+  const geometry::Mesh mesh = stepped_part();
+  const cam::Cutter cutter = cam::parse_cutter_spec(GetParam());
+  const cam::ClEngine engine(mesh, cutter);
+  cam::RasterOptions o;
   o.stepover = 0.7;
   o.step = 0.1;
-  o.lattice = XYLattice{0.001, 0.3337, -0.2123};
-  const XYBounds b = default_bounds(mesh, cutter);
-  const RasterPath path = build_raster(engine, b, o);
+  o.lattice = cam::XYLattice{0.001, 0.3337, -0.2123};
+  const cam::XYBounds b = cam::default_bounds(mesh, cutter);
+  const cam::RasterPath path = cam::build_raster(engine, b, o);
   EXPECT_NEAR(path.stepover, 0.7, 1e-12);
   auto on_lattice = [](double v, double origin) {
     const double k = (v - origin) / 0.001;
@@ -180,14 +180,14 @@ TEST_P(RasterPerCutter, LatticePathIsPrintableAndGougeFree) {
 INSTANTIATE_TEST_SUITE_P(Cutters, RasterPerCutter, ::testing::Values("ball:3.175", "bull:6:1", "flat:4"));
 
 TEST(Raster, GcodeParsesBackToThePath) {
-  const Mesh mesh = stepped_part();
-  const ClEngine engine(mesh, parse_cutter_spec("ball:3.175"));
-  RasterOptions o;
+  const geometry::Mesh mesh = stepped_part();
+  const cam::ClEngine engine(mesh, cam::parse_cutter_spec("ball:3.175"));
+  cam::RasterOptions o;
   o.stepover = 0.5;
   o.step = 0.1;
-  const RasterPath path = build_raster(engine, default_bounds(mesh, engine.cutter()), o);
-  const Box3 box = mesh.bounds();
-  const Vec3 off = work_offset(box, XYOrigin::PartMin, ZZero::PartTop);
+  const cam::RasterPath path = cam::build_raster(engine, cam::default_bounds(mesh, engine.cutter()), o);
+  const geometry::Box3 box = mesh.bounds();
+  const geometry::Vec3 off = work_offset(box, XYOrigin::PartMin, ZZero::PartTop);
   MachiningParams mp;
   mp.header_comments = {"test part (with parentheses) and a very long comment " + std::string(100, 'x')};
   ProgramStats st;
@@ -207,20 +207,20 @@ TEST(Raster, GcodeParsesBackToThePath) {
   const gcode::ProgramTrace trace = gcode::trace_program(text);
   ASSERT_TRUE(trace.errors.empty()) << trace.errors.front().message();
   // Feed moves in order: the path's vertices, placed and rounded (z up).
-  std::vector<Vec3> expect;
+  std::vector<geometry::Vec3> expect;
   for (std::size_t r = 0; r < path.rows.size(); ++r) {
     for (const auto& v : path.rows[r]) expect.push_back(v + off);
     if (r < path.links.size())
       for (const auto& v : path.links[r]) expect.push_back(v + off);
   }
-  std::vector<Vec3> got;
+  std::vector<geometry::Vec3> got;
   for (const auto& s : trace.segments)
     if (!s.rapid) got.push_back(s.work_to());
   // As written: 3 decimals, z rounded up; repeats of the same written point
   // (row end = link start, sub-resolution steps) are one line.
-  std::vector<Vec3> dedup;
+  std::vector<geometry::Vec3> dedup;
   for (const auto& p : expect) {
-    const Vec3 q{std::stod(format_gcode_number(p.x)), std::stod(format_gcode_number(p.y)), std::ceil(p.z * 1000 - 1e-6) / 1000};
+    const geometry::Vec3 q{std::stod(format_gcode_number(p.x)), std::stod(format_gcode_number(p.y)), std::ceil(p.z * 1000 - 1e-6) / 1000};
     if (dedup.empty() || !(dedup.back() == q)) dedup.push_back(q);
   }
   ASSERT_EQ(got.size(), dedup.size());
@@ -237,14 +237,14 @@ TEST(Raster, GcodeParsesBackToThePath) {
 }
 
 TEST(Raster, SafeZBelowThePathIsRefused) {
-  const Mesh mesh = stepped_part();
-  const ClEngine engine(mesh, parse_cutter_spec("ball:3"));
-  RasterOptions o;
+  const geometry::Mesh mesh = stepped_part();
+  const cam::ClEngine engine(mesh, cam::parse_cutter_spec("ball:3"));
+  cam::RasterOptions o;
   o.stepover = 2;
-  const RasterPath path = build_raster(engine, default_bounds(mesh, engine.cutter()), o);
+  const cam::RasterPath path = cam::build_raster(engine, cam::default_bounds(mesh, engine.cutter()), o);
   MachiningParams mp;
   mp.safe_z = 0.2;  // Z0 at the top: the path reaches 0
-  const Vec3 off = work_offset(mesh.bounds(), XYOrigin::PartMin, ZZero::PartTop);
+  const geometry::Vec3 off = work_offset(mesh.bounds(), XYOrigin::PartMin, ZZero::PartTop);
   EXPECT_THROW(finishing_program(path, off, mp), std::invalid_argument);
   // A feed that would print as F0 (GRBL: error 22) is refused too.
   mp.safe_z = 5;

@@ -26,9 +26,9 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180;
 
 // A height field z(y) (the same for every x) as a CL grid.
-ClGrid profile_grid(double (*z)(double), double step) {
-  ClGrid g;
-  g.spec = GridSpec::covering(0, 0, 10, 30, step, step);
+cam::ClGrid profile_grid(double (*z)(double), double step) {
+  cam::ClGrid g;
+  g.spec = cam::GridSpec::covering(0, 0, 10, 30, step, step);
   g.z.resize(g.spec.size());
   g.on_floor.assign(g.spec.size(), 0);
   for (std::size_t j = 0; j < g.spec.ny; ++j)
@@ -47,8 +47,8 @@ double ramp_and_wall(double y) {
 
 // An open surface of two triangles a side: the plane z = 0 for y < 10, a
 // ramp of `deg` up to y = 15, level beyond, over x in [0, 30].
-Mesh ramp_mesh(double deg) {
-  Mesh m;
+geometry::Mesh ramp_mesh(double deg) {
+  geometry::Mesh m;
   const double h = 5 * std::tan(deg * kDeg);
   const double ys[] = {-5, 10, 15, 35}, zs[] = {0, 0, h, h};
   for (int k = 0; k < 4; ++k) {
@@ -66,9 +66,9 @@ Mesh ramp_mesh(double deg) {
 }  // namespace
 
 TEST(RowSpacing, GapFollowsTheSlopeAcrossTheRowsUpToTheSteepAngle) {
-  const ClGrid g = profile_grid(&ramp_and_wall, 0.25);
+  const cam::ClGrid g = profile_grid(&ramp_and_wall, 0.25);
   const double widest = 0.8, steep = 45 * kDeg;
-  const RowSpacing rows(g, true, widest, steep);
+  const cam::RowSpacing rows(g, true, widest, steep);
   // Level ground, a grid line beyond either row included.
   EXPECT_DOUBLE_EQ(rows.gap(2, 2.8), widest);
   EXPECT_DOUBLE_EQ(rows.gap(17, 17.8), widest);
@@ -81,26 +81,26 @@ TEST(RowSpacing, GapFollowsTheSlopeAcrossTheRowsUpToTheSteepAngle) {
   // degrees steep).
   EXPECT_DOUBLE_EQ(rows.gap(22, 22.8), widest);
   // Slopes along the rows do not count: rows along Y see level ground.
-  const RowSpacing along_y(g, false, widest, steep);
+  const cam::RowSpacing along_y(g, false, widest, steep);
   EXPECT_DOUBLE_EQ(along_y.gap(3, 3.8), widest);
-  EXPECT_THROW(RowSpacing(g, true, 0, steep), std::invalid_argument);
-  EXPECT_THROW(RowSpacing(g, true, widest, 90 * kDeg), std::invalid_argument);
+  EXPECT_THROW(cam::RowSpacing(g, true, 0, steep), std::invalid_argument);
+  EXPECT_THROW(cam::RowSpacing(g, true, widest, 90 * kDeg), std::invalid_argument);
 }
 
 TEST(RowSpacing, RasterRowsCloseInOverTheRampOnlyAndStayExact) {
-  const Mesh m = ramp_mesh(30);
-  const Cutter ball = parse_cutter_spec("ball:3");
-  const ClEngine engine(m, ball);
-  ClGrid ground = engine.compute(GridSpec::covering(0, 0, 30, 30, 0.25, 0.25));
+  const geometry::Mesh m = ramp_mesh(30);
+  const cam::Cutter ball = cam::parse_cutter_spec("ball:3");
+  const cam::ClEngine engine(m, ball);
+  cam::ClGrid ground = engine.compute(cam::GridSpec::covering(0, 0, 30, 30, 0.25, 0.25));
   const double widest = 0.8;
-  const RowSpacing spacing(ground, true, widest, 45 * kDeg);
-  RasterOptions o;
+  const cam::RowSpacing spacing(ground, true, widest, 45 * kDeg);
+  cam::RasterOptions o;
   o.stepover = widest;
   o.step = 0.1;
-  o.lattice = XYLattice{0.001, 0, 0};
+  o.lattice = cam::XYLattice{0.001, 0, 0};
   o.row_gap = [&spacing](double a, double b) { return spacing.gap(a, b); };
-  const XYBounds b{0, 0, 30, 30};
-  const RasterPath path = build_raster(engine, b, o);
+  const cam::XYBounds b{0, 0, 30, 30};
+  const cam::RasterPath path = cam::build_raster(engine, b, o);
   ASSERT_GE(path.rows.size(), 30u);
   EXPECT_NEAR(path.stepover, widest, 1e-9);
   EXPECT_NEAR(path.stepover_min, std::cos(30 * kDeg) * widest, widest / 32 + 1e-9);
@@ -126,28 +126,28 @@ TEST(RowSpacing, RasterRowsCloseInOverTheRampOnlyAndStayExact) {
     }
     // Every vertex of a row is on the exact CL (rows of one spacing share
     // a grid; the vertices are its nodes).
-    for (const Vec3& p : path.rows[r]) ASSERT_NEAR(p.z, engine.height_at(p.x, p.y), 1e-9);
+    for (const geometry::Vec3& p : path.rows[r]) ASSERT_NEAR(p.z, engine.height_at(p.x, p.y), 1e-9);
   }
   EXPECT_GT(wide, 20u);
   EXPECT_GE(narrow, 2u);
   // A gap under the spacings' quantum (widest / 32) is kept on the lattice,
   // not rounded down to one lattice step.
-  RasterOptions tight = o;
+  cam::RasterOptions tight = o;
   tight.row_gap = [](double, double) { return 0.0137; };
-  const RasterPath dense = build_raster(engine, XYBounds{0, 0, 5, 1}, tight);
+  const cam::RasterPath dense = cam::build_raster(engine, cam::XYBounds{0, 0, 5, 1}, tight);
   ASSERT_GE(dense.rows.size(), 3u);
   EXPECT_NEAR(dense.rows[1].front().y - dense.rows[0].front().y, 0.013, 1e-9);
   EXPECT_EQ(dense.rows.size(), 78u);  // 76 gaps of 0.013 to 0.988, one of 0.012
   // keep_grid needs even rows.
   o.keep_grid = true;
-  EXPECT_THROW(build_raster(engine, b, o), std::invalid_argument);
+  EXPECT_THROW(cam::build_raster(engine, b, o), std::invalid_argument);
 }
 
 TEST(SkipSteep, AMoveOverLevelGroundBetweenTwoWallsIsNotBridged) {
   // Level at 0, a steep wall from x = 1 to 2 up to a level top at 5, down
   // again from x = 8 to 9 (slopes along X this time: rows along X).
-  ClGrid g;
-  g.spec = GridSpec::covering(-2, -2, 12, 2, 0.25, 0.25);
+  cam::ClGrid g;
+  g.spec = cam::GridSpec::covering(-2, -2, 12, 2, 0.25, 0.25);
   g.z.resize(g.spec.size());
   g.on_floor.assign(g.spec.size(), 0);
   for (std::size_t j = 0; j < g.spec.ny; ++j)
@@ -155,16 +155,16 @@ TEST(SkipSteep, AMoveOverLevelGroundBetweenTwoWallsIsNotBridged) {
       const double x = g.spec.x(i);
       g.at(i, j) = 5 * (std::clamp(x - 1, 0.0, 1.0) - std::clamp(x - 8, 0.0, 1.0));
     }
-  const SlopeMap slope(g);
+  const cam::SlopeMap slope(g);
   // A merged row: up the first wall to a point on it, one long move to a
   // point on the second wall (over the level top), down to the foot.
-  const Polyline row = {{-1, 0, 0}, {1.5, 0, 2.5}, {8.5, 0, 2.5}, {11, 0, 0}};
-  const SteepSkip s = skip_steep({row}, slope, 45 * kDeg);
+  const cam::Polyline row = {{-1, 0, 0}, {1.5, 0, 2.5}, {8.5, 0, 2.5}, {11, 0, 0}};
+  const cam::SteepSkip s = cam::skip_steep({row}, slope, 45 * kDeg);
   ASSERT_EQ(s.pieces.size(), 1u);
   // Each wall's crossing is bridged (the samples up and down it are
   // steep); the long move over the level top is still cut as it was.
   EXPECT_EQ(s.bridges, 2u);
-  const Polyline& p = s.pieces[0];
+  const cam::Polyline& p = s.pieces[0];
   bool kept = false;
   for (std::size_t k = 0; k + 1 < p.size(); ++k) {
     kept = kept || (p[k].x <= 3 && p[k + 1].x >= 7 && p[k].z == 2.5 && p[k + 1].z == 2.5);
@@ -177,15 +177,15 @@ TEST(SkipSteep, AMoveOverLevelGroundBetweenTwoWallsIsNotBridged) {
   // Across one wall alone: bridged over the wall only (its ends on the
   // row's moves, a sample before and after the steep ground), the row's own
   // points before and after kept.
-  const Polyline across = {{-1, 0, 0}, {1.25, 0, 1.25}, {1.75, 0, 3.75}, {4, 0, 5}};
-  const SteepSkip t = skip_steep({across}, slope, 45 * kDeg);
+  const cam::Polyline across = {{-1, 0, 0}, {1.25, 0, 1.25}, {1.75, 0, 3.75}, {4, 0, 5}};
+  const cam::SteepSkip t = cam::skip_steep({across}, slope, 45 * kDeg);
   ASSERT_EQ(t.pieces.size(), 1u);
   EXPECT_EQ(t.bridges, 1u);
   EXPECT_EQ(t.points_skipped, 2u);
-  const Polyline& q = t.pieces[0];
+  const cam::Polyline& q = t.pieces[0];
   EXPECT_EQ(q.front(), across.front());
   EXPECT_EQ(q.back(), across.back());
-  for (const Vec3& p : q) {
+  for (const geometry::Vec3& p : q) {
     EXPECT_DOUBLE_EQ(p.y, 0);
     // Off the row's own points only over the wall and the cell beside it.
     const bool own = std::find(across.begin(), across.end(), p) != across.end();
@@ -200,8 +200,8 @@ TEST(WaterlineLevels, OneRunsAtTheFootOfTheWallsOverAFlatArea) {
   // A plate 30 x 30 x 2 (the CL drops to the floor beyond it) with a block
   // 10 x 10 x 5 standing on it: with levels 1.3 mm apart from the floor
   // none falls near the plate's top, where the ball meets the block's walls.
-  Mesh m;
-  auto box = [&](Vec3 lo, Vec3 hi) {
+  geometry::Mesh m;
+  auto box = [&](geometry::Vec3 lo, geometry::Vec3 hi) {
     const auto b = static_cast<std::uint32_t>(m.vertices.size());
     for (int k = 0; k < 8; ++k) m.vertices.push_back({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z});
     const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
@@ -210,15 +210,15 @@ TEST(WaterlineLevels, OneRunsAtTheFootOfTheWallsOverAFlatArea) {
   };
   box({0, 0, 0}, {30, 30, 2});
   box({10, 10, 2}, {20, 20, 7});
-  const Cutter ball = parse_cutter_spec("ball:3");
-  const ClEngine engine(m, ball);
-  const ClGrid grid = engine.compute(GridSpec::covering(-3, -3, 33, 33, 0.25, 0.25));
-  const SlopeMap slope(grid);
-  WaterlineOptions o;
+  const cam::Cutter ball = cam::parse_cutter_spec("ball:3");
+  const cam::ClEngine engine(m, ball);
+  const cam::ClGrid grid = engine.compute(cam::GridSpec::covering(-3, -3, 33, 33, 0.25, 0.25));
+  const cam::SlopeMap slope(grid);
+  cam::WaterlineOptions o;
   o.z_step = 1.3;
-  const WaterlinePath with = build_waterline(engine, grid, slope, o);
+  const cam::WaterlinePath with = cam::build_waterline(engine, grid, slope, o);
   o.flat_levels = false;
-  const WaterlinePath without = build_waterline(engine, grid, slope, o);
+  const cam::WaterlinePath without = cam::build_waterline(engine, grid, slope, o);
   auto has = [](const std::vector<double>& levels, double z) {
     return std::any_of(levels.begin(), levels.end(), [&](double l) { return std::fabs(l - z) < 1e-9; });
   };
@@ -227,8 +227,8 @@ TEST(WaterlineLevels, OneRunsAtTheFootOfTheWallsOverAFlatArea) {
   EXPECT_EQ(with.levels.size(), without.levels.size() + 1);  // the floor has its level already; the top is the top
   // At that level the ball runs round the block, its side on the walls.
   std::size_t at_foot = 0;
-  for (const Polyline& pl : with.pieces)
-    for (const Vec3& p : pl)
+  for (const cam::Polyline& pl : with.pieces)
+    for (const geometry::Vec3& p : pl)
       if (std::fabs(p.z - 2.002) < 1e-9) {
         ++at_foot;
         // The radius from the block (round its corners).
@@ -239,17 +239,17 @@ TEST(WaterlineLevels, OneRunsAtTheFootOfTheWallsOverAFlatArea) {
 }
 
 TEST(Pencil, OnePassAlongAVGroovesCreaseOnTheClAndNoneOnAPlane) {
-  const Mesh m = test::v_groove();
-  const ClEngine engine(m, parse_cutter_spec("ball:2"));
-  PencilOptions o;
-  o.lattice = XYLattice{0.001, 0, 0};
-  const XYBounds b{10, 2, 30, 18};
+  const geometry::Mesh m = test::v_groove();
+  const cam::ClEngine engine(m, cam::parse_cutter_spec("ball:2"));
+  cam::PencilOptions o;
+  o.lattice = cam::XYLattice{0.001, 0, 0};
+  const cam::XYBounds b{10, 2, 30, 18};
   const auto all = [](double, double) { return true; };
-  const std::vector<Polyline> passes = pencil_passes(engine, b, o, all);
+  const std::vector<cam::Polyline> passes = cam::pencil_passes(engine, b, o, all);
   ASSERT_EQ(passes.size(), 1u);
-  const Polyline& p = passes.front();
+  const cam::Polyline& p = passes.front();
   double y0 = HUGE_VAL, y1 = -HUGE_VAL;
-  for (const Vec3& q : p) {
+  for (const geometry::Vec3& q : p) {
     EXPECT_NEAR(q.x, 20, 0.051);  // on the crease's grid line or the one beside it
     y0 = std::min(y0, q.y);
     y1 = std::max(y1, q.y);
@@ -260,11 +260,11 @@ TEST(Pencil, OnePassAlongAVGroovesCreaseOnTheClAndNoneOnAPlane) {
   // 1 (sqrt 2 - 1) above the crease, on it; a hair more beside it).
   for (std::size_t k = 0; k + 1 < p.size(); ++k)
     for (int s = 0; s <= 20; ++s) {
-      const Vec3 q = p[k] + (p[k + 1] - p[k]) * (s / 20.0);
+      const geometry::Vec3 q = p[k] + (p[k + 1] - p[k]) * (s / 20.0);
       ASSERT_GE(q.z, engine.height_at(q.x, q.y) - 1e-6) << q.x << "," << q.y;
     }
   EXPECT_NEAR(p.front().z, 6 + std::sqrt(2.0) - 1, 0.06);
   // Only where wanted; none on the level top.
-  EXPECT_TRUE(pencil_passes(engine, b, o, [](double, double) { return false; }).empty());
-  EXPECT_TRUE(pencil_passes(engine, XYBounds{1, 2, 12, 18}, o, all).empty());
+  EXPECT_TRUE(cam::pencil_passes(engine, b, o, [](double, double) { return false; }).empty());
+  EXPECT_TRUE(cam::pencil_passes(engine, cam::XYBounds{1, 2, 12, 18}, o, all).empty());
 }

@@ -10,15 +10,15 @@ using namespace cncstream;
 
 namespace {
 
-GridSpec square(double half, double step) { return GridSpec::covering(-half, -half, half, half, step, step); }
+cam::GridSpec square(double half, double step) { return cam::GridSpec::covering(-half, -half, half, half, step, step); }
 
 std::size_t nearest(double v, double v0, double step) { return static_cast<std::size_t>(std::lround((v - v0) / step)); }
 
 }  // namespace
 
 TEST(StockCuts, BallGrooveCrossSectionIsTheCircle) {
-  HeightFieldStock s(square(10, 0.05), 0.0);
-  const auto c = Cutter::ball(6);
+  cam::HeightFieldStock s(square(10, 0.05), 0.0);
+  const auto c = cam::Cutter::ball(6);
   s.cut_segment({-8, 0, -2}, {8, 0, -2}, c);
   const auto& g = s.grid();
   const std::size_t i = nearest(0, g.x0, g.dx);
@@ -33,16 +33,16 @@ TEST(StockCuts, BallGrooveCrossSectionIsTheCircle) {
 }
 
 TEST(StockCuts, FlatPocketHasFlatBottomAndWallsAtTheRadius) {
-  HeightFieldStock s(square(14, 0.05), 0.0);
-  const auto c = Cutter::flat(6);
+  cam::HeightFieldStock s(square(14, 0.05), 0.0);
+  const auto c = cam::Cutter::flat(6);
   // Zigzag over the tip rectangle [-7, 7]^2 at depth 3, stepover 2 mm.
   double y = -7;
   bool right = true;
-  Vec3 p{-7, -7, 5};
+  geometry::Vec3 p{-7, -7, 5};
   s.cut_segment(p, {-7, -7, -3}, c);
   p = {-7, -7, -3};
   while (y <= 7 + 1e-9) {
-    const Vec3 q{right ? 7.0 : -7.0, y, -3};
+    const geometry::Vec3 q{right ? 7.0 : -7.0, y, -3};
     s.cut_segment(p, q, c);
     p = q;
     if (y + 2 <= 7 + 1e-9) {
@@ -53,7 +53,7 @@ TEST(StockCuts, FlatPocketHasFlatBottomAndWallsAtTheRadius) {
     right = !right;
   }
   // Finishing contour around the tip rectangle.
-  for (const Vec3& q : {Vec3{-7, 7, -3}, Vec3{-7, -7, -3}, Vec3{7, -7, -3}, Vec3{7, 7, -3}, Vec3{-7, 7, -3}}) {
+  for (const geometry::Vec3& q : {geometry::Vec3{-7, 7, -3}, geometry::Vec3{-7, -7, -3}, geometry::Vec3{7, -7, -3}, geometry::Vec3{7, 7, -3}, geometry::Vec3{-7, 7, -3}}) {
     s.cut_segment(p, q, c);
     p = q;
   }
@@ -78,9 +78,9 @@ TEST(StockCuts, FlatPocketHasFlatBottomAndWallsAtTheRadius) {
 }
 
 TEST(StockCuts, PlungeLeavesTheCutterShape) {
-  for (const Cutter& c : {Cutter::ball(6), Cutter::flat(6), Cutter::bull(6, 1)}) {
+  for (const cam::Cutter& c : {cam::Cutter::ball(6), cam::Cutter::flat(6), cam::Cutter::bull(6, 1)}) {
     SCOPED_TRACE(c.spec());
-    HeightFieldStock s(square(5, 0.1), 0.0);
+    cam::HeightFieldStock s(square(5, 0.1), 0.0);
     const double v = s.cut_segment({0, 0, 5}, {0, 0, -2}, c);
     EXPECT_GT(v, 0);
     EXPECT_GT(s.nodes_cut(), 0u);
@@ -102,8 +102,8 @@ TEST(StockCuts, RampFollowsTheOffsetLine) {
   const double m = -0.2;
   auto tip_z = [&](double x) { return (x + 10) * m; };
   {
-    HeightFieldStock s(square(14, 0.1), 1.0);
-    s.cut_segment({-10, 0, 0}, {10, 0, -4}, Cutter::ball(6));
+    cam::HeightFieldStock s(square(14, 0.1), 1.0);
+    s.cut_segment({-10, 0, 0}, {10, 0, -4}, cam::Cutter::ball(6));
     const auto& g = s.grid();
     const std::size_t j = nearest(0, g.y0, g.dy);
     // A ball's lower envelope along a ramp is the tip line lowered by
@@ -112,8 +112,8 @@ TEST(StockCuts, RampFollowsTheOffsetLine) {
       EXPECT_NEAR(s.at(nearest(x, g.x0, g.dx), j), tip_z(x) + 3 - 3 * std::sqrt(1 + m * m), 1e-9) << x;
   }
   {
-    HeightFieldStock s(square(14, 0.1), 1.0);
-    s.cut_segment({-10, 0, 0}, {10, 0, -4}, Cutter::flat(6));
+    cam::HeightFieldStock s(square(14, 0.1), 1.0);
+    s.cut_segment({-10, 0, 0}, {10, 0, -4}, cam::Cutter::flat(6));
     const auto& g = s.grid();
     const std::size_t j = nearest(0, g.y0, g.dy);
     // A flat end's lowest point over x is its rim R ahead, further down.
@@ -125,8 +125,8 @@ TEST(StockCuts, RampFollowsTheOffsetLine) {
 }
 
 TEST(StockCuts, BullGrooveHasFlatBottomOfCoreWidth) {
-  HeightFieldStock s(square(8, 0.05), 0.0);
-  const auto c = Cutter::bull(6, 1);  // rc = 2
+  cam::HeightFieldStock s(square(8, 0.05), 0.0);
+  const auto c = cam::Cutter::bull(6, 1);  // rc = 2
   s.cut_segment({-6, 0, -2}, {6, 0, -2}, c);
   const auto& g = s.grid();
   const std::size_t i = nearest(0, g.x0, g.dx);
@@ -145,8 +145,8 @@ TEST(StockCuts, BullGrooveHasFlatBottomOfCoreWidth) {
 }
 
 TEST(StockCuts, ArcOfShortSegmentsCutsTheTorusGroove) {
-  HeightFieldStock s(GridSpec::covering(-2, -2, 13, 13, 0.05, 0.05), 0.0);
-  const auto c = Cutter::ball(3);
+  cam::HeightFieldStock s(cam::GridSpec::covering(-2, -2, 13, 13, 0.05, 0.05), 0.0);
+  const auto c = cam::Cutter::ball(3);
   const double r = 10;
   const int n = 200;
   for (int k = 0; k < n; ++k) {
@@ -170,9 +170,9 @@ TEST(StockCuts, ArcOfShortSegmentsCutsTheTorusGroove) {
 }
 
 TEST(StockCuts, CuttingTwiceChangesNothing) {
-  HeightFieldStock s(square(10, 0.1), 0.0);
-  const Cutter cs[] = {Cutter::ball(3.175), Cutter::bull(6, 1), Cutter::flat(4)};
-  const Vec3 path[] = {{-8, -8, 2}, {-8, -8, -1}, {5, -6, -1.5}, {6, 4, -0.5}, {-7, 5, -2.5}, {-3, -2, 1}};
+  cam::HeightFieldStock s(square(10, 0.1), 0.0);
+  const cam::Cutter cs[] = {cam::Cutter::ball(3.175), cam::Cutter::bull(6, 1), cam::Cutter::flat(4)};
+  const geometry::Vec3 path[] = {{-8, -8, 2}, {-8, -8, -1}, {5, -6, -1.5}, {6, 4, -0.5}, {-7, 5, -2.5}, {-3, -2, 1}};
   for (const auto& c : cs)
     for (std::size_t k = 0; k + 1 < std::size(path); ++k) s.cut_segment(path[k], path[k + 1], c);
   const auto before = s.heights();
@@ -185,9 +185,9 @@ TEST(StockCuts, CuttingTwiceChangesNothing) {
 }
 
 TEST(StockCuts, GrooveVolumeMatchesClosedForm) {
-  HeightFieldStock s(GridSpec::covering(-5, -5, 25, 5, 0.04, 0.04), 0.0);
+  cam::HeightFieldStock s(cam::GridSpec::covering(-5, -5, 25, 5, 0.04, 0.04), 0.0);
   const double R = 3, depth = 2, len = 20;
-  const double v = s.cut_segment({0, 0, -depth}, {len, 0, -depth}, Cutter::ball(2 * R));
+  const double v = s.cut_segment({0, 0, -depth}, {len, 0, -depth}, cam::Cutter::ball(2 * R));
   // Circular segment of height `depth` times the length, plus the two end
   // half-caps, which make one spherical cap.
   const double seg = R * R * std::acos((R - depth) / R) - (R - depth) * std::sqrt(2 * R * depth - depth * depth);
@@ -199,8 +199,8 @@ TEST(StockCuts, GrooveVolumeMatchesClosedForm) {
 TEST(StockCuts, OnlyTheFootprintIsVisited) {
   // A diagonal move: nodes further than R from the segment stay untouched
   // even when the cutter is far below them.
-  HeightFieldStock s(square(10, 0.1), 0.0);
-  s.cut_segment({-5, -4, -50}, {6, 3, -50}, Cutter::flat(4));
+  cam::HeightFieldStock s(square(10, 0.1), 0.0);
+  s.cut_segment({-5, -4, -50}, {6, 3, -50}, cam::Cutter::flat(4));
   const auto& g = s.grid();
   for (std::size_t j = 0; j < g.ny; ++j)
     for (std::size_t i = 0; i < g.nx; ++i) {
@@ -217,9 +217,9 @@ TEST(StockCuts, OnlyTheFootprintIsVisited) {
 }
 
 TEST(StockCuts, RejectsBadStock) {
-  EXPECT_THROW(HeightFieldStock(GridSpec{}, 0), std::invalid_argument);
-  GridSpec g = square(1, 0.5);
-  EXPECT_THROW(HeightFieldStock(g, NAN), std::invalid_argument);
-  HeightFieldStock s(g, 0);
-  EXPECT_THROW(s.cut_segment({0, 0, 0}, {INFINITY, 0, 0}, Cutter::ball(1)), std::invalid_argument);
+  EXPECT_THROW(cam::HeightFieldStock(cam::GridSpec{}, 0), std::invalid_argument);
+  cam::GridSpec g = square(1, 0.5);
+  EXPECT_THROW(cam::HeightFieldStock(g, NAN), std::invalid_argument);
+  cam::HeightFieldStock s(g, 0);
+  EXPECT_THROW(s.cut_segment({0, 0, 0}, {INFINITY, 0, 0}, cam::Cutter::ball(1)), std::invalid_argument);
 }

@@ -24,8 +24,8 @@ std::filesystem::path out_dir() {
 }
 
 // Axis-aligned box [0, sx] x [0, sy] x [0, sz], outward winding.
-Mesh box(double sx, double sy, double sz) {
-  Mesh m;
+geometry::Mesh box(double sx, double sy, double sz) {
+  geometry::Mesh m;
   for (int k = 0; k < 8; ++k) m.vertices.push_back({(k & 1) ? sx : 0, (k & 2) ? sy : 0, (k & 4) ? sz : 0});
   const std::uint32_t f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                                   {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
@@ -34,8 +34,8 @@ Mesh box(double sx, double sy, double sz) {
 }
 
 // UV sphere with its vertices on the sphere (faces lie inside it).
-Mesh sphere(double r, int nu, int nv) {
-  Mesh m;
+geometry::Mesh sphere(double r, int nu, int nv) {
+  geometry::Mesh m;
   for (int v = 0; v <= nv; ++v)
     for (int u = 0; u < nu; ++u) {
       const double th = std::numbers::pi * v / nv, ph = 2 * std::numbers::pi * u / nu;
@@ -53,8 +53,8 @@ Mesh sphere(double r, int nu, int nv) {
 }  // namespace
 
 TEST(DesignHeights, BoxTopIsTheTopMostHit) {
-  const auto g = GridSpec::covering(-2, -2, 12, 10, 0.5, 0.5);
-  const auto d = design_heights(box(10, 8, 5), g);
+  const auto g = cam::GridSpec::covering(-2, -2, 12, 10, 0.5, 0.5);
+  const auto d = cam::design_heights(box(10, 8, 5), g);
   for (std::size_t j = 0; j < g.ny; ++j)
     for (std::size_t i = 0; i < g.nx; ++i) {
       const double x = g.x(i), y = g.y(j);
@@ -71,9 +71,9 @@ TEST(DesignHeights, BoxTopIsTheTopMostHit) {
 }
 
 TEST(DesignHeights, SphereTopWithinTessellationError) {
-  const auto g = GridSpec::covering(-6, -6, 6, 6, 0.25, 0.25);
+  const auto g = cam::GridSpec::covering(-6, -6, 6, 6, 0.25, 0.25);
   const double R = 5;
-  const auto d = design_heights(sphere(R, 96, 48), g);
+  const auto d = cam::design_heights(sphere(R, 96, 48), g);
   // Chord sag of the tessellation: R (1 - cos(pi / 48)).
   const double sag = R * (1 - std::cos(std::numbers::pi / 48)) * 1.5;
   for (std::size_t j = 0; j < g.ny; ++j)
@@ -93,10 +93,10 @@ TEST(DesignHeights, SphereTopWithinTessellationError) {
 }
 
 TEST(DesignHeights, RealMeshStaysInsideItsBounds) {
-  const auto mesh = load_stl(std::filesystem::path(CNCSTREAM_SHARED_MESHES) / "gearwheel.bin.stl").mesh;
-  const Box3 b = mesh.bounds();
-  const auto g = GridSpec::covering(b.lo.x - 1, b.lo.y - 1, b.hi.x + 1, b.hi.y + 1, 0.5, 0.5);
-  const auto d = design_heights(mesh, g);
+  const auto mesh = geometry::load_stl(std::filesystem::path(CNCSTREAM_SHARED_MESHES) / "gearwheel.bin.stl").mesh;
+  const geometry::Box3 b = mesh.bounds();
+  const auto g = cam::GridSpec::covering(b.lo.x - 1, b.lo.y - 1, b.hi.x + 1, b.hi.y + 1, 0.5, 0.5);
+  const auto d = cam::design_heights(mesh, g);
   EXPECT_GT(d.on_part, g.size() / 3);
   EXPECT_LT(d.on_part, g.size());
   for (std::size_t k = 0; k < g.size(); ++k)
@@ -107,11 +107,11 @@ TEST(DesignHeights, RealMeshStaysInsideItsBounds) {
 }
 
 TEST(Deviation, KnownGougeAndExcess) {
-  const auto g = GridSpec::covering(-2, -2, 12, 10, 0.25, 0.25);
-  const auto design = design_heights(box(10, 8, 5), g);
-  HeightFieldStock stock(g, 5.3);  // 0.3 mm left everywhere...
-  stock.cut_segment({3, 2, 8}, {3, 2, 4.8}, Cutter::flat(2));  // ...but a 0.2 mm deep hole at (3, 2)
-  const auto r = compare_to_design(stock, design, 0.05);
+  const auto g = cam::GridSpec::covering(-2, -2, 12, 10, 0.25, 0.25);
+  const auto design = cam::design_heights(box(10, 8, 5), g);
+  cam::HeightFieldStock stock(g, 5.3);  // 0.3 mm left everywhere...
+  stock.cut_segment({3, 2, 8}, {3, 2, 4.8}, cam::Cutter::flat(2));  // ...but a 0.2 mm deep hole at (3, 2)
+  const auto r = cam::compare_to_design(stock, design, 0.05);
   const auto& s = r.stats;
   ASSERT_TRUE(s.has_gouge);
   EXPECT_NEAR(s.largest_gouge.value, -0.2, 1e-12);
@@ -133,14 +133,14 @@ TEST(Deviation, KnownGougeAndExcess) {
   EXPECT_NE(s.summary().find("median 0.3000 mm, 90% 0.3000 mm, 99% 0.3000 mm"), std::string::npos) << s.summary();
 
   // The map: gouge pixels where the hole is, excess over the rest of the box.
-  const auto img = render_deviation(r, "Deviation test", "flat 2 mm hole", 400);
-  write_png(out_dir() / "deviation_known.png", img);
-  const Rgb gouge = DeviationPalette::gouge(1), excess = DeviationPalette::excess(1);
+  const auto img = cam::render_deviation(r, "Deviation test", "flat 2 mm hole", 400);
+  image::write_png(out_dir() / "deviation_known.png", img);
+  const image::Rgb gouge = image::DeviationPalette::gouge(1), excess = image::DeviationPalette::excess(1);
   double gx = 0, gy = 0, gn = 0, en = 0;
   int ex0 = 1 << 30, ex1 = -1, ey0 = 1 << 30, ey1 = -1;
   for (int y = 0; y < img.height(); ++y)
     for (int x = 0; x < 16 + 400; ++x) {  // the map area (legend is to its right)
-      const Rgb c = img.get(x, y);
+      const image::Rgb c = img.get(x, y);
       if (c == gouge) gx += x, gy += y, ++gn;
       if (c == excess || c == gouge) {
         ++en;
@@ -155,22 +155,22 @@ TEST(Deviation, KnownGougeAndExcess) {
 }
 
 TEST(Deviation, RejectsMismatchedGrid) {
-  const auto g = GridSpec::covering(0, 0, 10, 8, 0.5, 0.5);
-  const auto design = design_heights(box(10, 8, 5), g);
-  HeightFieldStock other(GridSpec::covering(0, 0, 10, 8, 0.25, 0.25), 6);
-  EXPECT_THROW(compare_to_design(other, design, 0.05), std::invalid_argument);
-  HeightFieldStock same(g, 6);
-  EXPECT_THROW(compare_to_design(same, design, 0), std::invalid_argument);
+  const auto g = cam::GridSpec::covering(0, 0, 10, 8, 0.5, 0.5);
+  const auto design = cam::design_heights(box(10, 8, 5), g);
+  cam::HeightFieldStock other(cam::GridSpec::covering(0, 0, 10, 8, 0.25, 0.25), 6);
+  EXPECT_THROW(cam::compare_to_design(other, design, 0.05), std::invalid_argument);
+  cam::HeightFieldStock same(g, 6);
+  EXPECT_THROW(cam::compare_to_design(same, design, 0), std::invalid_argument);
 }
 
 TEST(HeightFieldFiles, RoundTrip) {
-  const auto g = GridSpec::covering(-3, 2, 7, 9, 0.1, 0.2);
-  HeightFieldStock s(g, 1.5);
-  s.cut_segment({-2, 3, 0.2}, {6, 8, -0.5}, Cutter::ball(3));
+  const auto g = cam::GridSpec::covering(-3, 2, 7, 9, 0.1, 0.2);
+  cam::HeightFieldStock s(g, 1.5);
+  s.cut_segment({-2, 3, 0.2}, {6, 8, -0.5}, cam::Cutter::ball(3));
   const auto path = out_dir() / "groove.f32";
-  write_height_field(path, g, s.heights());
+  cam::write_height_field(path, g, s.heights());
   EXPECT_EQ(std::filesystem::file_size(path), g.size() * 4);
-  const auto back = read_height_field(path);
+  const auto back = cam::read_height_field(path);
   EXPECT_EQ(back.grid.nx, g.nx);
   EXPECT_EQ(back.grid.ny, g.ny);
   EXPECT_DOUBLE_EQ(back.grid.x0, g.x0);
@@ -180,61 +180,61 @@ TEST(HeightFieldFiles, RoundTrip) {
   // NaN survives (off-part nodes).
   std::vector<double> z(g.size(), 1.0);
   z[5] = std::nan("");
-  write_height_field(path, g, z);
-  EXPECT_TRUE(std::isnan(read_height_field(path).z[5]));
-  EXPECT_FALSE(read_height_field(path).work_offset);
+  cam::write_height_field(path, g, z);
+  EXPECT_TRUE(std::isnan(cam::read_height_field(path).z[5]));
+  EXPECT_FALSE(cam::read_height_field(path).work_offset);
   // A machined surface in work coordinates says where the model sat.
-  write_height_field(path, g, z, Vec3{1.25, 0, -10.5});
-  const auto placed = read_height_field(path);
+  cam::write_height_field(path, g, z, geometry::Vec3{1.25, 0, -10.5});
+  const auto placed = cam::read_height_field(path);
   ASSERT_TRUE(placed.work_offset);
-  EXPECT_EQ(*placed.work_offset, (Vec3{1.25, 0, -10.5}));
+  EXPECT_EQ(*placed.work_offset, (geometry::Vec3{1.25, 0, -10.5}));
 }
 
 TEST(HeightFieldFiles, ErrorsNameTheFile) {
-  const auto g = GridSpec::covering(0, 0, 1, 1, 0.5, 0.5);
+  const auto g = cam::GridSpec::covering(0, 0, 1, 1, 0.5, 0.5);
   const auto path = out_dir() / "bad.f32";
-  write_height_field(path, g, std::vector<double>(g.size(), 0.0));
+  cam::write_height_field(path, g, std::vector<double>(g.size(), 0.0));
   std::filesystem::resize_file(path, 10);
   try {
-    read_height_field(path);
+    cam::read_height_field(path);
     FAIL();
-  } catch (const HeightFieldError& e) {
+  } catch (const cam::HeightFieldError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.f32: expected 36 bytes"), std::string::npos) << e.what();
   }
   {
-    std::ofstream(height_field_sidecar(path)) << "cncstream height field 1\nnx 3\nny three\n";
+    std::ofstream(cam::height_field_sidecar(path)) << "cncstream height field 1\nnx 3\nny three\n";
   }
   try {
-    read_height_field(path);
+    cam::read_height_field(path);
     FAIL();
-  } catch (const HeightFieldError& e) {
+  } catch (const cam::HeightFieldError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.f32.txt:3: 'three' is not a number"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(read_height_field(out_dir() / "missing.f32"), HeightFieldError);
-  write_height_field(path, g, std::vector<double>(g.size(), 0.0));
-  std::ofstream(height_field_sidecar(path), std::ios::app) << "work_offset_z -10.5\n";
+  EXPECT_THROW(cam::read_height_field(out_dir() / "missing.f32"), cam::HeightFieldError);
+  cam::write_height_field(path, g, std::vector<double>(g.size(), 0.0));
+  std::ofstream(cam::height_field_sidecar(path), std::ios::app) << "work_offset_z -10.5\n";
   try {
-    read_height_field(path);
+    cam::read_height_field(path);
     FAIL() << "a partial work offset was taken";
-  } catch (const HeightFieldError& e) {
+  } catch (const cam::HeightFieldError& e) {
     EXPECT_NE(std::string(e.what()).find("work_offset_x, work_offset_y and work_offset_z go together"), std::string::npos)
         << e.what();
   }
 }
 
 TEST(HeightFieldSolid, ClosedAndEnclosesTheVolume) {
-  const auto g = GridSpec::covering(0, 0, 6, 4, 0.5, 0.5);
-  HeightFieldStock s(g, 2.0);
-  s.cut_segment({1, 1, 1}, {5, 3, 0.5}, Cutter::ball(2));
+  const auto g = cam::GridSpec::covering(0, 0, 6, 4, 0.5, 0.5);
+  cam::HeightFieldStock s(g, 2.0);
+  s.cut_segment({1, 1, 1}, {5, 3, 0.5}, cam::Cutter::ball(2));
   const double bottom = -1;
   const auto path = out_dir() / "machined.stl";
-  write_height_field_stl(path, g, s.heights(), bottom);
-  const auto loaded = load_stl(path);
-  const auto summary = summarize(loaded.mesh);
+  cam::write_height_field_stl(path, g, s.heights(), bottom);
+  const auto loaded = geometry::load_stl(path);
+  const auto summary = geometry::summarize(loaded.mesh);
   EXPECT_TRUE(summary.closed()) << summary.to_string();
   EXPECT_EQ(summary.facets, 2 * (g.nx - 1) * (g.ny - 1) + 3 * 2 * (g.nx - 1 + g.ny - 1));
   // Signed volume (divergence theorem) equals the prisms under the top triangles.
-  const Mesh m = height_field_solid(g, s.heights(), bottom);
+  const geometry::Mesh m = cam::height_field_solid(g, s.heights(), bottom);
   double vol = 0;
   for (std::size_t t = 0; t < m.size(); ++t) vol += dot(m.corner(t, 0), cross(m.corner(t, 1), m.corner(t, 2))) / 6;
   double want = 0;
@@ -244,7 +244,7 @@ TEST(HeightFieldSolid, ClosedAndEnclosesTheVolume) {
       want += g.dx * g.dy / 2 * ((a + b + c) / 3 - bottom) + g.dx * g.dy / 2 * ((a + c + d) / 3 - bottom);
     }
   EXPECT_NEAR(vol, want, 1e-9 * want);
-  EXPECT_THROW(height_field_solid(g, s.heights(), 0.6), std::invalid_argument);
+  EXPECT_THROW(cam::height_field_solid(g, s.heights(), 0.6), std::invalid_argument);
 }
 
 #include "cncstream/image/height_map.hpp"
@@ -252,25 +252,25 @@ TEST(HeightFieldSolid, ClosedAndEnclosesTheVolume) {
 TEST(MachinedPicture, HeightMapOfAFinishedPocket) {
   // Rough a pocket with a flat end mill, then a ball-nose raster over a dome:
   // the picture shows walls, scallops and the untouched rim.
-  const auto g = GridSpec::covering(0, 0, 60, 40, 0.1, 0.1);
-  HeightFieldStock s(g, 0.0);
-  const auto flat = Cutter::flat(6), ball = Cutter::ball(3.175);
+  const auto g = cam::GridSpec::covering(0, 0, 60, 40, 0.1, 0.1);
+  cam::HeightFieldStock s(g, 0.0);
+  const auto flat = cam::Cutter::flat(6), ball = cam::Cutter::ball(3.175);
   for (double y = 8; y <= 32; y += 4) s.cut_segment({8, y, -1.5}, {52, y, -1.5}, flat);
   for (double y = 8; y <= 32; y += 1.0) {
-    Vec3 p{8, y, -1.5};
+    geometry::Vec3 p{8, y, -1.5};
     for (double x = 8.5; x <= 52; x += 0.5) {
       const double z = -1.5 - 2.5 * std::exp(-((x - 30) * (x - 30) + (y - 20) * (y - 20)) / 60);
-      const Vec3 q{x, y, z};
+      const geometry::Vec3 q{x, y, z};
       s.cut_segment(p, q, ball);
       p = q;
     }
   }
-  const MapGrid mg{g.nx, g.ny, g.dx, g.dy, g.x0, g.y0};
-  HeightMapOptions o;
+  const image::MapGrid mg{g.nx, g.ny, g.dx, g.dy, g.x0, g.y0};
+  image::HeightMapOptions o;
   o.title = "Machined stock";
   o.subtitle = "flat 6 mm roughing, ball 3.175 mm finish, 1 mm stepover";
-  const auto img = render_height_map(mg, s.heights(), {}, o);
-  write_png(out_dir() / "machined_height_map.png", img);
+  const auto img = image::render_height_map(mg, s.heights(), {}, o);
+  image::write_png(out_dir() / "machined_height_map.png", img);
   EXPECT_GT(img.width(), 800);
   EXPECT_LT(s.heights()[0], 1e-12);
 }
@@ -278,13 +278,13 @@ TEST(MachinedPicture, HeightMapOfAFinishedPocket) {
 TEST(Deviation, ScallopPercentilesOfAKnownDistribution) {
   // A design block with its top at Z1 and a machined surface left k/100 mm
   // high in column k (k = 0..99): the material left is uniform on 0..0.99 mm.
-  const auto g = GridSpec::covering(0, 0, 99, 9, 1, 1);
+  const auto g = cam::GridSpec::covering(0, 0, 99, 9, 1, 1);
   ASSERT_EQ(g.nx, 100u);
-  const auto design = design_heights(box(100, 20, 1), g);
+  const auto design = cam::design_heights(box(100, 20, 1), g);
   std::vector<double> z(g.size());
   for (std::size_t k = 0; k < g.size(); ++k) z[k] = 1 + static_cast<double>(k % g.nx) / 100.0;
-  const HeightFieldStock stock(g, 2.0, z);
-  const auto s = compare_to_design(stock, design, 0.05).stats;
+  const cam::HeightFieldStock stock(g, 2.0, z);
+  const auto s = cam::compare_to_design(stock, design, 0.05).stats;
   ASSERT_EQ(s.on_part, g.size());
   EXPECT_NEAR(s.excess_p50, 0.49, 1e-12);  // nearest rank: the 500th of 1000
   EXPECT_NEAR(s.excess_p90, 0.89, 1e-12);

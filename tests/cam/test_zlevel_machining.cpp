@@ -26,7 +26,7 @@ struct Case {
   const char* cutter;
   double step_down;
   double sim_step;
-  ClearingOrder order = ClearingOrder::InsideOut;
+  cam::ClearingOrder order = cam::ClearingOrder::InsideOut;
   bool climb = true;
   double scale = 1;
 };
@@ -34,20 +34,20 @@ struct Case {
 void rough_and_check(const Case& k) {
   const auto file = k.shared ? std::filesystem::path(CNCSTREAM_SHARED_MESHES) / k.mesh
                              : std::filesystem::path(CNCSTREAM_SOURCE_DIR) / k.mesh;
-  Mesh mesh = load_stl(file).mesh;
-  for (Vec3& v : mesh.vertices) v = v * k.scale;
-  const Cutter cutter = parse_cutter_spec(k.cutter);
-  RoughingParams p;
+  geometry::Mesh mesh = geometry::load_stl(file).mesh;
+  for (geometry::Vec3& v : mesh.vertices) v = v * k.scale;
+  const cam::Cutter cutter = cam::parse_cutter_spec(k.cutter);
+  cam::RoughingParams p;
   p.step_down = k.step_down;
   p.leave = 0.3;
   p.tolerance = 0.05;
   p.order = k.order;
   p.climb = k.climb;
-  const Box3 box = mesh.bounds();
-  const StockBlock block{box.lo.x, box.lo.y, box.hi.x, box.hi.y, box.hi.z + 1};
-  const ClEngine grown(mesh, grown_cutter(cutter, p.leave));
+  const geometry::Box3 box = mesh.bounds();
+  const cam::StockBlock block{box.lo.x, box.lo.y, box.hi.x, box.hi.y, box.hi.z + 1};
+  const cam::ClEngine grown(mesh, cam::grown_cutter(cutter, p.leave));
   const auto t0 = std::chrono::steady_clock::now();
-  const RoughingPath path = build_zlevel_roughing(grown, cutter, block, p);
+  const cam::RoughingPath path = cam::build_zlevel_roughing(grown, cutter, block, p);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_FALSE(path.levels.empty());
   std::size_t points = 0;
@@ -57,8 +57,8 @@ void rough_and_check(const Case& k) {
               k.cutter, k.step_down, secs, path.levels.size(), path.stats.passes, points, path.terrace_bound);
 
   // Stock nodes off round numbers, so none sits exactly on a wall.
-  const GridSpec g = GridSpec::covering(block.x0 + 0.0373, block.y0 + 0.0411, block.x1, block.y1, k.sim_step, k.sim_step);
-  HeightFieldStock stock(g, block.top);
+  const cam::GridSpec g = cam::GridSpec::covering(block.x0 + 0.0373, block.y0 + 0.0411, block.x1, block.y1, k.sim_step, k.sim_step);
+  cam::HeightFieldStock stock(g, block.top);
   const zlevel_test::SimResult sim = zlevel_test::machine(stock, path);
   EXPECT_LE(sim.rapid_removed, 1e-9) << "a move over or a descent cut material";  // rounding only
   EXPECT_LE(sim.deepest_cut, p.step_down + 1e-6);
@@ -66,14 +66,14 @@ void rough_and_check(const Case& k) {
   // The stock to leave: nowhere closer to the part than leave - tolerance
   // (the top of the part grown by a ball of that radius).
   const double least = p.leave - p.tolerance;
-  const ClEngine probe(mesh, Cutter::ball(2 * least));
-  const ClGrid offset = probe.compute(g);
+  const cam::ClEngine probe(mesh, cam::Cutter::ball(2 * least));
+  const cam::ClGrid offset = probe.compute(g);
   // The reach: the cutter's lowest surface with its tip anywhere allowed.
   const std::size_t pad = static_cast<std::size_t>(std::ceil(cutter.radius / g.dx)) + 1;
-  GridSpec tg = g;
+  cam::GridSpec tg = g;
   tg.x0 -= static_cast<double>(pad) * g.dx, tg.y0 -= static_cast<double>(pad) * g.dy;
   tg.nx += 2 * pad, tg.ny += 2 * pad;
-  const ClGrid cl = grown.compute(tg);
+  const cam::ClGrid cl = grown.compute(tg);
   std::vector<double> tips(tg.size());
   for (std::size_t n = 0; n < tg.size(); ++n) {
     const double x = tg.x(n % tg.nx), y = tg.y(n / tg.nx);
@@ -130,13 +130,13 @@ TEST(ZLevelMachining, PlaqueFlat6) { rough_and_check({"examples/plaque.stl", fal
 TEST(ZLevelMachining, GearwheelFlat3) { rough_and_check({"gearwheel.bin.stl", true, "flat:3", 2, 0.25}); }
 
 TEST(ZLevelMachining, GearwheelFlat3OutsideInConventional) {
-  rough_and_check({"gearwheel.bin.stl", true, "flat:3", 2, 0.25, ClearingOrder::OutsideIn, false});
+  rough_and_check({"gearwheel.bin.stl", true, "flat:3", 2, 0.25, cam::ClearingOrder::OutsideIn, false});
 }
 
 // A relief with many levels: found a level's sharp corner poking out of the
 // level above's boundary (a 24 mm deep cut) before corners were checked.
 TEST(ZLevelMachining, LionReliefFlat6) {
-  rough_and_check({"lion_head_relief.stl", true, "flat:6", 3, 0.5, ClearingOrder::InsideOut, true, 100});
+  rough_and_check({"lion_head_relief.stl", true, "flat:6", 3, 0.5, cam::ClearingOrder::InsideOut, true, 100});
 }
 
 TEST(ZLevelMachining, PlaqueBull6) { rough_and_check({"examples/plaque.stl", false, "bull:6:1", 3, 0.5}); }

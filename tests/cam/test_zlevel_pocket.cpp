@@ -15,17 +15,17 @@ using namespace cncstream;
 namespace {
 
 struct Pocket {
-  Mesh mesh = zlevel_test::pocket_block();
-  Cutter cutter = Cutter::flat(6);
-  RoughingParams params;
-  StockBlock block{-30, -25, 30, 25, 20};
-  ClEngine grown{mesh, grown_cutter(cutter, 0.3)};
-  RoughingPath path;
+  geometry::Mesh mesh = zlevel_test::pocket_block();
+  cam::Cutter cutter = cam::Cutter::flat(6);
+  cam::RoughingParams params;
+  cam::StockBlock block{-30, -25, 30, 25, 20};
+  cam::ClEngine grown{mesh, cam::grown_cutter(cutter, 0.3)};
+  cam::RoughingPath path;
   Pocket() {
     params.step_down = 3;
     params.leave = 0.3;
     params.tolerance = 0.02;
-    path = build_zlevel_roughing(grown, cutter, block, params);
+    path = cam::build_zlevel_roughing(grown, cutter, block, params);
   }
 };
 
@@ -48,11 +48,11 @@ TEST(ZLevelPocket, EachLevelIsThePocketInOnePass) {
   double above = k.block.top;
   for (const auto& lv : k.path.levels) {
     ASSERT_EQ(lv.passes.size(), 1u) << "level " << lv.z;
-    const RoughingPass& ps = lv.passes.front();
+    const cam::RoughingPass& ps = lv.passes.front();
     EXPECT_TRUE(ps.lift_before);
     double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
     for (std::size_t n = 0; n < ps.points.size(); ++n) {
-      const Vec3& v = ps.points[n];
+      const geometry::Vec3& v = ps.points[n];
       // Never outside the tip region.
       ASSERT_LE(std::fabs(v.x), kX + 1e-9) << v.x << "," << v.y;
       ASSERT_LE(std::fabs(v.y), kY + 1e-9) << v.x << "," << v.y;
@@ -68,10 +68,10 @@ TEST(ZLevelPocket, EachLevelIsThePocketInOnePass) {
     EXPECT_LT(y0, -kY + tol);
     EXPECT_GT(y1, kY - tol);
     std::size_t on_wall = 0;
-    for (const Vec3& v : ps.points)
+    for (const geometry::Vec3& v : ps.points)
       if (std::min(kX - std::fabs(v.x), kY - std::fabs(v.y)) < tol / 4) ++on_wall;
     EXPECT_GT(on_wall, 4u);
-    const Vec3& last = ps.points.back();
+    const geometry::Vec3& last = ps.points.back();
     EXPECT_LT(std::min(kX - std::fabs(last.x), kY - std::fabs(last.y)), tol / 4) << "the boundary is not last";
     // The entry ramps from above the level above, no steeper than the ramp angle.
     ASSERT_GT(ps.entry_points, 0u);
@@ -79,7 +79,7 @@ TEST(ZLevelPocket, EachLevelIsThePocketInOnePass) {
     above = lv.z;
     const double slope = std::tan(k.params.ramp_angle_deg * 3.14159265358979 / 180);
     for (std::size_t n = 1; n <= ps.entry_points; ++n) {
-      const Vec3 d = ps.points[n] - ps.points[n - 1];
+      const geometry::Vec3 d = ps.points[n] - ps.points[n - 1];
       EXPECT_LE(-d.z, slope * std::hypot(d.x, d.y) + 1e-9);
     }
   }
@@ -87,8 +87,8 @@ TEST(ZLevelPocket, EachLevelIsThePocketInOnePass) {
 
 TEST(ZLevelPocket, MachinedIsThePocketLessTheStockToLeave) {
   const Pocket k;
-  const GridSpec g = GridSpec::covering(-29.9627, -24.9589, 30, 25, 0.25, 0.25);
-  HeightFieldStock stock(g, 20);
+  const cam::GridSpec g = cam::GridSpec::covering(-29.9627, -24.9589, 30, 25, 0.25, 0.25);
+  cam::HeightFieldStock stock(g, 20);
   const zlevel_test::SimResult sim = zlevel_test::machine(stock, k.path);
   EXPECT_LE(sim.rapid_removed, 1e-9);
   EXPECT_LE(sim.deepest_cut, 3 + 1e-9);
@@ -115,15 +115,15 @@ TEST(ZLevelPocket, MachinedIsThePocketLessTheStockToLeave) {
 // leaving 0.3 may go down to z where its grown ball (radius 3.3) centred at
 // z + 3 touches the sphere: at distance sqrt(13.3^2 - (z + 3)^2) from the axis.
 TEST(ZLevelHemisphere, EveryLevelFollowsTheCircleOfItsHeight) {
-  const Mesh dome = cl_test::hemisphere(10, 48, 192);
-  const Cutter ball = Cutter::ball(6);
-  const ClEngine grown(dome, grown_cutter(ball, 0.3));
-  RoughingParams p;
+  const geometry::Mesh dome = cl_test::hemisphere(10, 48, 192);
+  const cam::Cutter ball = cam::Cutter::ball(6);
+  const cam::ClEngine grown(dome, cam::grown_cutter(ball, 0.3));
+  cam::RoughingParams p;
   p.leave = 0.3;
   p.step_down = 3;
   p.tolerance = 0.02;
   p.bottom = 0.3;  // the open hemisphere's rim would let the ball below it
-  const RoughingPath path = build_zlevel_roughing(grown, ball, StockBlock{-12, -12, 12, 12, 11}, p);
+  const cam::RoughingPath path = cam::build_zlevel_roughing(grown, ball, cam::StockBlock{-12, -12, 12, 12, 11}, p);
   // Levels closer than the step down by the ball's scallop between loops.
   ASSERT_GE(path.levels.size(), 5u);
   EXPECT_NEAR(path.terrace_bound, 3.0, 1e-9);
@@ -147,23 +147,23 @@ TEST(ZLevelHemisphere, EveryLevelFollowsTheCircleOfItsHeight) {
 // cutter's reach beside it) is cleared; machined, the result is the same
 // pocket, no move deeper than the step down.
 TEST(ZLevelPocket, MachinedStockIsClearedOnlyWhereMaterialIsAboveTheLevel) {
-  const Mesh mesh = zlevel_test::pocket_block();
-  const Cutter cutter = Cutter::flat(6);
-  const ClEngine grown(mesh, grown_cutter(cutter, 0.3));
+  const geometry::Mesh mesh = zlevel_test::pocket_block();
+  const cam::Cutter cutter = cam::Cutter::flat(6);
+  const cam::ClEngine grown(mesh, cam::grown_cutter(cutter, 0.3));
   // The surface covers the block (beyond it: nothing, at 0).
-  const GridSpec g = GridSpec::covering(-30.2127, -25.2089, 30.3, 25.3, 0.25, 0.25);
+  const cam::GridSpec g = cam::GridSpec::covering(-30.2127, -25.2089, 30.3, 25.3, 0.25, 0.25);
   std::vector<double> before(g.size());
   for (std::size_t n = 0; n < g.size(); ++n) {
     const double x = g.x(n % g.nx), y = g.y(n / g.nx);
     before[n] = std::fabs(x) > 30 || std::fabs(y) > 25 ? 0.0 : x < 0 ? 21.0 : 26.0;
   }
-  const HeightFieldStock surface(g, 26, before);
-  RoughingParams p;
+  const cam::HeightFieldStock surface(g, 26, before);
+  cam::RoughingParams p;
   p.leave = 0.3;
   p.step_down = 3;
   p.tolerance = 0.02;
-  StockBlock block{-30, -25, 30, 25, 30, &surface};  // the block's top is above the surface
-  const RoughingPath path = build_zlevel_roughing(grown, cutter, block, p);
+  cam::StockBlock block{-30, -25, 30, 25, 30, &surface};  // the block's top is above the surface
+  const cam::RoughingPath path = cam::build_zlevel_roughing(grown, cutter, block, p);
   ASSERT_FALSE(path.levels.empty());
   EXPECT_DOUBLE_EQ(path.levels.front().z, 23.0);
   EXPECT_DOUBLE_EQ(path.clearance_z, 26.0 + p.clearance);
@@ -173,9 +173,9 @@ TEST(ZLevelPocket, MachinedStockIsClearedOnlyWhereMaterialIsAboveTheLevel) {
   for (const auto& lv : path.levels) {
     if (lv.z < 21) break;
     for (const auto& ps : lv.passes)
-      for (const Vec3& v : ps.points) ASSERT_GE(v.x, -reach) << "level " << lv.z;
+      for (const geometry::Vec3& v : ps.points) ASSERT_GE(v.x, -reach) << "level " << lv.z;
   }
-  HeightFieldStock stock(g, 26, before);
+  cam::HeightFieldStock stock(g, 26, before);
   const zlevel_test::SimResult sim = zlevel_test::machine(stock, path);
   EXPECT_LE(sim.rapid_removed, 1e-9);
   EXPECT_LE(sim.deepest_cut, 3 + 1e-9);

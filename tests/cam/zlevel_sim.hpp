@@ -21,11 +21,11 @@ struct SimResult {
   std::size_t moves = 0;
 };
 
-inline SimResult machine(HeightFieldStock& stock, const RoughingPath& path) {
+inline SimResult machine(cam::HeightFieldStock& stock, const cam::RoughingPath& path) {
   SimResult r;
-  Vec3 at{path.levels.front().passes.front().points.front()};
+  geometry::Vec3 at{path.levels.front().passes.front().points.front()};
   at.z = path.clearance_z;
-  auto move = [&](const Vec3& to, bool rapid) {
+  auto move = [&](const geometry::Vec3& to, bool rapid) {
     stock.cut_segment(at, to, path.cutter);
     ++r.moves;
     if (rapid) r.rapid_removed = std::max(r.rapid_removed, stock.last_max_depth());
@@ -34,7 +34,7 @@ inline SimResult machine(HeightFieldStock& stock, const RoughingPath& path) {
   };
   for (const auto& lv : path.levels)
     for (const auto& pass : lv.passes) {
-      const Vec3& first = pass.points.front();
+      const geometry::Vec3& first = pass.points.front();
       if (pass.lift_before) {
         move({at.x, at.y, std::max(at.z, pass.lift_z)}, true);
         move({first.x, first.y, at.z}, true);
@@ -52,8 +52,8 @@ inline SimResult machine(HeightFieldStock& stock, const RoughingPath& path) {
 // with its tip at every allowed height of a node grid `tips` around it (the
 // grown CL plus leave, +inf where the tip may not go): `tips` has `pad` more
 // nodes on each side of `grid`, same spacing. Capped at `top`.
-inline std::vector<double> ideal_surface(const GridSpec& grid, std::size_t pad, const std::vector<double>& tips,
-                                         const Cutter& c, double top) {
+inline std::vector<double> ideal_surface(const cam::GridSpec& grid, std::size_t pad, const std::vector<double>& tips,
+                                         const cam::Cutter& c, double top) {
   std::vector<double> s(grid.size(), top);
   const std::size_t tnx = grid.nx + 2 * pad, tny = grid.ny + 2 * pad;
   const long rn = static_cast<long>(std::ceil(c.radius / grid.dx));
@@ -76,9 +76,9 @@ inline std::vector<double> ideal_surface(const GridSpec& grid, std::size_t pad, 
 
 // A block [-30, 30] x [-25, 25] x [0, 20] with a pocket [-15, 15] x
 // [-10, 10] down to z = 10, vertical walls.
-inline Mesh pocket_block() {
-  std::vector<std::array<Vec3, 3>> t;
-  auto quad = [&](Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+inline geometry::Mesh pocket_block() {
+  std::vector<std::array<geometry::Vec3, 3>> t;
+  auto quad = [&](geometry::Vec3 a, geometry::Vec3 b, geometry::Vec3 c, geometry::Vec3 d) {
     t.push_back({a, b, c});
     t.push_back({a, c, d});
   };

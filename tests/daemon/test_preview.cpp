@@ -13,8 +13,8 @@
 #include "daemon_test_util.hpp"
 
 using namespace dtest;
-using cncstream::Rgb;
-using cncstream::Vec3;
+using cncstream::image::Rgb;
+using cncstream::geometry::Vec3;
 
 namespace {
 
@@ -45,7 +45,7 @@ std::int64_t ready_job(const Http& h, const json& body) {
 // A dome on a plate as binary STL bytes (centre at 10, 10; its top the highest point).
 std::string dome_stl(const fs::path& dir) {
   const auto p = dir / "dome.stl";
-  cncstream::write_stl_binary(p, cl_test::dome_on_plate(20, 8));
+  cncstream::geometry::write_stl_binary(p, cl_test::dome_on_plate(20, 8));
   return read_file(p);
 }
 
@@ -75,7 +75,7 @@ std::string dome_gcode() {
 double ramp_position(Rgb c) {
   double best = -1, dist = 1e9;
   for (int k = 0; k <= 255; ++k) {
-    const Rgb v = cncstream::colormap_viridis(k / 255.0);
+    const Rgb v = cncstream::image::colormap_viridis(k / 255.0);
     const double d = std::hypot(v.r - c.r, v.g - c.g, v.b - c.b);
     if (d < dist) {
       dist = d;
@@ -120,7 +120,7 @@ void check_png(const Http& h, const std::string& url, const json& preview, int l
   const auto r = h.get(url);
   ASSERT_EQ(r.status, 200) << r.body.substr(0, 300);
   EXPECT_EQ(r.headers.count("content-type") ? r.headers.at("content-type") : "", "image/png");
-  const auto img = cncstream::decode_png(r.body);
+  const auto img = cncstream::image::decode_png(r.body);
   const auto& b = preview["bounds"];
   const double x0 = b[0].get<double>(), y1 = b[3].get<double>();
   const double ex = b[2].get<double>() - x0, ey = y1 - b[1].get<double>();

@@ -24,7 +24,7 @@ namespace {
 constexpr double kDollar12 = 0.002;
 
 // The moves as G-code lines (G90, mm), written by the program writer.
-std::vector<std::string> gcode_of(const std::vector<Vec3>& pts, const std::vector<FittedMove>& moves) {
+std::vector<std::string> gcode_of(const std::vector<geometry::Vec3>& pts, const std::vector<FittedMove>& moves) {
   GcodeWriter w(6, 120);
   w.feed(pts[0].x, pts[0].y, pts[0].z, 500);
   for (const FittedMove& m : moves) {
@@ -42,9 +42,9 @@ std::vector<std::string> gcode_of(const std::vector<Vec3>& pts, const std::vecto
 // The tool-tip path our interpreter makes of the program: every line end and
 // every chord end of the arcs at the controller's arc tolerance, from the
 // first line's end (the first line moves there from the origin).
-std::vector<Vec3> cut_path(const std::vector<std::string>& lines, double dollar12, int* arcs = nullptr) {
+std::vector<geometry::Vec3> cut_path(const std::vector<std::string>& lines, double dollar12, int* arcs = nullptr) {
   ParserState s;
-  std::vector<Vec3> path;
+  std::vector<geometry::Vec3> path;
   bool first = true;
   for (const std::string& l : lines) {
     const BlockResult r = execute_block(s, clean_line(l).text);
@@ -57,7 +57,7 @@ std::vector<Vec3> cut_path(const std::vector<std::string>& lines, double dollar1
         first = false;
       } else if (const auto* am = std::get_if<ArcMove>(&a)) {
         if (arcs) ++*arcs;
-        for (const Vec3& p : segment_arc(*am, dollar12)) path.push_back(p);
+        for (const geometry::Vec3& p : segment_arc(*am, dollar12)) path.push_back(p);
       }
     }
     s = r.state;
@@ -65,14 +65,14 @@ std::vector<Vec3> cut_path(const std::vector<std::string>& lines, double dollar1
   return path;
 }
 
-double distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 d = b - a;
+double distance_to_segment(const geometry::Vec3& p, const geometry::Vec3& a, const geometry::Vec3& b) {
+  const geometry::Vec3 d = b - a;
   const double l2 = dot(d, d);
   const double t = l2 > 0 ? std::clamp(dot(p - a, d) / l2, 0.0, 1.0) : 0.0;
   return norm(p - (a + d * t));
 }
 
-double distance_to_path(const Vec3& p, const std::vector<Vec3>& path) {
+double distance_to_path(const geometry::Vec3& p, const std::vector<geometry::Vec3>& path) {
   double best = HUGE_VAL;
   for (std::size_t k = 0; k + 1 < path.size(); ++k) best = std::min(best, distance_to_segment(p, path[k], path[k + 1]));
   return best;
@@ -80,9 +80,9 @@ double distance_to_path(const Vec3& p, const std::vector<Vec3>& path) {
 
 // Points on a circle in `plane`: (first, second) axis coordinates as G2/G3
 // measure them, the third coordinate fixed.
-std::vector<Vec3> circle_points(Plane plane, double c0, double c1, double r, double from_deg, double to_deg,
+std::vector<geometry::Vec3> circle_points(Plane plane, double c0, double c1, double r, double from_deg, double to_deg,
                                 double step_deg, double fixed) {
-  std::vector<Vec3> pts;
+  std::vector<geometry::Vec3> pts;
   const int n = int(std::lround(std::fabs(to_deg - from_deg) / step_deg));
   for (int k = 0; k <= n; ++k) {
     const double a = (from_deg + (to_deg - from_deg) * k / n) * std::numbers::pi / 180;
@@ -104,11 +104,11 @@ ArcFitOptions two_sided(double tol) {
   return o;
 }
 
-void expect_within(const std::vector<Vec3>& pts, const std::vector<FittedMove>& moves, double tol) {
-  const std::vector<Vec3> path = cut_path(gcode_of(pts, moves), kDollar12);
+void expect_within(const std::vector<geometry::Vec3>& pts, const std::vector<FittedMove>& moves, double tol) {
+  const std::vector<geometry::Vec3> path = cut_path(gcode_of(pts, moves), kDollar12);
   ASSERT_FALSE(path.empty());
   EXPECT_LT(norm(path.back() - pts.back()), 1e-9);
-  for (const Vec3& p : pts) EXPECT_LE(distance_to_path(p, path), tol + 1e-9) << p.x << " " << p.y << " " << p.z;
+  for (const geometry::Vec3& p : pts) EXPECT_LE(distance_to_path(p, path), tol + 1e-9) << p.x << " " << p.y << " " << p.z;
 }
 
 }  // namespace
@@ -119,7 +119,7 @@ TEST(ArcFit, CircleInEachPlaneIsOneArc) {
   for (Plane plane : {Plane::XY, Plane::ZX, Plane::YZ}) {
     for (bool reverse : {false, true}) {
       SCOPED_TRACE(int(plane) * 10 + int(reverse));
-      std::vector<Vec3> pts = circle_points(plane, 3, -2, 25, 10, 150, 2, 7);
+      std::vector<geometry::Vec3> pts = circle_points(plane, 3, -2, 25, 10, 150, 2, 7);
       if (reverse) std::reverse(pts.begin(), pts.end());
       const auto moves = fit_arcs(pts, two_sided(0.01));
       ASSERT_EQ(moves.size(), 1u);
@@ -129,12 +129,12 @@ TEST(ArcFit, CircleInEachPlaneIsOneArc) {
       EXPECT_EQ(m.clockwise, reverse);
       EXPECT_NEAR(m.radius, 25, 1e-3);
       EXPECT_NEAR(m.sweep, 140 * std::numbers::pi / 180, 1e-4);
-      const Vec3 centre = pts[0] + m.center_offset;
-      const Vec3 want = plane == Plane::XY ? Vec3{3, -2, 7} : plane == Plane::ZX ? Vec3{-2, 7, 3} : Vec3{7, 3, -2};
+      const geometry::Vec3 centre = pts[0] + m.center_offset;
+      const geometry::Vec3 want = plane == Plane::XY ? geometry::Vec3{3, -2, 7} : plane == Plane::ZX ? geometry::Vec3{-2, 7, 3} : geometry::Vec3{7, 3, -2};
       // Off the plane the offset is zero; in it the centre is the circle's.
-      const Vec3 off_plane = plane == Plane::XY ? Vec3{0, 0, 1} : plane == Plane::ZX ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+      const geometry::Vec3 off_plane = plane == Plane::XY ? geometry::Vec3{0, 0, 1} : plane == Plane::ZX ? geometry::Vec3{0, 1, 0} : geometry::Vec3{1, 0, 0};
       EXPECT_EQ(dot(m.center_offset, off_plane), 0);
-      const Vec3 in_plane_error = (centre - want) - off_plane * dot(centre - want, off_plane);
+      const geometry::Vec3 in_plane_error = (centre - want) - off_plane * dot(centre - want, off_plane);
       EXPECT_LT(norm(in_plane_error), 1e-3);
       EXPECT_EQ(m.to, pts.back());
       expect_within(pts, moves, 0.01);
@@ -146,7 +146,7 @@ TEST(ArcFit, CircleInEachPlaneIsOneArc) {
 // way round: the chords pass the middle point, not the far side of the circle.
 TEST(ArcFit, WrittenDirectionRunsThroughThePoints) {
   for (Plane plane : {Plane::XY, Plane::ZX, Plane::YZ}) {
-    const std::vector<Vec3> pts = circle_points(plane, 0, 0, 10, 200, 300, 2.5, 1);
+    const std::vector<geometry::Vec3> pts = circle_points(plane, 0, 0, 10, 200, 300, 2.5, 1);
     const auto moves = fit_arcs(pts, two_sided(0.005));
     ASSERT_EQ(moves.size(), 1u);
     int arcs = 0;
@@ -161,7 +161,7 @@ TEST(ArcFit, WrittenDirectionRunsThroughThePoints) {
 }
 
 TEST(ArcFit, StraightRunStaysLines) {
-  std::vector<Vec3> pts;
+  std::vector<geometry::Vec3> pts;
   for (int k = 0; k <= 50; ++k) pts.push_back({k * 0.1, 2 + k * 0.05, -1});
   const auto moves = fit_arcs(pts, two_sided(0.01));
   ASSERT_EQ(moves.size(), 50u);
@@ -173,11 +173,11 @@ TEST(ArcFit, StraightRunStaysLines) {
 
 // Two arcs meeting at a kink (tangents 60 degrees apart): split there.
 TEST(ArcFit, KinkSplitsTheArcs) {
-  std::vector<Vec3> pts = circle_points(Plane::XY, 0, 0, 20, 0, 60, 2, 0);
-  const Vec3 kink = pts.back();
+  std::vector<geometry::Vec3> pts = circle_points(Plane::XY, 0, 0, 20, 0, 60, 2, 0);
+  const geometry::Vec3 kink = pts.back();
   // The second arc starts at the kink and turns the other way.
-  std::vector<Vec3> second = circle_points(Plane::XY, 0, 0, 15, 180, 120, 2, 0);
-  const Vec3 shift = kink - second.front();
+  std::vector<geometry::Vec3> second = circle_points(Plane::XY, 0, 0, 15, 180, 120, 2, 0);
+  const geometry::Vec3 shift = kink - second.front();
   for (std::size_t k = 1; k < second.size(); ++k) pts.push_back(second[k] + shift);
   const auto moves = fit_arcs(pts, two_sided(0.01));
   ASSERT_EQ(moves.size(), 2u);
@@ -194,7 +194,7 @@ TEST(ArcFit, KinkSplitsTheArcs) {
 TEST(ArcFit, NoisyCircleWithinTolerance) {
   std::mt19937 rng(12);
   std::uniform_real_distribution<double> noise(-0.003, 0.003);
-  std::vector<Vec3> pts = circle_points(Plane::ZX, 0, 0, 30, 30, 80, 1, 0);
+  std::vector<geometry::Vec3> pts = circle_points(Plane::ZX, 0, 0, 30, 30, 80, 1, 0);
   for (std::size_t k = 1; k + 1 < pts.size(); ++k) {
     pts[k].x += noise(rng);
     pts[k].z += noise(rng);
@@ -210,7 +210,7 @@ TEST(ArcFit, NoisyCircleWithinTolerance) {
 // GRBL's $12 is part of the budget: a tolerance below the chords' sag fits
 // no long arc; an exact controller ($12 = 0) takes them.
 TEST(ArcFit, ControllerChordsTakeTheirShare) {
-  const std::vector<Vec3> pts = circle_points(Plane::XY, 0, 0, 10, 0, 90, 1, 0);
+  const std::vector<geometry::Vec3> pts = circle_points(Plane::XY, 0, 0, 10, 0, 90, 1, 0);
   auto o = two_sided(0.001);
   const auto few = fit_arcs(pts, o);
   for (const auto& m : few) EXPECT_LT(m.sweep, 0.2);
@@ -220,12 +220,12 @@ TEST(ArcFit, ControllerChordsTakeTheirShare) {
 
 // Nearly straight runs (radius over the cap) and a huge radius stay lines.
 TEST(ArcFit, HugeRadiusStaysLines) {
-  const std::vector<Vec3> pts = circle_points(Plane::XY, 0, 0, 5000, 90, 89.9, 0.001, 0);
+  const std::vector<geometry::Vec3> pts = circle_points(Plane::XY, 0, 0, 5000, 90, 89.9, 0.001, 0);
   for (const auto& m : fit_arcs(pts, two_sided(0.01))) EXPECT_FALSE(m.arc);
 }
 
 TEST(ArcFit, BadOptionsAreRefused) {
-  const std::vector<Vec3> pts{{0, 0, 0}, {1, 0, 0}};
+  const std::vector<geometry::Vec3> pts{{0, 0, 0}, {1, 0, 0}};
   auto o = two_sided(-1);
   EXPECT_THROW(fit_arcs(pts, o), std::invalid_argument);
   o = two_sided(0.01);
@@ -245,7 +245,7 @@ TEST(ArcFit, RandomPolylinesStayWithinTolerance) {
   for (int trial = 0; trial < 60; ++trial) {
     const double tol = 0.003 + 0.02 * unit(rng);
     const double noise = tol * 0.4 * unit(rng);
-    std::vector<Vec3> pts{{0, 0, 0}};
+    std::vector<geometry::Vec3> pts{{0, 0, 0}};
     const Plane plane = trial % 3 == 0 ? Plane::XY : trial % 3 == 1 ? Plane::ZX : Plane::YZ;
     double heading = unit(rng) * 2 * std::numbers::pi;
     double u = 0, v = 0;
@@ -261,7 +261,7 @@ TEST(ArcFit, RandomPolylinesStayWithinTolerance) {
         v += step * std::sin(heading);
         const double nu = (unit(rng) - 0.5) * 2 * noise, nv = (unit(rng) - 0.5) * 2 * noise;
         const double a = std::round((u + nu) * 1e6) / 1e6, b = std::round((v + nv) * 1e6) / 1e6;
-        pts.push_back(plane == Plane::XY ? Vec3{a, b, 1} : plane == Plane::ZX ? Vec3{b, 2, a} : Vec3{3, a, b});
+        pts.push_back(plane == Plane::XY ? geometry::Vec3{a, b, 1} : plane == Plane::ZX ? geometry::Vec3{b, 2, a} : geometry::Vec3{3, a, b});
       }
     }
     const auto moves = fit_arcs(pts, two_sided(tol));
@@ -287,12 +287,12 @@ TEST(ArcFit, MaterialBelowNeverGoesUnderTheProfile) {
     const double tol = 0.004 + 0.02 * unit(rng);
     // z(s): a sum of bumps, sampled every 0.05 mm, then rounded up like the program's Z.
     const double a1 = 2 * unit(rng), w1 = 0.1 + 0.3 * unit(rng), a2 = unit(rng), w2 = 0.5 + unit(rng);
-    std::vector<Vec3> pts;
+    std::vector<geometry::Vec3> pts;
     for (int k = 0; k <= 600; ++k) {
       const double s = k * 0.05;
       double z = a1 * std::sin(w1 * s) + a2 * std::cos(w2 * s + 1);
       z = std::ceil(z * 1000 - 1e-6) / 1000;
-      pts.push_back(along_x ? Vec3{s, 4, z} : Vec3{-2, s, z});
+      pts.push_back(along_x ? geometry::Vec3{s, 4, z} : geometry::Vec3{-2, s, z});
     }
     ArcFitOptions o = two_sided(tol);
     o.material_below = true;
@@ -321,7 +321,7 @@ TEST(ArcFit, MaterialBelowNeverGoesUnderTheProfile) {
     for (std::size_t k = 0; k + 1 < pts.size(); ++k) {
       // The profile's segments, densely: never above the path.
       for (int f = 0; f <= 10; ++f) {
-        const Vec3 q = pts[k] + (pts[k + 1] - pts[k]) * (f / 10.0);
+        const geometry::Vec3 q = pts[k] + (pts[k + 1] - pts[k]) * (f / 10.0);
         worst_under = std::max(worst_under, q.z - path_z(along_x ? q.x : q.y));
       }
       worst_over = std::max(worst_over, distance_to_path(pts[k], path));
@@ -335,16 +335,16 @@ TEST(ArcFit, MaterialBelowNeverGoesUnderTheProfile) {
 namespace {
 
 // Winding test: whether p lies inside the closed polygon (x, y).
-bool inside_polygon(const Vec3& p, const std::vector<Vec3>& poly) {
+bool inside_polygon(const geometry::Vec3& p, const std::vector<geometry::Vec3>& poly) {
   bool in = false;
   for (std::size_t k = 0, m = poly.size() - 1; k < poly.size(); m = k++) {
-    const Vec3 &a = poly[k], &b = poly[m];
+    const geometry::Vec3 &a = poly[k], &b = poly[m];
     if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
   }
   return in;
 }
 
-double distance_to_polygon(const Vec3& p, const std::vector<Vec3>& poly) {
+double distance_to_polygon(const geometry::Vec3& p, const std::vector<geometry::Vec3>& poly) {
   double best = HUGE_VAL;
   for (std::size_t k = 0; k < poly.size(); ++k)
     best = std::min(best, distance_to_segment(p, poly[k], poly[(k + 1) % poly.size()]));
@@ -366,7 +366,7 @@ TEST(ArcFit, MaterialRightNeverCrossesIntoTheWall) {
     const double tol = 0.003 + 0.02 * unit(rng);
     const double r0 = 4 + 6 * unit(rng), a1 = 0.3 + 0.8 * unit(rng), a2 = 0.3 * unit(rng);
     const int k1 = 2 + int(4 * unit(rng)), k2 = 5 + int(5 * unit(rng));
-    std::vector<Vec3> loop;
+    std::vector<geometry::Vec3> loop;
     const int n = int(std::ceil(2 * std::numbers::pi * r0 / 0.05));
     for (int k = 0; k < n; ++k) {
       // Boss: clockwise (angle decreasing); pocket: counter-clockwise.
@@ -374,7 +374,7 @@ TEST(ArcFit, MaterialRightNeverCrossesIntoTheWall) {
       const double r = r0 + a1 * std::sin(k1 * t) + a2 * std::cos(k2 * t + 1);
       loop.push_back({std::round(r * std::cos(t) * 1e6) / 1e6, std::round(r * std::sin(t) * 1e6) / 1e6, -2.5});
     }
-    std::vector<Vec3> pts = loop;
+    std::vector<geometry::Vec3> pts = loop;
     pts.push_back(loop.front());
     ArcFitOptions o = two_sided(tol);
     o.material_below = true;  // as the finishing program sets it: rows are G18/G19, waterlines G17
@@ -392,11 +392,11 @@ TEST(ArcFit, MaterialRightNeverCrossesIntoTheWall) {
     double worst_in = 0;
     for (std::size_t k = 0; k + 1 < path.size(); ++k)
       for (int f = 0; f <= 8; ++f) {
-        const Vec3 q = path[k] + (path[k + 1] - path[k]) * (f / 8.0);
+        const geometry::Vec3 q = path[k] + (path[k + 1] - path[k]) * (f / 8.0);
         if (inside_polygon(q, loop) == boss) worst_in = std::max(worst_in, distance_to_polygon(q, loop));
       }
     double worst_far = 0;
-    for (const Vec3& p : pts) worst_far = std::max(worst_far, distance_to_path(p, path));
+    for (const geometry::Vec3& p : pts) worst_far = std::max(worst_far, distance_to_path(p, path));
     EXPECT_LE(worst_in, 1e-6);
     EXPECT_LE(worst_far, tol + 1e-9);
   }
@@ -411,7 +411,7 @@ TEST(ArcFit, LongStretchFittedInParallelChunksIsTheSerialFit) {
   // serial fit's, exactly.
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> noise(-2e-4, 2e-4);
-  std::vector<Vec3> pts;
+  std::vector<geometry::Vec3> pts;
   const double step = 0.05, z0 = 1.0;
   for (int row = 0; row < 12; ++row) {
     const double y = row * 0.5;

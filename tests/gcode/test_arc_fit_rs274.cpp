@@ -19,13 +19,13 @@ namespace {
 
 // Points on a circle in `plane` ((first, second) as G2/G3 measure them), at
 // the program's 3 decimals.
-std::vector<Vec3> circle(Plane plane, Vec3 start_shift, double r, double from_deg, double to_deg) {
-  std::vector<Vec3> pts;
+std::vector<geometry::Vec3> circle(Plane plane, geometry::Vec3 start_shift, double r, double from_deg, double to_deg) {
+  std::vector<geometry::Vec3> pts;
   const int n = 40;
   for (int k = 0; k <= n; ++k) {
     const double a = (from_deg + (to_deg - from_deg) * k / n) * std::numbers::pi / 180;
     const double u = r * std::cos(a), v = r * std::sin(a);
-    Vec3 p = plane == Plane::XY ? Vec3{u, v, 0} : plane == Plane::ZX ? Vec3{v, 0, u} : Vec3{0, u, v};
+    geometry::Vec3 p = plane == Plane::XY ? geometry::Vec3{u, v, 0} : plane == Plane::ZX ? geometry::Vec3{v, 0, u} : geometry::Vec3{0, u, v};
     p = p + start_shift;
     pts.push_back({std::round(p.x * 1e3) / 1e3, std::round(p.y * 1e3) / 1e3, std::round(p.z * 1e3) / 1e3});
   }
@@ -42,12 +42,12 @@ TEST(ArcFitRs274, LinuxCncAgreesInAllThreePlanes) {
   ArcFitOptions o;
   o.tolerance = 0.01;
   int arcs = 0;
-  Vec3 at{0, 0, 5};
+  geometry::Vec3 at{0, 0, 5};
   const Plane planes[] = {Plane::XY, Plane::ZX, Plane::YZ};
   for (int k = 0; k < 6; ++k) {
     const Plane plane = planes[k % 3];
     const bool reverse = k >= 3;
-    std::vector<Vec3> pts = circle(plane, at + Vec3{1, 2, 3}, 12.5 + k, reverse ? 160 : 20, reverse ? 20 : 160);
+    std::vector<geometry::Vec3> pts = circle(plane, at + geometry::Vec3{1, 2, 3}, 12.5 + k, reverse ? 160 : 20, reverse ? 20 : 160);
     w.feed(pts[0].x, pts[0].y, pts[0].z, 400);
     for (const FittedMove& m : fit_arcs(pts, o)) {
       if (!m.arc) {
@@ -102,11 +102,11 @@ TEST(ArcFitRs274, RasterProfilesAreAccepted) {
   o.material_below = true;
   int arcs = 0;
   for (int row = 0; row < 4; ++row) {
-    std::vector<Vec3> pts;
+    std::vector<geometry::Vec3> pts;
     for (int k = 0; k <= 400; ++k) {
       const double s = k * 0.05;
       const double z = std::ceil((-3 + 2 * std::sin(0.3 * s + row) + 0.5 * std::cos(0.9 * s)) * 1000 - 1e-6) / 1000;
-      pts.push_back(row % 2 == 0 ? Vec3{s, 0.4 * row, z} : Vec3{0.4 * row, s, z});
+      pts.push_back(row % 2 == 0 ? geometry::Vec3{s, 0.4 * row, z} : geometry::Vec3{0.4 * row, s, z});
     }
     w.rapid(std::nullopt, std::nullopt, 5);
     w.rapid(pts[0].x, pts[0].y, std::nullopt);

@@ -93,7 +93,7 @@ TEST(Interpreter, ErrorLeavesStateUntouched) {
   BlockResult r = run(s, "G90 G0 X5 X6");
   EXPECT_EQ(r.status, 25);
   EXPECT_TRUE(r.state.modal.incremental);
-  EXPECT_EQ(r.state.position, (Vec3{1, 0, 0}));
+  EXPECT_EQ(r.state.position, (geometry::Vec3{1, 0, 0}));
 }
 
 TEST(Interpreter, ModalMotionAndUnits) {
@@ -114,9 +114,9 @@ TEST(Interpreter, ModalMotionAndUnits) {
 
 TEST(Interpreter, WorkOffsetsG10G92G54) {
   ParserState s = run_ok({}, "G10 L2 P2 X10 Y20 Z-5");
-  EXPECT_EQ(s.coords.wcs[1], (Vec3{10, 20, -5}));
+  EXPECT_EQ(s.coords.wcs[1], (geometry::Vec3{10, 20, -5}));
   s = run_ok(s, "G55 G0 X1 Y1 Z1");
-  EXPECT_EQ(s.position, (Vec3{11, 21, -4}));
+  EXPECT_EQ(s.position, (geometry::Vec3{11, 21, -4}));
   s = run_ok(s, "G92 X0 Y0");  // here is now work 0,0
   EXPECT_NEAR(s.work_position().x, 0, 1e-12);
   EXPECT_NEAR(s.work_position().z, 1, 1e-12);
@@ -132,15 +132,15 @@ TEST(Interpreter, WorkOffsetsG10G92G54) {
 TEST(Interpreter, G28AndG30) {
   ParserState s = run_ok({}, "G0 X5 Y6 Z7");
   s = run_ok(s, "G28.1");
-  EXPECT_EQ(s.coords.g28, (Vec3{5, 6, 7}));
+  EXPECT_EQ(s.coords.g28, (geometry::Vec3{5, 6, 7}));
   s = run_ok(s, "G0 X0 Y0 Z0");
   BlockResult r = run(s, "G28 Z3");  // via Z3, then Z to the stored Z only
   ASSERT_TRUE(r.ok());
   ASSERT_EQ(r.actions.size(), 2u);
-  EXPECT_EQ(std::get<LinearMove>(r.actions[1]).to, (Vec3{0, 0, 7}));
+  EXPECT_EQ(std::get<LinearMove>(r.actions[1]).to, (geometry::Vec3{0, 0, 7}));
   r = run(s, "G28");
   ASSERT_EQ(r.actions.size(), 1u);
-  EXPECT_EQ(r.state.position, (Vec3{5, 6, 7}));
+  EXPECT_EQ(r.state.position, (geometry::Vec3{5, 6, 7}));
 }
 
 TEST(Interpreter, ArcsRadiusAndCentre) {
@@ -158,13 +158,13 @@ TEST(Interpreter, ArcsRadiusAndCentre) {
   EXPECT_NEAR(arc_angular_travel(arc), 2 * M_PI, 1e-9);
   const auto pts = segment_arc(arc, 0.002);
   EXPECT_GT(pts.size(), 50u);
-  for (const Vec3& p : pts) EXPECT_NEAR(std::hypot(p.x - 5, p.y), 5, 1e-9);
+  for (const geometry::Vec3& p : pts) EXPECT_NEAR(std::hypot(p.x - 5, p.y), 5, 1e-9);
   // G18 arc: in the ZX plane the offsets are K and I.
   r = run(s, "G18 G2 X10 Z0 I5 K0");
   ASSERT_TRUE(r.ok());
   arc = std::get<ArcMove>(r.actions[0]);
   EXPECT_EQ(arc.plane, Plane::ZX);
-  for (const Vec3& p : segment_arc(arc, 0.01)) {
+  for (const geometry::Vec3& p : segment_arc(arc, 0.01)) {
     EXPECT_NEAR(std::hypot(p.x - 5, p.z), 5, 1e-9);
     EXPECT_NEAR(p.y, 0, 1e-12);
   }
@@ -208,8 +208,8 @@ TEST(Interpreter, InverseTimeArcTakesOneOverFMinutes) {
   ASSERT_TRUE(r.ok());
   c = arc_chords(std::get<ArcMove>(r.actions[0]), 0.002);
   double length = 0;
-  Vec3 p{0, 0, 0};
-  for (const Vec3& q : c.points) {
+  geometry::Vec3 p{0, 0, 0};
+  for (const geometry::Vec3& q : c.points) {
     length += norm(q - p);
     p = q;
   }

@@ -35,7 +35,7 @@ std::size_t index_of(const std::vector<std::string>& lines, const std::string& l
   return lines.size();
 }
 
-std::vector<Polyline> square(double z) {
+std::vector<cam::Polyline> square(double z) {
   return {{{0, 0, z}, {10, 0, z}, {10, 10, z}, {0, 10, z}, {0, 0, z}}};
 }
 
@@ -54,9 +54,9 @@ TEST(JobProgram, ToolChangeBetweenTwoToolsPausesWithTheOperatorsNote) {
   o.safe_z = 8;
   o.header_comments = {"two tools"};
   JobProgram p(o);
-  p.begin_operation({"roughing", 1, Cutter::flat(6), 16000});
+  p.begin_operation({"roughing", 1, cam::Cutter::flat(6), 16000});
   write_pieces(p.writer(), square(-2), {}, feeds(), p.stats());
-  p.begin_operation({"finishing", 2, Cutter::ball(3.175), 18000});
+  p.begin_operation({"finishing", 2, cam::Cutter::ball(3.175), 18000});
   write_pieces(p.writer(), square(-3), {}, feeds(), p.stats());
   const std::string text = p.finish();
   const auto lines = lines_of(text);
@@ -95,9 +95,9 @@ TEST(JobProgram, ToolChangeBetweenTwoToolsPausesWithTheOperatorsNote) {
   // M6 instead of M0 where the controller has one.
   o.tool_change = ToolChangeCode::M6;
   JobProgram q(o);
-  q.begin_operation({"roughing", 1, Cutter::flat(6), 16000});
+  q.begin_operation({"roughing", 1, cam::Cutter::flat(6), 16000});
   write_pieces(q.writer(), square(-2), {}, feeds(), q.stats());
-  q.begin_operation({"finishing", 2, Cutter::ball(3.175), 18000});
+  q.begin_operation({"finishing", 2, cam::Cutter::ball(3.175), 18000});
   write_pieces(q.writer(), square(-3), {}, feeds(), q.stats());
   const auto m6_lines = lines_of(q.finish());
   EXPECT_EQ(index_of(m6_lines, "M0"), m6_lines.size());
@@ -108,9 +108,9 @@ TEST(JobProgram, SameToolGoesOnWithoutAPauseAndTheProgramRuns) {
   JobProgramOptions o;
   o.safe_z = 8;
   JobProgram p(o);
-  p.begin_operation({"roughing", 1, Cutter::ball(3), 18000});
+  p.begin_operation({"roughing", 1, cam::Cutter::ball(3), 18000});
   write_pieces(p.writer(), square(-2), {}, feeds(), p.stats());
-  p.begin_operation({"finishing", 1, Cutter::ball(3), 18000});
+  p.begin_operation({"finishing", 1, cam::Cutter::ball(3), 18000});
   write_pieces(p.writer(), square(-3), {}, feeds(), p.stats());
   const std::string text = p.finish();
   const auto lines = lines_of(text);
@@ -137,7 +137,7 @@ TEST(JobProgram, SameToolGoesOnWithoutAPauseAndTheProgramRuns) {
 TEST(JobProgram, RefusesAnEmptyProgramAndABadToolNumber) {
   JobProgram p(JobProgramOptions{});
   EXPECT_THROW(p.finish(), std::invalid_argument);
-  EXPECT_THROW(p.begin_operation({"x", 0, Cutter::flat(6), 1000}), std::invalid_argument);
+  EXPECT_THROW(p.begin_operation({"x", 0, cam::Cutter::flat(6), 1000}), std::invalid_argument);
 }
 
 TEST(ProgramPause, M0WordsAndNotes) {
@@ -162,11 +162,11 @@ TEST(JobProgram, OperationsAndTheToolInTheSpindleAreReadBackFromTheLines) {
   JobProgram p(o);
   // A long name wraps its comment over two lines; a bull-nose's description
   // has commas of its own.
-  p.begin_operation({"roughing", 1, Cutter::bull(6, 1), 16000});
+  p.begin_operation({"roughing", 1, cam::Cutter::bull(6, 1), 16000});
   write_pieces(p.writer(), square(-2), {}, feeds(), p.stats());
-  p.begin_operation({"rest roughing along the steepest walls of the part", 2, Cutter::ball(3.175), 18000});
+  p.begin_operation({"rest roughing along the steepest walls of the part", 2, cam::Cutter::ball(3.175), 18000});
   write_pieces(p.writer(), square(-3), {}, feeds(), p.stats());
-  p.begin_operation({"finishing", 2, Cutter::ball(3.175), 18000});
+  p.begin_operation({"finishing", 2, cam::Cutter::ball(3.175), 18000});
   write_pieces(p.writer(), square(-3.5), {}, feeds(), p.stats());
   const auto lines = lines_of(p.finish());
 
@@ -175,7 +175,7 @@ TEST(JobProgram, OperationsAndTheToolInTheSpindleAreReadBackFromTheLines) {
   EXPECT_EQ(ops[0].number, 1);
   EXPECT_EQ(ops[0].name, "roughing");
   EXPECT_EQ(ops[0].tool, 1);
-  EXPECT_EQ(ops[0].cutter, Cutter::bull(6, 1).description() + " [" + Cutter::bull(6, 1).spec() + "]");
+  EXPECT_EQ(ops[0].cutter, cam::Cutter::bull(6, 1).description() + " [" + cam::Cutter::bull(6, 1).spec() + "]");
   EXPECT_EQ(ops[1].name, "rest roughing along the steepest walls of the part");
   EXPECT_EQ(ops[1].tool, 2);
   EXPECT_EQ(ops[1].cutter, "3.175 mm ball-nose end mill [ball:3.175]");

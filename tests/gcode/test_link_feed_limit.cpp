@@ -39,7 +39,7 @@ double worst_wire_over_motion(const std::string& text, std::size_t window) {
   const auto lines = split_lines(text);
   std::vector<double> len(lines.size(), 0.0), feed(lines.size(), 0.0);
   for (const auto& s : trace.segments)
-    if (!s.rapid) len[s.source_line] += cncstream::norm(s.to - s.from), feed[s.source_line] = s.feed;
+    if (!s.rapid) len[s.source_line] += cncstream::geometry::norm(s.to - s.from), feed[s.source_line] = s.feed;
   std::vector<double> wire, motion;
   for (std::size_t i = 0; i < lines.size(); ++i)
     if (len[i] > 0) wire.push_back(grbl_line_cost(lines[i]) / kRate), motion.push_back(len[i] / feed[i] * 60);

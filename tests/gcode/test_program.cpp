@@ -17,7 +17,7 @@ TEST(Program, TraceAndErrors) {
   EXPECT_EQ(t.errors[0].status, 20);
   EXPECT_NE(t.errors[0].message().find("line 7: error:20"), std::string::npos);
   ASSERT_GT(t.segments.size(), 5u);
-  EXPECT_EQ(t.segments.back().to, (Vec3{20, 0, 5}));
+  EXPECT_EQ(t.segments.back().to, (geometry::Vec3{20, 0, 5}));
   EXPECT_EQ(t.segments.front().source_line, 3u);
 }
 
@@ -57,9 +57,9 @@ TEST(MotionPlanner, JunctionsAndLookahead) {
   std::vector<MotionBlock> straight, corner;
   for (int i = 0; i < 100; ++i) {
     if (i < 50) straight.push_back({{i * 2.0, 0, 0}, {i * 2.0 + 2, 0, 0}, 3600, false, 0, 0});
-    const Vec3 a = (i % 2) ? Vec3{1, 0, 0} : Vec3{0, 0, 0};
-    const Vec3 b = (i % 2) ? Vec3{0, 0, 0} : Vec3{1, 0, 0};
-    corner.push_back({a + Vec3{0, i * 1.0, 0}, b + Vec3{0, i + 1.0, 0}, 3600, false, 0, 0});
+    const geometry::Vec3 a = (i % 2) ? geometry::Vec3{1, 0, 0} : geometry::Vec3{0, 0, 0};
+    const geometry::Vec3 b = (i % 2) ? geometry::Vec3{0, 0, 0} : geometry::Vec3{1, 0, 0};
+    corner.push_back({a + geometry::Vec3{0, i * 1.0, 0}, b + geometry::Vec3{0, i + 1.0, 0}, 3600, false, 0, 0});
   }
   const double ts = estimate_motion_time(straight, lim);
   EXPECT_NEAR(ts, 0.6 + 64.0 / 60 + 0.6, 1e-6);  // collinear pieces plan like one move
@@ -84,7 +84,7 @@ TEST(MotionPlanner, AdvanceInPiecesMatchesEstimateAndHolds) {
   q.push({{0, 0, 0}, {100, 0, 0}, 3600, false, 0, 0});
   double t = 0, travelled = 0;
   while (!q.empty()) {
-    auto r = q.advance(0.013, [&](const Vec3& a, const Vec3& b, const MotionBlock&) { travelled += norm(b - a); });
+    auto r = q.advance(0.013, [&](const geometry::Vec3& a, const geometry::Vec3& b, const MotionBlock&) { travelled += norm(b - a); });
     t += r.time;
   }
   EXPECT_NEAR(t, 0.6 + 64.0 / 60 + 0.6, 1e-6);

@@ -7,7 +7,7 @@
 #include "cncstream/gcode/program.hpp"
 #include "cncstream/gcode/resume.hpp"
 
-using cncstream::Vec3;
+using cncstream::geometry::Vec3;
 using cncstream::gcode::choose_resume_line;
 using cncstream::gcode::LastSeen;
 using cncstream::gcode::trace_program;

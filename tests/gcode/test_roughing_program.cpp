@@ -18,16 +18,16 @@ using namespace cncstream;
 namespace {
 
 struct PocketJob {
-  Mesh mesh = zlevel_test::pocket_block();
-  Cutter cutter = Cutter::flat(6);
-  ClEngine grown{mesh, grown_cutter(cutter, 0.3)};
-  RoughingPath path;
+  geometry::Mesh mesh = zlevel_test::pocket_block();
+  cam::Cutter cutter = cam::Cutter::flat(6);
+  cam::ClEngine grown{mesh, cam::grown_cutter(cutter, 0.3)};
+  cam::RoughingPath path;
   PocketJob() {
-    RoughingParams p;
+    cam::RoughingParams p;
     p.leave = 0.3;
     p.step_down = 3;
     p.tolerance = 0.02;
-    path = build_zlevel_roughing(grown, cutter, StockBlock{-30, -25, 30, 25, 20}, p);
+    path = cam::build_zlevel_roughing(grown, cutter, cam::StockBlock{-30, -25, 30, 25, 20}, p);
   }
 };
 
@@ -35,7 +35,7 @@ struct PocketJob {
 
 TEST(RoughingProgram, RunsInTheInterpreterAndCutsThePocket) {
   const PocketJob job;
-  const Vec3 offset{30, 25, -20};  // work X0 Y0 at the block's corner, Z0 on its top
+  const geometry::Vec3 offset{30, 25, -20};  // work X0 Y0 at the block's corner, Z0 on its top
   MachiningParams mp;
   mp.feed = 1200;
   mp.plunge_feed = 300;
@@ -51,13 +51,13 @@ TEST(RoughingProgram, RunsInTheInterpreterAndCutsThePocket) {
   EXPECT_LT(st.lines, 2000u);
   EXPECT_LE(st.work_bounds.hi.z, 0.5 + 1e-9);  // the ramps start half a millimetre above the top
 
-  const GridSpec g = GridSpec::covering(-29.9627, -24.9589, 30, 25, 0.25, 0.25);
-  HeightFieldStock stock(g, 20);
+  const cam::GridSpec g = cam::GridSpec::covering(-29.9627, -24.9589, 30, 25, 0.25, 0.25);
+  cam::HeightFieldStock stock(g, 20);
   gcode::ParserState state;
   state.position = {0, 0, mp.safe_z};
   double deepest = 0, rapid_cut = 0;
   std::size_t moves = 0, arcs = 0;
-  auto cut = [&](const Vec3& a, const Vec3& b, bool rapid) {
+  auto cut = [&](const geometry::Vec3& a, const geometry::Vec3& b, bool rapid) {
     stock.cut_segment(a - offset, b - offset, job.cutter);
     (rapid ? rapid_cut : deepest) = std::max(rapid ? rapid_cut : deepest, stock.last_max_depth());
     ++moves;
@@ -75,8 +75,8 @@ TEST(RoughingProgram, RunsInTheInterpreterAndCutsThePocket) {
       if (const auto* m = std::get_if<gcode::LinearMove>(&act)) cut(m->from, m->to, m->rapid);
       if (const auto* a = std::get_if<gcode::ArcMove>(&act)) {
         ++arcs;
-        Vec3 from = a->from;
-        for (const Vec3& p : gcode::segment_arc(*a, 0.002)) {
+        geometry::Vec3 from = a->from;
+        for (const geometry::Vec3& p : gcode::segment_arc(*a, 0.002)) {
           cut(from, p, false);
           from = p;
         }
@@ -105,7 +105,7 @@ TEST(RoughingProgram, RunsInTheInterpreterAndCutsThePocket) {
 
 TEST(RoughingProgram, RejectsASafeZBelowTheClearanceAndBadFeeds) {
   const PocketJob job;
-  const Vec3 offset{0, 0, -20};
+  const geometry::Vec3 offset{0, 0, -20};
   MachiningParams mp;
   mp.safe_z = 1;  // the clearance is 2 above the stock top
   EXPECT_THROW(roughing_program(job.path, offset, mp), std::invalid_argument);
@@ -113,5 +113,5 @@ TEST(RoughingProgram, RejectsASafeZBelowTheClearanceAndBadFeeds) {
   EXPECT_NO_THROW(roughing_program(job.path, offset, mp));
   mp.plunge_feed = 0;
   EXPECT_THROW(roughing_program(job.path, offset, mp), std::invalid_argument);
-  EXPECT_THROW(roughing_program(RoughingPath{}, offset, MachiningParams{}), std::invalid_argument);
+  EXPECT_THROW(roughing_program(cam::RoughingPath{}, offset, MachiningParams{}), std::invalid_argument);
 }

@@ -29,7 +29,7 @@ constexpr double kAbove = 2e-3;
 // the edge of a steep triangle may be lit by it although it lies just
 // outside. Such a node is within this distance of where the exact surface is
 // as high as the GL value.
-double snap_distance(const GridSpec& s) { return std::hypot(s.dx, s.dy) / 256; }
+double snap_distance(const cam::GridSpec& s) { return std::hypot(s.dx, s.dy) / 256; }
 
 struct RealMesh {
   std::string file;
@@ -38,10 +38,10 @@ struct RealMesh {
 };
 void PrintTo(const RealMesh& r, std::ostream* os) { *os << r.file << " " << r.tool; }
 
-Mesh load(const RealMesh& r) {
+geometry::Mesh load(const RealMesh& r) {
   const std::string path = r.file == "plaque" ? std::string(CNCSTREAM_SOURCE_DIR) + "/examples/plaque.stl"
                                               : std::string(CNCSTREAM_SHARED_MESHES) + "/" + r.file;
-  Mesh m = load_stl(path).mesh;
+  geometry::Mesh m = geometry::load_stl(path).mesh;
   m.scale(r.scale);
   return m;
 }
@@ -57,9 +57,9 @@ struct Outcome {
 // as a sliver node if the exact surface, a sliver width away in some
 // direction, drops to within tol of the GL value (the node lies in the gap
 // between an inscribed polygon and a vertical wall of the exact surface).
-Outcome compare(const ClEngine& exact_engine, const ClGrid& exact, const ClGrid& g, double tol, double sliver) {
+Outcome compare(const cam::ClEngine& exact_engine, const cam::ClGrid& exact, const cam::ClGrid& g, double tol, double sliver) {
   Outcome o;
-  const GridSpec& s = exact.spec;
+  const cam::GridSpec& s = exact.spec;
   o.nodes = s.size();
   for (std::size_t j = 0; j < s.ny; ++j)
     for (std::size_t i = 0; i < s.nx; ++i) {
@@ -84,13 +84,13 @@ Outcome compare(const ClEngine& exact_engine, const ClGrid& exact, const ClGrid&
 // The GL grid of a part against the exact one on a grid from the part's
 // default bounds: never above it (beyond kAbove) but for snapped nodes,
 // never more than tol below it but in the rim slivers, few of either.
-void expect_gl_bounds_exact(const Mesh& m, const Cutter& c, const GridSpec& spec, double tol, const std::string& what) {
-  const ClEngine engine(m, c);
-  const ClGrid exact = engine.compute(spec);
+void expect_gl_bounds_exact(const geometry::Mesh& m, const cam::Cutter& c, const cam::GridSpec& spec, double tol, const std::string& what) {
+  const cam::ClEngine engine(m, c);
+  const cam::ClGrid exact = engine.compute(spec);
   gl::GlClOptions o;
   o.tolerance = tol;
   gl::GlClStats st;
-  const ClGrid g = gl::compute_cl_grid_gl(m, c, spec, o, &st);
+  const cam::ClGrid g = gl::compute_cl_grid_gl(m, c, spec, o, &st);
   ASSERT_EQ(g.z.size(), exact.z.size());
   EXPECT_EQ(g.floor, exact.floor);
   const Outcome r = compare(engine, exact, g, tol, st.sliver_width);
@@ -116,15 +116,15 @@ void expect_gl_bounds_exact(const Mesh& m, const Cutter& c, const GridSpec& spec
 class GlClRealMesh : public ::testing::TestWithParam<RealMesh> {};
 
 TEST_P(GlClRealMesh, WithinTheToleranceBelowTheExactGridAndNeverAbove) {
-  const Mesh m = load(GetParam());
+  const geometry::Mesh m = load(GetParam());
   // The plaque's 17,500 vertex offsets and the lion's at 0.1 mm take over 10 s
   // in Release and ten times that under the sanitizers; 0.2 mm halves them.
   const bool large = GetParam().file == "plaque" || GetParam().file == "lion_head_relief.stl";
   const double tol = large ? 0.2 : 0.1;
-  const Cutter c = parse_cutter_spec(GetParam().tool);
-  const XYBounds b = default_bounds(m, c);
+  const cam::Cutter c = cam::parse_cutter_spec(GetParam().tool);
+  const cam::XYBounds b = cam::default_bounds(m, c);
   const double step = std::max(b.x1 - b.x0, b.y1 - b.y0) / 100;
-  const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, step, step * 1.07);
+  const cam::GridSpec spec = cam::GridSpec::covering(b.x0, b.y0, b.x1, b.y1, step, step * 1.07);
   expect_gl_bounds_exact(m, c, spec, tol, GetParam().file);
 }
 
@@ -165,17 +165,17 @@ INSTANTIATE_TEST_SUITE_P(Shared, GlClRealMesh, ::testing::ValuesIn(real_meshes()
 // grid equals the exact one to float precision, for every cutter; with the
 // flat cutter the edges' sweeps are flat too.
 TEST(GlClEngine, HorizontalFacetIsErrorFree) {
-  Mesh m;
+  geometry::Mesh m;
   m.vertices = {{0, 0, 5}, {40, 0, 5}, {40, 30, 5}, {0, 30, 5}};
   m.triangles = {{0, 1, 2}, {0, 2, 3}};
-  for (const Cutter& c : {Cutter::flat(6), Cutter::ball(6), Cutter::bull(6, 1)}) {
+  for (const cam::Cutter& c : {cam::Cutter::flat(6), cam::Cutter::ball(6), cam::Cutter::bull(6, 1)}) {
     SCOPED_TRACE(c.spec());
-    const GridSpec spec = GridSpec::covering(-4, -4, 44, 34, 0.25, 0.25);
-    const ClEngine engine(m, c);
-    const ClGrid exact = engine.compute(spec);
+    const cam::GridSpec spec = cam::GridSpec::covering(-4, -4, 44, 34, 0.25, 0.25);
+    const cam::ClEngine engine(m, c);
+    const cam::ClGrid exact = engine.compute(spec);
     gl::GlClOptions o;
     o.tolerance = 0.1;
-    const ClGrid g = gl::compute_cl_grid_gl(m, c, spec, o);
+    const cam::ClGrid g = gl::compute_cl_grid_gl(m, c, spec, o);
     std::size_t checked = 0;
     for (std::size_t j = 0; j < spec.ny; ++j)
       for (std::size_t i = 0; i < spec.nx; ++i) {
@@ -184,7 +184,7 @@ TEST(GlClEngine, HorizontalFacetIsErrorFree) {
         // Flat cutter: also beside the plate's sides (not near its corners,
         // where the vertex discs' rims are polygons).
         const double out = std::max({-x, x - 40, -y, y - 30, 0.0});  // distance from the plate's sides
-        const bool beside_side = c.type == CutterType::Flat && out < c.radius - 1e-6 &&
+        const bool beside_side = c.type == cam::CutterType::Flat && out < c.radius - 1e-6 &&
                                  ((x >= 0 && x <= 40) || (y >= 0 && y <= 30));
         if (!over_plate && !beside_side) continue;
         ++checked;
@@ -201,26 +201,26 @@ TEST(GlClEngine, HorizontalFacetIsErrorFree) {
 // never above it but for float rounding and snapped nodes, never more than
 // the tolerance below it outside the rim slivers.
 TEST(GlClEngine, VBitAndTaperedBallAgreeWithTheExactEngine) {
-  Mesh m;
+  geometry::Mesh m;
   // A pyramid (faces at about 43 to 60 degrees) on a block with vertical walls.
   m.vertices = {{-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0},
                 {-10, -10, 3}, {10, -10, 3}, {10, 10, 3}, {-10, 10, 3}, {3, -2, 15}};
   m.triangles = {{4, 5, 8}, {5, 6, 8}, {6, 7, 8}, {7, 4, 8}, {0, 1, 5}, {0, 5, 4},
                  {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
-  for (const Cutter& c : {parse_cutter_spec("vbit:90:6"), parse_cutter_spec("taper:1:5:3.175"),
-                          grown_cutter(parse_cutter_spec("taper:1:5:3.175"), 0.5)}) {
+  for (const cam::Cutter& c : {cam::parse_cutter_spec("vbit:90:6"), cam::parse_cutter_spec("taper:1:5:3.175"),
+                          cam::grown_cutter(cam::parse_cutter_spec("taper:1:5:3.175"), 0.5)}) {
     SCOPED_TRACE(c.description());
-    const XYBounds b = default_bounds(m, c);
-    const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 0.25, 0.25);
+    const cam::XYBounds b = cam::default_bounds(m, c);
+    const cam::GridSpec spec = cam::GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 0.25, 0.25);
     expect_gl_bounds_exact(m, c, spec, 0.05, "pyramid");
     // Drawn as this cutter, not another: over the pyramid's faces the V-bit's
     // tip and the tapered ball sit where the exact engine puts them.
     gl::GlClOptions o;
     o.tolerance = 0.05;
-    const Vec3 p{2, -1, 0};  // on the pyramid's faces
-    const GridSpec one = GridSpec::covering(p.x, p.y, p.x + 1, p.y + 1, 0.5, 0.5);
-    const ClGrid g = gl::compute_cl_grid_gl(m, c, one, o);
-    const ClEngine engine(m, c);
+    const geometry::Vec3 p{2, -1, 0};  // on the pyramid's faces
+    const cam::GridSpec one = cam::GridSpec::covering(p.x, p.y, p.x + 1, p.y + 1, 0.5, 0.5);
+    const cam::ClGrid g = gl::compute_cl_grid_gl(m, c, one, o);
+    const cam::ClEngine engine(m, c);
     for (std::size_t k = 0; k < one.size(); ++k)
       EXPECT_NEAR(g.z[k], engine.height_at(one.x(k % one.nx), one.y(k / one.nx)), 0.05 + kAbove);
   }
@@ -228,18 +228,18 @@ TEST(GlClEngine, VBitAndTaperedBallAgreeWithTheExactEngine) {
 
 // A grid larger than the framebuffer is rendered in tiles: the same heights.
 TEST(GlClEngine, TilesGiveTheSameGrid) {
-  const Mesh m = load({"gearwheel.bin.stl", 1.0, ""});
-  const Cutter c = Cutter::ball(4);
-  const XYBounds b = default_bounds(m, c);
+  const geometry::Mesh m = load({"gearwheel.bin.stl", 1.0, ""});
+  const cam::Cutter c = cam::Cutter::ball(4);
+  const cam::XYBounds b = cam::default_bounds(m, c);
   // Coarse (the property is the tiles' seams, not the accuracy): 1 mm nodes,
   // offsets within 0.3 mm.
-  const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 1.0, 1.0);
+  const cam::GridSpec spec = cam::GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 1.0, 1.0);
   gl::GlClOptions o;
   o.tolerance = 0.3;
   gl::GlClStats one, many;
-  const ClGrid g1 = gl::compute_cl_grid_gl(m, c, spec, o, &one);
+  const cam::ClGrid g1 = gl::compute_cl_grid_gl(m, c, spec, o, &one);
   o.max_tile = 11;  // not a divisor of the grid: partial tiles at the ends
-  const ClGrid g2 = gl::compute_cl_grid_gl(m, c, spec, o, &many);
+  const cam::ClGrid g2 = gl::compute_cl_grid_gl(m, c, spec, o, &many);
   EXPECT_EQ(one.tiles, 1u);
   std::cout << spec.nx << " x " << spec.ny << " nodes, " << many.tiles << " tiles\n";
   EXPECT_GT(many.tiles, 8u);
@@ -253,16 +253,16 @@ TEST(GlClEngine, TilesGiveTheSameGrid) {
 // walls: the trimmed grid gouges there (far below the exact one), and is
 // still never above it.
 TEST(GlClEngine, TrimmingGougesBesideVerticalWalls) {
-  const Mesh m = load({"gearwheel.bin.stl", 1.0, ""});
-  const Cutter c = Cutter::ball(6);
-  const XYBounds b = default_bounds(m, c);
-  const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 1.0, 1.0);
-  const ClEngine engine(m, c);
-  const ClGrid exact = engine.compute(spec);
+  const geometry::Mesh m = load({"gearwheel.bin.stl", 1.0, ""});
+  const cam::Cutter c = cam::Cutter::ball(6);
+  const cam::XYBounds b = cam::default_bounds(m, c);
+  const cam::GridSpec spec = cam::GridSpec::covering(b.x0, b.y0, b.x1, b.y1, 1.0, 1.0);
+  const cam::ClEngine engine(m, c);
+  const cam::ClGrid exact = engine.compute(spec);
   gl::GlClOptions o;
   o.tolerance = 0.3;
   o.trim = true;
-  const ClGrid g = gl::compute_cl_grid_gl(m, c, spec, o);
+  const cam::ClGrid g = gl::compute_cl_grid_gl(m, c, spec, o);
   std::size_t gouges = 0;
   for (std::size_t k = 0; k < g.z.size(); ++k) {
     ASSERT_LE(g.z[k], exact.z[k] + kAbove) << "node " << k;
@@ -273,13 +273,13 @@ TEST(GlClEngine, TrimmingGougesBesideVerticalWalls) {
 }
 
 TEST(GlClEngine, NoDisplayIsAClearError) {
-  Mesh m;
+  geometry::Mesh m;
   m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   m.triangles = {{0, 1, 2}};
   gl::GlClOptions o;
   o.egl_platform = 0;  // no such EGL platform
   try {
-    gl::compute_cl_grid_gl(m, Cutter::ball(2), GridSpec::covering(0, 0, 1, 1, 0.5, 0.5), o);
+    gl::compute_cl_grid_gl(m, cam::Cutter::ball(2), cam::GridSpec::covering(0, 0, 1, 1, 0.5, 0.5), o);
     FAIL() << "no error";
   } catch (const gl::GlError& e) {
     EXPECT_NE(std::string(e.what()).find("no EGL display"), std::string::npos) << e.what();
@@ -287,15 +287,15 @@ TEST(GlClEngine, NoDisplayIsAClearError) {
 }
 
 TEST(GlClEngine, RejectsABadSpec) {
-  Mesh m;
+  geometry::Mesh m;
   m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   m.triangles = {{0, 1, 2}};
-  GridSpec s = GridSpec::covering(0, 0, 1, 1, 0.5, 0.5);
+  cam::GridSpec s = cam::GridSpec::covering(0, 0, 1, 1, 0.5, 0.5);
   s.dx = 0;
-  EXPECT_THROW(gl::compute_cl_grid_gl(m, Cutter::ball(2), s), std::invalid_argument);
+  EXPECT_THROW(gl::compute_cl_grid_gl(m, cam::Cutter::ball(2), s), std::invalid_argument);
   gl::GlClOptions o;
   o.tolerance = 0;
-  EXPECT_THROW(gl::compute_cl_grid_gl(m, Cutter::ball(2), GridSpec::covering(0, 0, 1, 1, 0.5, 0.5), o),
+  EXPECT_THROW(gl::compute_cl_grid_gl(m, cam::Cutter::ball(2), cam::GridSpec::covering(0, 0, 1, 1, 0.5, 0.5), o),
                std::invalid_argument);
 }
 

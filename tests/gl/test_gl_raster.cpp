@@ -24,9 +24,9 @@ struct Deviation {
   double above = 0;  // the most a point is above it, away from a wall's vertical step
 };
 
-Deviation deviation_from_exact(const ClEngine& engine, const RasterPath& path) {
+Deviation deviation_from_exact(const cam::ClEngine& engine, const cam::RasterPath& path) {
   Deviation d;
-  for (const Polyline& row : path.rows)
+  for (const cam::Polyline& row : path.rows)
     for (std::size_t k = 0; k < row.size(); ++k) {
       ++d.points;
       const bool beside_step = (k > 0 && std::fabs(row[k].z - row[k - 1].z) > 1) ||
@@ -34,11 +34,11 @@ Deviation deviation_from_exact(const ClEngine& engine, const RasterPath& path) {
       if (!beside_step) d.above = std::max(d.above, row[k].z - engine.height_at(row[k].x, row[k].y));
       if (k == 0) continue;
       // Along the chord every 0.01 mm, measured across it (how deep the cutter would cut).
-      const Vec3 a = row[k - 1], v = row[k] - a;
+      const geometry::Vec3 a = row[k - 1], v = row[k] - a;
       const double len = std::hypot(v.x, v.y), across = std::sqrt(1 + (len > 0 ? v.z * v.z / (len * len) : 0));
       const int n = static_cast<int>(std::ceil(len / 0.01));
       for (int s = 0; s <= n; ++s) {
-        const Vec3 p = a + v * (static_cast<double>(s) / std::max(n, 1));
+        const geometry::Vec3 p = a + v * (static_cast<double>(s) / std::max(n, 1));
         d.below = std::max(d.below, (engine.height_at(p.x, p.y) - p.z) / across);
       }
     }
@@ -49,11 +49,11 @@ Deviation deviation_from_exact(const ClEngine& engine, const RasterPath& path) {
 
 
 TEST(GlRaster, RowsFromTheDepthBufferNeverGoBelowTheExactSurface) {
-  Mesh m = load_stl(std::string(CNCSTREAM_SHARED_MESHES) + "/gearwheel.bin.stl").mesh;
+  geometry::Mesh m = geometry::load_stl(std::string(CNCSTREAM_SHARED_MESHES) + "/gearwheel.bin.stl").mesh;
   m.scale(2.5);
-  const Cutter c = Cutter::ball(6);
-  const ClEngine engine(m, c);
-  RasterOptions ro;
+  const cam::Cutter c = cam::Cutter::ball(6);
+  const cam::ClEngine engine(m, c);
+  cam::RasterOptions ro;
   ro.stepover = 2;
   ro.step = 0.2;
   gl::GlClOptions glo;
@@ -61,18 +61,18 @@ TEST(GlRaster, RowsFromTheDepthBufferNeverGoBelowTheExactSurface) {
   glo.lift_to_bound = true;
   gl::GlClStats st;
   std::size_t grids = 0;
-  ro.grid_source = [&](const GridSpec& spec, const Checkpoint&) {
+  ro.grid_source = [&](const cam::GridSpec& spec, const cam::Checkpoint&) {
     ++grids;
     return gl::compute_cl_grid_gl(m, c, spec, glo, &st);
   };
-  const XYBounds b = default_bounds(m, c);
-  const RasterPath path = build_raster(engine, b, ro);
+  const cam::XYBounds b = cam::default_bounds(m, c);
+  const cam::RasterPath path = cam::build_raster(engine, b, ro);
   ASSERT_GE(grids, 1u);
   EXPECT_GE(st.lifted, st.height_error_bound);
 
   const Deviation gl_dev = deviation_from_exact(engine, path);
   ro.grid_source = {};
-  const Deviation exact_dev = deviation_from_exact(engine, build_raster(engine, b, ro));
+  const Deviation exact_dev = deviation_from_exact(engine, cam::build_raster(engine, b, ro));
   std::printf("  depth buffer: %zu points, %zu nodes raised to the exact surface, lift %.4f mm, below %.2g mm, above "
               "%.4f mm; exact: %zu points, below %.2g mm\n",
               gl_dev.points, path.raised_to_exact, st.lifted, gl_dev.below, gl_dev.above, exact_dev.points,

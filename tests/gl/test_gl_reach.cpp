@@ -35,26 +35,26 @@ struct Probe {
 
 // Adds an item for a node at (x, y), its primitive `dist` away in direction
 // -(nx, ny), the item itself farther away still.
-using Item = std::function<void(Mesh&, double x, double y, double nx, double ny, double dist)>;
+using Item = std::function<void(geometry::Mesh&, double x, double y, double nx, double ny, double dist)>;
 
-void add_triangle(Mesh& m, const Vec3& a, const Vec3& b, const Vec3& c) {
+void add_triangle(geometry::Mesh& m, const geometry::Vec3& a, const geometry::Vec3& b, const geometry::Vec3& c) {
   const auto k = static_cast<std::uint32_t>(m.vertices.size());
   m.vertices.insert(m.vertices.end(), {a, b, c});
   m.triangles.push_back({k, k + 1, k + 2});
 }
 
 // A steep triangle whose apex (5 mm high) is the nearest point to the node.
-void vertex_item(Mesh& m, double x, double y, double nx, double ny, double dist) {
-  const Vec3 apex{x - dist * nx, y - dist * ny, 5};
-  const Vec3 back{apex.x - 3 * nx, apex.y - 3 * ny, 0}, side{-ny * 1.5, nx * 1.5, 0};
+void vertex_item(geometry::Mesh& m, double x, double y, double nx, double ny, double dist) {
+  const geometry::Vec3 apex{x - dist * nx, y - dist * ny, 5};
+  const geometry::Vec3 back{apex.x - 3 * nx, apex.y - 3 * ny, 0}, side{-ny * 1.5, nx * 1.5, 0};
   add_triangle(m, apex, back + side, back - side);
 }
 
 // A vertical fence whose top edge rises from 3 to 6 mm along it: the node is
 // beside the edge's middle, `dist` from it and from the wall below.
-void edge_item(Mesh& m, double x, double y, double nx, double ny, double dist) {
-  const Vec3 c{x - dist * nx, y - dist * ny, 0}, t{-ny * 2, nx * 2, 0};
-  const Vec3 b0 = c - t, b1 = c + t, t0 = b0 + Vec3{0, 0, 3}, t1 = b1 + Vec3{0, 0, 6};
+void edge_item(geometry::Mesh& m, double x, double y, double nx, double ny, double dist) {
+  const geometry::Vec3 c{x - dist * nx, y - dist * ny, 0}, t{-ny * 2, nx * 2, 0};
+  const geometry::Vec3 b0 = c - t, b1 = c + t, t0 = b0 + geometry::Vec3{0, 0, 3}, t1 = b1 + geometry::Vec3{0, 0, 6};
   add_triangle(m, b0, b1, t1);
   add_triangle(m, b0, t1, t0);
 }
@@ -62,25 +62,25 @@ void edge_item(Mesh& m, double x, double y, double nx, double ny, double dist) {
 // A box 5 mm high whose corner is the nearest point to the node (the
 // held-out part's case): its two walls meet there, one along (nx, ny)
 // rotated by 30 degrees.
-void corner_item(Mesh& m, double x, double y, double nx, double ny, double dist) {
+void corner_item(geometry::Mesh& m, double x, double y, double nx, double ny, double dist) {
   const double a = std::atan2(ny, nx) + M_PI / 6;  // the box lies in the quadrant beyond the corner
-  const Vec3 u{-std::cos(a), -std::sin(a), 0}, v{-std::cos(a - M_PI / 2), -std::sin(a - M_PI / 2), 0};
-  const Vec3 c{x - dist * nx, y - dist * ny, 0};
+  const geometry::Vec3 u{-std::cos(a), -std::sin(a), 0}, v{-std::cos(a - M_PI / 2), -std::sin(a - M_PI / 2), 0};
+  const geometry::Vec3 c{x - dist * nx, y - dist * ny, 0};
   // u and v point away from the node (the node sees the corner from outside).
-  const Vec3 p[4] = {c, c + u * 3, c + u * 3 + v * 3, c + v * 3};
-  const Vec3 h{0, 0, 5};
+  const geometry::Vec3 p[4] = {c, c + u * 3, c + u * 3 + v * 3, c + v * 3};
+  const geometry::Vec3 h{0, 0, 5};
   add_triangle(m, p[0] + h, p[1] + h, p[2] + h);
   add_triangle(m, p[0] + h, p[2] + h, p[3] + h);
   for (int k = 0; k < 4; ++k) {
-    const Vec3 a0 = p[k], a1 = p[(k + 1) % 4];
+    const geometry::Vec3 a0 = p[k], a1 = p[(k + 1) % 4];
     add_triangle(m, a0, a1, a1 + h);
     add_triangle(m, a0, a1 + h, a0 + h);
   }
 }
 
 struct Layout {
-  Mesh mesh;
-  GridSpec spec;
+  geometry::Mesh mesh;
+  cam::GridSpec spec;
   std::vector<Probe> probes;
 };
 
@@ -111,13 +111,13 @@ void check_reach(const Item& item, const char* what) {
   // the exact engine's touch is below the floor.
   for (const char* spec : {"ball:3.175", "flat:6", "bull:6:1", "taper:1:5:3.175"}) {
     SCOPED_TRACE(std::string(what) + " " + spec);
-    const Cutter c = parse_cutter_spec(spec);
+    const cam::Cutter c = cam::parse_cutter_spec(spec);
     const Layout l = lay_out(item, c.radius);
-    const ClEngine exact(l.mesh, c);
+    const cam::ClEngine exact(l.mesh, c);
     gl::GlClOptions o;
     o.tolerance = kTolerance;
     o.floor = 0;
-    const ClGrid g = gl::compute_cl_grid_gl(l.mesh, c, l.spec, o);
+    const cam::ClGrid g = gl::compute_cl_grid_gl(l.mesh, c, l.spec, o);
     std::size_t touched_at_reach = 0;
     for (const Probe& p : l.probes) {
       const double x = l.spec.x(p.i), y = l.spec.y(p.j);

@@ -13,13 +13,13 @@ using cncstream::gl::CutterCap;
 
 namespace {
 
-double exact_top(const Cutter& c, double rho) { return -c.profile_height(rho); }
+double exact_top(const cam::Cutter& c, double rho) { return -c.profile_height(rho); }
 
 // The cap's height at (x, y) by barycentric interpolation; false outside it.
 bool cap_height(const CutterCap& cap, double x, double y, double& z) {
   const auto& P = cap.points();
   for (const auto& t : cap.triangles()) {
-    const Vec3 a = P[t[0]], b = P[t[1]], c = P[t[2]];
+    const geometry::Vec3 a = P[t[0]], b = P[t[1]], c = P[t[2]];
     const double det = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
     const double l1 = ((x - a.x) * (c.y - a.y) - (y - a.y) * (c.x - a.x)) / det;
     const double l2 = ((b.x - a.x) * (y - a.y) - (b.y - a.y) * (x - a.x)) / det;
@@ -35,7 +35,7 @@ bool cap_height(const CutterCap& cap, double x, double y, double& z) {
 }  // namespace
 
 TEST(CutterCap, PointsLieOnTheCutterSurface) {
-  for (const Cutter& c : {Cutter::flat(6), Cutter::ball(6), Cutter::bull(6, 1), Cutter::bull(10, 4)}) {
+  for (const cam::Cutter& c : {cam::Cutter::flat(6), cam::Cutter::ball(6), cam::Cutter::bull(6, 1), cam::Cutter::bull(10, 4)}) {
     const CutterCap cap(c, 0.05);
     SCOPED_TRACE(c.spec());
     EXPECT_EQ(cap.spokes() % 4, 0u);
@@ -44,7 +44,7 @@ TEST(CutterCap, PointsLieOnTheCutterSurface) {
     for (std::size_t k = 0; k < rho.size(); ++k) {
       EXPECT_NEAR(cap.ring_height()[k], exact_top(c, rho[k]), 1e-12);
       for (std::size_t j = 0; j < cap.spokes(); ++j) {
-        const Vec3& p = cap.points()[1 + k * cap.spokes() + j];
+        const geometry::Vec3& p = cap.points()[1 + k * cap.spokes() + j];
         EXPECT_NEAR(std::hypot(p.x, p.y), rho[k], 1e-12);
         EXPECT_EQ(p.z, cap.ring_height()[k]);
       }
@@ -55,7 +55,7 @@ TEST(CutterCap, PointsLieOnTheCutterSurface) {
 TEST(CutterCap, WithinTheToleranceBelowTheExactSurfaceAndNeverAbove) {
   std::mt19937 rng(7);
   for (double tol : {0.1, 0.03}) {
-    for (const Cutter& c : {Cutter::flat(6), Cutter::ball(6), Cutter::bull(6, 1), Cutter::bull(10, 4)}) {
+    for (const cam::Cutter& c : {cam::Cutter::flat(6), cam::Cutter::ball(6), cam::Cutter::bull(6, 1), cam::Cutter::bull(10, 4)}) {
       SCOPED_TRACE(c.spec() + " tolerance " + std::to_string(tol));
       const CutterCap cap(c, tol);
       EXPECT_LE(cap.height_error_bound(), tol);
@@ -84,28 +84,28 @@ TEST(CutterCap, WithinTheToleranceBelowTheExactSurfaceAndNeverAbove) {
 }
 
 TEST(CutterCap, RejectsABadTolerance) {
-  EXPECT_THROW(CutterCap(Cutter::ball(6), 0), std::invalid_argument);
-  EXPECT_THROW(CutterCap(Cutter::ball(6), -1), std::invalid_argument);
-  EXPECT_THROW(CutterCap(Cutter::ball(6), NAN), std::invalid_argument);
+  EXPECT_THROW(CutterCap(cam::Cutter::ball(6), 0), std::invalid_argument);
+  EXPECT_THROW(CutterCap(cam::Cutter::ball(6), -1), std::invalid_argument);
+  EXPECT_THROW(CutterCap(cam::Cutter::ball(6), NAN), std::invalid_argument);
 }
 
 TEST(FaceOffset, TheThesisOffsetVectorForTheToolTip) {
-  std::array<Vec3, 3> t;
+  std::array<geometry::Vec3, 3> t;
   // Horizontal facet: the tip sits on it for every cutter.
-  for (const Cutter& c : {Cutter::flat(6), Cutter::ball(6), Cutter::bull(6, 1)}) {
+  for (const cam::Cutter& c : {cam::Cutter::flat(6), cam::Cutter::ball(6), cam::Cutter::bull(6, 1)}) {
     ASSERT_TRUE(gl::face_offset_triangle({0, 0, 5}, {10, 0, 5}, {0, 10, 5}, c, t));
     EXPECT_DOUBLE_EQ(t[0].z, 5);
     EXPECT_DOUBLE_EQ(t[0].x, 0);
   }
   // A 45-degree plane z = x: ball tip at x + R sin45... n = (-1, 0, 1)/sqrt2.
-  ASSERT_TRUE(gl::face_offset_triangle({0, 0, 0}, {10, 0, 10}, {0, 10, 0}, Cutter::ball(6), t));
+  ASSERT_TRUE(gl::face_offset_triangle({0, 0, 0}, {10, 0, 10}, {0, 10, 0}, cam::Cutter::ball(6), t));
   const double s = std::sqrt(0.5);
   EXPECT_NEAR(t[0].x, -3 * s, 1e-12);
   EXPECT_NEAR(t[0].z, 3 * s - 3, 1e-12);
   // Flat: moved by R horizontally down the slope, z unchanged.
-  ASSERT_TRUE(gl::face_offset_triangle({0, 0, 0}, {10, 0, 10}, {0, 10, 0}, Cutter::flat(6), t));
+  ASSERT_TRUE(gl::face_offset_triangle({0, 0, 0}, {10, 0, 10}, {0, 10, 0}, cam::Cutter::flat(6), t));
   EXPECT_NEAR(t[0].x, -3, 1e-12);
   EXPECT_NEAR(t[0].z, 0, 1e-12);
   // Vertical facet: no face offset.
-  EXPECT_FALSE(gl::face_offset_triangle({0, 0, 0}, {10, 0, 0}, {0, 0, 10}, Cutter::ball(6), t));
+  EXPECT_FALSE(gl::face_offset_triangle({0, 0, 0}, {10, 0, 0}, {0, 0, 10}, cam::Cutter::ball(6), t));
 }

@@ -15,7 +15,7 @@ std::filesystem::path out_dir() {
 }  // namespace
 
 TEST(Image, FontSheet) {
-  RgbImage img(16 * 6 * 4 + 16, 7 * 11 * 4 + 16);
+  image::RgbImage img(16 * 6 * 4 + 16, 7 * 11 * 4 + 16);
   for (int row = 0; row < 6; ++row) {
     std::string s;
     for (int c = 0; c < 16; ++c) {
@@ -25,5 +25,5 @@ TEST(Image, FontSheet) {
     img.draw_text(8, 8 + row * 11 * 4, s, {0, 0, 0}, 4);
   }
   img.draw_text(8, 8 + 6 * 44, "Height 12.5 mm gjpqy", {200, 0, 0}, 4);
-  write_png(out_dir() / "font_sheet.png", img);
+  image::write_png(out_dir() / "font_sheet.png", img);
 }

@@ -45,7 +45,7 @@ std::string dome_program() {
   return g + "G0 Z5\nG0 X-30 Y-30\nM2\n";
 }
 
-std::size_t count_points(const std::vector<std::vector<Vec3>>& lines) {
+std::size_t count_points(const std::vector<std::vector<geometry::Vec3>>& lines) {
   std::size_t n = 0;
   for (const auto& l : lines) n += l.size();
   return n;
@@ -54,19 +54,19 @@ std::size_t count_points(const std::vector<std::vector<Vec3>>& lines) {
 }  // namespace
 
 TEST(HeightPreview, GridResampledOverTheRowsKeepsTheHighestNode) {
-  ClGrid g;
-  g.spec = GridSpec{0, 0, 0.1, 0.5, 301, 41};  // 30 x 20 mm
+  cam::ClGrid g;
+  g.spec = cam::GridSpec{0, 0, 0.1, 0.5, 301, 41};  // 30 x 20 mm
   g.z.resize(g.spec.size());
   for (std::size_t j = 0; j < g.spec.ny; ++j)
     for (std::size_t i = 0; i < g.spec.nx; ++i)
       g.at(i, j) = 5 - (std::pow(g.spec.x(i) - 15, 2) + std::pow(g.spec.y(j) - 10, 2)) / 20;
   // The rows reach a shorter last row at y = 20.3 the grid lacks.
-  const XYBounds extent{0, 0, 30, 20.3};
-  const Vec3 offset{-15, -10, -5};
+  const cam::XYBounds extent{0, 0, 30, 20.3};
+  const geometry::Vec3 offset{-15, -10, -5};
   const auto h = height_preview_from_grid(g, extent, offset, 100);
   EXPECT_EQ(h.grid.nx, 100u);  // 301 nodes across: resampled to the cap
   EXPECT_EQ(h.grid.ny, 42u);   // 0.5 mm apart: as fine as the grid, never finer
-  const XYBounds b = h.bounds();
+  const cam::XYBounds b = h.bounds();
   EXPECT_NEAR(b.x0, -15, 1e-9);
   EXPECT_NEAR(b.y0, -10, 1e-9);
   EXPECT_NEAR(b.x1, 15, 1e-9);
@@ -83,7 +83,7 @@ TEST(HeightPreview, ProgramRasterisedFromItsCutsNotItsRapids) {
   const auto trace = gcode::trace_program(dome_program());
   const auto h = height_preview_from_trace(trace, 256);
   ASSERT_FALSE(h.empty());
-  const XYBounds b = h.bounds();  // the cuts' extent; the rapid to (-30, -30) is not in it
+  const cam::XYBounds b = h.bounds();  // the cuts' extent; the rapid to (-30, -30) is not in it
   EXPECT_NEAR(b.x0, 0, 1e-9);
   EXPECT_NEAR(b.y0, 0, 1e-9);
   EXPECT_NEAR(b.x1, 20, 1e-9);
@@ -103,10 +103,10 @@ TEST(HeightPreview, ProgramRasterisedFromItsCutsNotItsRapids) {
   EXPECT_LT(at(5, 10), at(10, 10));
   EXPECT_LT(at(10, 15), at(10, 10));
   // The picture: long side as asked, square bounds give a square.
-  const RgbImage img = render_height_preview(h, 64, {0, 0, 0});
+  const image::RgbImage img = render_height_preview(h, 64, {0, 0, 0});
   EXPECT_EQ(img.width(), 64);
   EXPECT_EQ(img.height(), 64);
-  EXPECT_EQ(img.get(32, 32), colormap_viridis(std::clamp((at(10, 10) - h.z_min) / (h.z_max - h.z_min), 0.0, 1.0)));
+  EXPECT_EQ(img.get(32, 32), image::colormap_viridis(std::clamp((at(10, 10) - h.z_min) / (h.z_max - h.z_min), 0.0, 1.0)));
 }
 
 TEST(HeightPreview, APlungeCountsByItsBottomAndRapidsAloneGiveNothing) {
@@ -120,7 +120,7 @@ TEST(HeightPreview, APlungeCountsByItsBottomAndRapidsAloneGiveNothing) {
 
 TEST(PathPreview, ThinnedToTheBudgetKeepingEndsAndKinds) {
   const auto trace = gcode::trace_program(dome_program());
-  const Vec3 first = trace.segments.front().work_from(), last = trace.segments.back().work_to();
+  const geometry::Vec3 first = trace.segments.front().work_from(), last = trace.segments.back().work_to();
   const auto all = decimate_path(trace, 1000000);
   EXPECT_EQ(all.points, all.total_points + 2);  // the rapid-to-cut and cut-to-rapid corners count twice
   EXPECT_EQ(all.cuts.size(), 1u);
@@ -131,9 +131,9 @@ TEST(PathPreview, ThinnedToTheBudgetKeepingEndsAndKinds) {
     EXPECT_LE(p.points, budget) << budget;
     EXPECT_EQ(count_points(p.cuts) + count_points(p.rapids), p.points);
     // With two points the one span holds cuts: a cut; with more, rapids begin and end the path.
-    const Vec3 a = p.rapids.empty() ? p.cuts.front().front() : p.rapids.front().front();
+    const geometry::Vec3 a = p.rapids.empty() ? p.cuts.front().front() : p.rapids.front().front();
     EXPECT_EQ(a, first) << budget;
-    const Vec3 z = p.rapids.empty() ? p.cuts.back().back() : p.rapids.back().back();
+    const geometry::Vec3 z = p.rapids.empty() ? p.cuts.back().back() : p.rapids.back().back();
     EXPECT_EQ(z, last) << budget;
     if (budget >= 7) {
       EXPECT_EQ(p.cuts.size(), 1u) << budget;
@@ -151,24 +151,24 @@ TEST(PathPreview, ThinnedToTheBudgetKeepingEndsAndKinds) {
 TEST(PathPreview, AJumpOfTheWorkOffsetIsNotDrawnAcross) {
   const auto p = decimate_path(gcode::trace_program("G1 X10 F100\nG92 X0\nG1 X5\n"), 100);
   ASSERT_EQ(p.cuts.size(), 2u);
-  EXPECT_EQ(p.cuts[0].back(), (Vec3{10, 0, 0}));
-  EXPECT_EQ(p.cuts[1].front(), (Vec3{0, 0, 0}));
-  EXPECT_EQ(p.cuts[1].back(), (Vec3{5, 0, 0}));
+  EXPECT_EQ(p.cuts[0].back(), (geometry::Vec3{10, 0, 0}));
+  EXPECT_EQ(p.cuts[1].front(), (geometry::Vec3{0, 0, 0}));
+  EXPECT_EQ(p.cuts[1].back(), (geometry::Vec3{5, 0, 0}));
   EXPECT_TRUE(p.rapids.empty());
   EXPECT_EQ(decimate_path(gcode::trace_program("G21\n"), 100).points, 0u);
 }
 
 TEST(ToolpathJob, KeepsASmallHeightPreviewOfItsClGridInWorkCoordinates) {
   ToolpathParams p;
-  p.part.mesh = std::make_shared<const Mesh>(cl_test::dome_on_plate(20, 8));
+  p.part.mesh = std::make_shared<const geometry::Mesh>(cl_test::dome_on_plate(20, 8));
   p.part.stl = "dome";
-  p.cutter = parse_cutter_spec("ball:3");
+  p.cutter = cam::parse_cutter_spec("ball:3");
   p.stepover = 1;
   const auto r = generate_toolpath(p);
   EXPECT_TRUE(r.path.grid.z.empty());  // the full grid is not kept
   ASSERT_FALSE(r.preview.empty());
   EXPECT_LE(std::max(r.preview.grid.nx, r.preview.grid.ny), kPreviewSideMax);
-  const XYBounds b = r.preview.bounds();
+  const cam::XYBounds b = r.preview.bounds();
   EXPECT_NEAR(b.x0, r.path.bounds.x0 + r.work_offset.x, 1e-9);
   EXPECT_NEAR(b.y0, r.path.bounds.y0 + r.work_offset.y, 1e-9);
   EXPECT_NEAR(b.x1, r.path.bounds.x1 + r.work_offset.x, 1e-9);
@@ -179,7 +179,7 @@ TEST(ToolpathJob, KeepsASmallHeightPreviewOfItsClGridInWorkCoordinates) {
   for (const auto& s : trace.segments) {
     if (s.rapid) continue;
     const bool along = s.from.x != s.to.x || s.from.y != s.to.y;  // a plunge's top is no cut
-    for (const Vec3& q : {s.work_from(), s.work_to()}) {
+    for (const geometry::Vec3& q : {s.work_from(), s.work_to()}) {
       x0 = std::min(x0, q.x);
       x1 = std::max(x1, q.x);
       y0 = std::min(y0, q.y);

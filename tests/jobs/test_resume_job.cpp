@@ -44,7 +44,7 @@ jobs::ResumeInput input() {
 
 TEST(ResumeJob, StatusReportPicksTheLineBeingCut) {
   jobs::ResumeInput in = input();
-  in.status_work_pos = Vec3{10, 5, -1};  // half-way along line 7
+  in.status_work_pos = geometry::Vec3{10, 5, -1};  // half-way along line 7
   in.status_line = 8;
   const jobs::ResumePlan plan = jobs::plan_resume(in);
   EXPECT_EQ(plan.from_line, 6);
@@ -53,7 +53,7 @@ TEST(ResumeJob, StatusReportPicksTheLineBeingCut) {
   EXPECT_EQ(plan.file, "square.nc");
   EXPECT_EQ(plan.file_sha256, "abc");
   // The state after line 6: at (10, 0, -1), spindle on, G1 at F800.
-  const Vec3 p = plan.state.work_position();
+  const geometry::Vec3 p = plan.state.work_position();
   EXPECT_EQ(p.x, 10);
   EXPECT_EQ(p.y, 0);
   EXPECT_EQ(p.z, -1);
@@ -192,11 +192,11 @@ TEST(ResumeJob, AResumeThatRanNoFileLineContinuesWhereItWasToContinue) {
   EXPECT_EQ(plan.from_line, 6);
   EXPECT_NE(plan.reason.find("resumed after line 6"), std::string::npos) << plan.reason;
   in.last_line = 6;  // only its preamble was answered (journaled as line 6)
-  in.status_work_pos = Vec3{3, 3, 5};  // travelling above the part
+  in.status_work_pos = geometry::Vec3{3, 3, 5};  // travelling above the part
   in.status_line = 6;
   EXPECT_EQ(jobs::plan_resume(in).from_line, 6);
   in.last_line = 7;  // it ran on: the usual choice
-  in.status_work_pos = Vec3{10, 5, -1};
+  in.status_work_pos = geometry::Vec3{10, 5, -1};
   in.status_line = 7;
   EXPECT_EQ(jobs::plan_resume(in).from_line, 6);
   EXPECT_EQ(jobs::plan_resume(in).reason, "the controller last reported the tool at X10 Y5 Z-1, on line 7");
@@ -224,7 +224,7 @@ TEST(ResumeJob, TheWindowCoversThePlannerAndTheLinesAnsweredWithAnError) {
   EXPECT_EQ(jobs::plan_resume(in).from_line, 27) << "planner unknown: grblHAL's 35 + 1";
   // The last report put the tool on line 46, 18 motion lines back.
   in.planner_blocks = 15;
-  in.status_work_pos = Vec3{42.5, 0, -1};
+  in.status_work_pos = geometry::Vec3{42.5, 0, -1};
   in.status_line = 63;
   in.error_lines = {10};
   const auto plan = jobs::plan_resume(in);
@@ -233,7 +233,7 @@ TEST(ResumeJob, TheWindowCoversThePlannerAndTheLinesAnsweredWithAnError) {
   in.error_lines = {};  // a window too short for it backs off from the last answered line instead
   EXPECT_EQ(jobs::plan_resume(in).from_line, 47);
   // The machine went on past a line that failed: it runs again.
-  in.status_work_pos = Vec3{52.5, 0, -1};  // on line 56
+  in.status_work_pos = geometry::Vec3{52.5, 0, -1};  // on line 56
   in.error_lines = {53};
   const auto past = jobs::plan_resume(in);
   EXPECT_EQ(past.from_line, 52);

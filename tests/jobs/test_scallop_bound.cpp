@@ -28,12 +28,12 @@ namespace {
 
 // The pieces as the program cuts them: between two pieces up to `top`,
 // across, and down (machine_path joins consecutive pieces straight).
-std::vector<Polyline> joined_over(const std::vector<Polyline>& pieces, double top) {
-  std::vector<Polyline> out;
-  for (const Polyline& pl : pieces) {
+std::vector<cam::Polyline> joined_over(const std::vector<cam::Polyline>& pieces, double top) {
+  std::vector<cam::Polyline> out;
+  for (const cam::Polyline& pl : pieces) {
     if (pl.empty()) continue;
     if (!out.empty()) {
-      const Vec3 a = out.back().back(), b = pl.front();
+      const geometry::Vec3 a = out.back().back(), b = pl.front();
       out.push_back({{a.x, a.y, top}, {b.x, b.y, top}});
     }
     out.push_back(pl);
@@ -46,34 +46,34 @@ std::vector<Polyline> joined_over(const std::vector<Polyline>& pieces, double to
 TEST(ScallopBound, SteepShallowFinishingLeavesAtMostTheScallopHeight) {
   jobs::ToolpathParams p;
   p.part.stl = jobstest::plaque();
-  p.cutter = parse_cutter_spec("ball:3.175");
+  p.cutter = cam::parse_cutter_spec("ball:3.175");
   p.strategy = jobs::FinishStrategy::SteepShallow;
   p.scallop = 0.05;
   p.tolerance = 0.01;
   // The top-left corner: the rounded border, the bead's corner and legs,
   // the "C" (walls facing every way) and level ground between them.
-  p.bounds = XYBounds{-1.6, 55, 34, 101.6};
+  p.bounds = cam::XYBounds{-1.6, 55, 34, 101.6};
   const jobs::ToolpathProgram r = jobs::generate_toolpath(p);
   ASSERT_GT(r.waterline_pieces, 0u);
   // Rows over level ground farther apart than over the slopes.
   EXPECT_GT(r.path.stepover, r.path.stepover_min + 0.2);
 
-  const Mesh mesh = load_stl(jobstest::plaque()).mesh;
+  const geometry::Mesh mesh = geometry::load_stl(jobstest::plaque()).mesh;
   const double top = mesh.bounds().hi.z + 2;
   // Inside the window by more than the ball's radius: no edge effects.
-  const GridSpec sim = GridSpec::covering(1.0131, 57.0173, 31.6, 99.6, 0.05, 0.05);
+  const cam::GridSpec sim = cam::GridSpec::covering(1.0131, 57.0173, 31.6, 99.6, 0.05, 0.05);
   const std::vector<double> machined =
-      machine_path(sim, std::vector<double>(sim.size(), top), joined_over(r.finish_pieces, top), p.cutter);
-  const ClEngine engine(mesh, p.cutter);
+      cam::machine_path(sim, std::vector<double>(sim.size(), top), joined_over(r.finish_pieces, top), p.cutter);
+  const cam::ClEngine engine(mesh, p.cutter);
   const double R = p.cutter.radius;
-  const ClGrid dense = engine.compute(reach_lattice(sim, sim.x0 - R, sim.y0 - R, sim.x1() + R, sim.y1() + R, 0.05, 0.05));
-  const std::vector<double> reach = reach_heights(dense, p.cutter, sim, std::vector<std::uint8_t>(sim.size(), 1));
+  const cam::ClGrid dense = engine.compute(cam::reach_lattice(sim, sim.x0 - R, sim.y0 - R, sim.x1() + R, sim.y1() + R, 0.05, 0.05));
+  const std::vector<double> reach = cam::reach_heights(dense, p.cutter, sim, std::vector<std::uint8_t>(sim.size(), 1));
 
   // The part's own surface (off it, beside the plate's outer wall, the
   // ball cannot reach the floor's corner and there is no part to finish).
   // The reach lattice cannot follow a CL that drops like a cliff (a ball
   // beside a vertical wall): nodes steeper than 80 degrees do not count.
-  const DesignHeights design = design_heights(mesh, sim);
+  const cam::DesignHeights design = cam::design_heights(mesh, sim);
   // A scallop is measured across the surface: a vertical height times the
   // cosine of the part's slope there (NaN: not counted).
   auto across = [&](std::size_t i, std::size_t j) {

@@ -31,7 +31,7 @@ namespace {
 jobs::SelectionParams coarse_plaque() {
   jobs::SelectionParams p;
   p.part.stl = plaque();
-  p.cutters = CutterPair(parse_cutter_spec("ball:3.175"), parse_cutter_spec("bull:3.175:0.79"));
+  p.cutters = cam::CutterPair(cam::parse_cutter_spec("ball:3.175"), cam::parse_cutter_spec("bull:3.175:0.79"));
   p.stepover = 1;
   p.step = 0.2;
   p.scallop_tol = 0.05;
@@ -92,7 +92,7 @@ TEST(SelectionJob, SameTableAsTheCliAndTheReportFiles) {
 // its narrow cone leaves less where neither can reach the bottom.
 TEST(SelectionJob, TaperedBallBesideBallAndBullNose) {
   jobs::SelectionParams p = coarse_plaque();
-  p.tapered = parse_cutter_spec("taper:1:5:3.175");
+  p.tapered = cam::parse_cutter_spec("taper:1:5:3.175");
   const jobs::SelectionResult r = jobs::run_selection(p);
   ASSERT_TRUE(r.tapered);
   ASSERT_EQ(r.runs().size(), 3u);
@@ -137,7 +137,7 @@ TEST(SelectionJob, SelectionPathsLieOnTheToolpathJobsLattice) {
   t.cutter = s.cutters.ball;
   t.stepover = s.stepover;
   t.step = s.step;
-  t.tolerance = RasterOptions{}.tolerance;  // the selection's rows keep the raster's own
+  t.tolerance = cam::RasterOptions{}.tolerance;  // the selection's rows keep the raster's own
   t.arcs = false;                           // (with arcs the rows take half the tolerance)
   const jobs::ToolpathProgram tp = jobs::generate_toolpath(t);
   ASSERT_EQ(sel.ball.path.rows.size(), tp.path.rows.size());
@@ -160,7 +160,7 @@ TEST(PlanJob, SameOptionsAndProgramsAsTheCliWithAnyThreadLimit) {
   // The part as the CLI was given it (it names the part in the programs'
   // headers), from a mesh already loaded.
   p.selection.part.stl = "examples/plaque.stl";
-  p.selection.part.mesh = std::make_shared<const Mesh>(load_stl(plaque()).mesh);
+  p.selection.part.mesh = std::make_shared<const geometry::Mesh>(geometry::load_stl(plaque()).mesh);
   // Under the sanitizers (the test command) one run, in a task arena of one
   // thread (`--threads 1`): the CLI's plan tests run without a limit, and
   // ClEngine.SameResultForAnyThreadCount checks the engine for any count.

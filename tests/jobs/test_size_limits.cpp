@@ -14,8 +14,8 @@ using namespace cncstream;
 
 namespace {
 
-Box3 box(double x, double y, double z) {
-  Box3 b;
+geometry::Box3 box(double x, double y, double z) {
+  geometry::Box3 b;
   b.lo = {0, 0, 0};
   b.hi = {x, y, z};
   return b;
@@ -57,7 +57,7 @@ TEST(SizeLimits, AToolPathOnAHugePartIsRefusedAtOnce) {
   jobs::ToolpathParams p;
   p.part.stl = CNCSTREAM_SOURCE_DIR "/examples/plaque.stl";
   p.part.scale = 10000;
-  p.cutter = parse_cutter_spec("ball:3.175");
+  p.cutter = cam::parse_cutter_spec("ball:3.175");
   const auto t0 = std::chrono::steady_clock::now();
   const auto e = refusal([&] { (void)jobs::generate_toolpath(p); });
   EXPECT_NE(e.find("plaque.stl: the part is"), std::string::npos) << e;
@@ -67,7 +67,7 @@ TEST(SizeLimits, AToolPathOnAHugePartIsRefusedAtOnce) {
   q.part.stl = CNCSTREAM_SOURCE_DIR "/examples/plaque.stl";
   q.part.max_extent_mm = 1e9;
   q.part.scale = 100;
-  q.cutter = parse_cutter_spec("ball:3.175");
+  q.cutter = cam::parse_cutter_spec("ball:3.175");
   q.stepover = 0.0001;
   q.step = 0.0001;
   EXPECT_NE(refusal([&] { (void)jobs::generate_toolpath(q); }).find("the tool path"), std::string::npos);
@@ -76,16 +76,16 @@ TEST(SizeLimits, AToolPathOnAHugePartIsRefusedAtOnce) {
 TEST(SizeLimits, UnitsWarningNamesTheLikelyUnits) {
   using jobs::units_warning;
   // A plaque drawn in metres (0.12 m), read as mm: --units m gives 120 mm.
-  const std::string m = units_warning(box(0.12, 0.1, 0.02), LengthUnit::Millimetre, 3.175, "plaque.stl");
+  const std::string m = units_warning(box(0.12, 0.1, 0.02), geometry::LengthUnit::Millimetre, 3.175, "plaque.stl");
   EXPECT_NE(m.find("plaque.stl"), std::string::npos) << m;
   EXPECT_NE(m.find("--units m (120 mm)"), std::string::npos) << m;
   // A part drawn in inches (4.7 x 3.9 in): --units in; metres would make it 4.7 m, too large to suggest.
-  const std::string in = units_warning(box(4.7, 3.9, 0.8), LengthUnit::Millimetre, 6, "sign.stl");
+  const std::string in = units_warning(box(4.7, 3.9, 0.8), geometry::LengthUnit::Millimetre, 6, "sign.stl");
   EXPECT_NE(in.find("--units in (119 mm)"), std::string::npos) << in;
   EXPECT_EQ(in.find("--units m"), std::string::npos) << in;
   EXPECT_NE(in.find("smaller than the 6 mm cutter"), std::string::npos) << in;
   // Plausible parts: no warning.
-  EXPECT_EQ(units_warning(box(120, 100, 20), LengthUnit::Millimetre, 3.175, "p"), "");
-  EXPECT_EQ(units_warning(box(4.7, 3.9, 0.8), LengthUnit::Inch, 6, "p").find("--units in"), std::string::npos);
-  EXPECT_EQ(units_warning(box(12, 12, 3), LengthUnit::Millimetre, 6, "p"), "");
+  EXPECT_EQ(units_warning(box(120, 100, 20), geometry::LengthUnit::Millimetre, 3.175, "p"), "");
+  EXPECT_EQ(units_warning(box(4.7, 3.9, 0.8), geometry::LengthUnit::Inch, 6, "p").find("--units in"), std::string::npos);
+  EXPECT_EQ(units_warning(box(12, 12, 3), geometry::LengthUnit::Millimetre, 6, "p"), "");
 }

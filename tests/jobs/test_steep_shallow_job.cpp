@@ -19,26 +19,26 @@ using namespace cncstream;
 TEST(SteepShallowJob, EveryMoveStaysOnOrAboveTheClSurface) {
   jobs::ToolpathParams p;
   p.part.stl = jobstest::plaque();
-  p.cutter = parse_cutter_spec("ball:3.175");
+  p.cutter = cam::parse_cutter_spec("ball:3.175");
   p.stepover = 0.4;
   p.strategy = jobs::FinishStrategy::SteepShallow;
   // The left half: the outer edge, the rim, the "C" and the "S" (walls
   // taller than the ball's radius: cliffs of its CL) in half the time.
-  p.bounds = XYBounds{-1.5875, -1.5875, 50, 101.5875};
+  p.bounds = cam::XYBounds{-1.5875, -1.5875, 50, 101.5875};
   const jobs::ToolpathProgram r = jobs::generate_toolpath(p);
   ASSERT_GT(r.waterline_pieces, 0u);
-  const Mesh mesh = load_stl(jobstest::plaque()).mesh;
-  const ClEngine engine(mesh, p.cutter);
+  const geometry::Mesh mesh = geometry::load_stl(jobstest::plaque()).mesh;
+  const cam::ClEngine engine(mesh, p.cutter);
   double worst = 0;
-  Vec3 at;
+  geometry::Vec3 at;
   std::size_t piece_at = 0;
   for (std::size_t k = 0; k < r.finish_pieces.size(); ++k) {
-    const Polyline& pl = r.finish_pieces[k];
+    const cam::Polyline& pl = r.finish_pieces[k];
     for (std::size_t i = 0; i + 1 < pl.size(); ++i) {
-      const Vec3 a = pl[i], b = pl[i + 1];
+      const geometry::Vec3 a = pl[i], b = pl[i + 1];
       const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(std::hypot(b.x - a.x, b.y - a.y) / 0.02)));
       for (std::size_t s = 0; s <= n; ++s) {
-        const Vec3 q = a + (b - a) * (double(s) / double(n));
+        const geometry::Vec3 q = a + (b - a) * (double(s) / double(n));
         double below = engine.height_at(q.x, q.y) - q.z;
         // Beside a cliff of the CL (a ball's beside a wall taller than its
         // radius) a move a hair into it is far below it: what counts is
@@ -58,9 +58,9 @@ TEST(SteepShallowJob, EveryMoveStaysOnOrAboveTheClSurface) {
     }
   }
   if (worst > 1e-4) {
-    const Polyline& pl = r.finish_pieces[piece_at];
+    const cam::Polyline& pl = r.finish_pieces[piece_at];
     for (std::size_t i = 0; i + 1 < pl.size(); ++i) {
-      const Vec3 a = pl[i], b = pl[i + 1];
+      const geometry::Vec3 a = pl[i], b = pl[i + 1];
       if (std::hypot(a.x - at.x, a.y - at.y) < 3 || std::hypot(b.x - at.x, b.y - at.y) < 3)
         std::printf("%zu: %.4f,%.4f,%.4f (cl %.4f) -> %.4f,%.4f,%.4f\n", i, a.x, a.y, a.z, engine.height_at(a.x, a.y), b.x, b.y, b.z);
     }

@@ -19,13 +19,13 @@ namespace {
 
 // The first job's work zero on the machine, and the second's (the block
 // re-clamped: 7 mm further in X, 4 mm nearer in Y, its zero 1.5 mm higher).
-const Vec3 kFirstOrigin{120, 80, -42}, kSecondOrigin{127, 76, -40.5};
+const geometry::Vec3 kFirstOrigin{120, 80, -42}, kSecondOrigin{127, 76, -40.5};
 
 // What the first job left, in its work coordinates: a block X 0..40, Y 0..30
 // with its top at 0, the left half (X < 20) cut down to -3.
-HeightFieldData first_job_left() {
-  HeightFieldData d;
-  d.grid = GridSpec::covering(0, 0, 40, 30, 0.5, 0.5);
+cam::HeightFieldData first_job_left() {
+  cam::HeightFieldData d;
+  d.grid = cam::GridSpec::covering(0, 0, 40, 30, 0.5, 0.5);
   d.z.resize(d.grid.size());
   for (std::size_t j = 0; j < d.grid.ny; ++j)
     for (std::size_t i = 0; i < d.grid.nx; ++i) d.z[j * d.grid.nx + i] = d.grid.x(i) < 20 ? -3.0f : 0.0f;
@@ -45,8 +45,8 @@ struct SavedStock {
     const auto dir = std::filesystem::temp_directory_path() / ("cncstream_stock_origin_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     map = dir / "left.f32";
-    const HeightFieldData d = first_job_left();
-    write_height_field(map, d.grid, std::vector<double>(d.z.begin(), d.z.end()), std::nullopt, kFirstOrigin);
+    const cam::HeightFieldData d = first_job_left();
+    cam::write_height_field(map, d.grid, std::vector<double>(d.z.begin(), d.z.end()), std::nullopt, kFirstOrigin);
   }
   ~SavedStock() { std::filesystem::remove_all(map.parent_path()); }
 };
@@ -55,11 +55,11 @@ struct SavedStock {
 
 TEST(StockOrigin, ASecondSetupReadsTheSavedSurfaceWhereItPhysicallyIs) {
   SavedStock saved;
-  EXPECT_EQ(read_height_field(saved.map).work_origin, kFirstOrigin);
+  EXPECT_EQ(cam::read_height_field(saved.map).work_origin, kFirstOrigin);
   jobs::StockSpec spec = jobs::parse_stock_spec(saved.map.string());
   spec.work_origin = kSecondOrigin;
   // The second part sits well inside what is left, in its own work coordinates.
-  const Box3 part{Vec3{5, 5, -10}, Vec3{25, 20, -4}};
+  const geometry::Box3 part{geometry::Vec3{5, 5, -10}, geometry::Vec3{25, 20, -4}};
   const jobs::WorkStock w = jobs::resolve_stock(spec, part);
   // At every point of the second job's work area, the stock's top it plans
   // with is the physical one: so it neither cuts air above the cut half nor
@@ -75,7 +75,7 @@ TEST(StockOrigin, ASecondSetupReadsTheSavedSurfaceWhereItPhysicallyIs) {
       EXPECT_NEAR(w.top_at(x, y), physical, 1e-4) << x << "," << y;
       ++checked;
       // The old reading (the saved work coordinates taken as this job's).
-      const HeightFieldData raw = first_job_left();
+      const cam::HeightFieldData raw = first_job_left();
       const std::size_t i = static_cast<std::size_t>(std::lround(x / 0.5)), j = static_cast<std::size_t>(std::lround(y / 0.5));
       if (std::fabs(raw.z[j * raw.grid.nx + i] - physical) > 0.5) ++would_err_unplaced;
     }
@@ -91,7 +91,7 @@ TEST(StockOrigin, ASecondSetupReadsTheSavedSurfaceWhereItPhysicallyIs) {
 TEST(StockOrigin, AnUnknownWorkZeroIsRefusedNamingTheSavedOne) {
   SavedStock saved;
   const jobs::StockSpec spec = jobs::parse_stock_spec(saved.map.string());
-  const Box3 part{Vec3{5, 5, -10}, Vec3{25, 20, -4}};
+  const geometry::Box3 part{geometry::Vec3{5, 5, -10}, geometry::Vec3{25, 20, -4}};
   try {
     jobs::resolve_stock(spec, part);
     FAIL() << "accepted a saved stock without knowing this job's work zero";
@@ -107,13 +107,13 @@ TEST(StockOrigin, TheSameZeroReadsTheSurfaceUnchangedAndAnOldFileAsBefore) {
   SavedStock saved;
   jobs::StockSpec spec = jobs::parse_stock_spec(saved.map.string());
   spec.work_origin = kFirstOrigin;
-  const Box3 part{Vec3{5, 5, -10}, Vec3{35, 25, -4}};
+  const geometry::Box3 part{geometry::Vec3{5, 5, -10}, geometry::Vec3{35, 25, -4}};
   const jobs::WorkStock same = jobs::resolve_stock(spec, part);
   EXPECT_NEAR(same.top_at(10, 10), -3, 1e-6);
   EXPECT_NEAR(same.top_at(30, 10), 0, 1e-6);
   // A file without an origin (written before origins were recorded): its own work coordinates.
-  const HeightFieldData d = first_job_left();
-  write_height_field(saved.map, d.grid, std::vector<double>(d.z.begin(), d.z.end()));
+  const cam::HeightFieldData d = first_job_left();
+  cam::write_height_field(saved.map, d.grid, std::vector<double>(d.z.begin(), d.z.end()));
   spec.work_origin = kSecondOrigin;
   EXPECT_NEAR(jobs::resolve_stock(spec, part).top_at(10, 10), -3, 1e-6);
 }

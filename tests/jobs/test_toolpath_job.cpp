@@ -27,7 +27,7 @@ namespace {
 jobs::ToolpathParams plaque_params() {
   jobs::ToolpathParams p;
   p.part.stl = plaque();
-  p.cutter = parse_cutter_spec("ball:3.175");
+  p.cutter = cam::parse_cutter_spec("ball:3.175");
   p.stepover = 0.4;
   p.step = 0.05;
   return p;
@@ -68,7 +68,7 @@ TEST(ToolpathJob, SameProgramFromAMeshAndWithOneThread) {
   p.step = 0.1;
   const jobs::ToolpathProgram from_file = jobs::generate_toolpath(p);
   jobs::ToolpathParams q = p;
-  q.part.mesh = std::make_shared<const Mesh>(load_stl(plaque()).mesh);
+  q.part.mesh = std::make_shared<const geometry::Mesh>(geometry::load_stl(plaque()).mesh);
   q.part.stl = plaque();  // names it in the header only
   jobs::JobControl one;
   one.threads = 1;
@@ -84,7 +84,7 @@ TEST(ToolpathJob, StopFromAnotherThreadCancelsAndWritesNothing) {
   // From the block with a roughing cutter: the roughing's path runs beside
   // the finishing, and the stop must end it too.
   p.stock = jobs::StockSpec{};
-  p.rough = parse_cutter_spec("flat:6");
+  p.rough = cam::parse_cutter_spec("flat:6");
 
   std::stop_source stop;
   std::mutex mutex;
@@ -145,7 +145,7 @@ TEST(ToolpathJob, OperationsBesideTheFinishingGiveTheSameProgramAsOneThread) {
   // The roughing's path and the rest machining run beside the finishing;
   // with one thread they run after it. The program is the same either way.
   jobs::ToolpathParams p = test::v_groove_job("ball:6", "ball:2");
-  p.rough = parse_cutter_spec("flat:6");
+  p.rough = cam::parse_cutter_spec("flat:6");
   p.stock = jobs::StockSpec{};
   p.stepover = 1.0;
   p.step = 0.1;
@@ -185,7 +185,7 @@ TEST(ToolpathJob, TwoJobsAtOnceGiveTheProgramsOfOneAtATime) {
   jobs::ToolpathParams a = plaque_params(), b = plaque_params();
   a.stepover = b.stepover = 1.0;
   a.step = b.step = 0.1;
-  b.cutter = parse_cutter_spec("bull:3.175:0.79");
+  b.cutter = cam::parse_cutter_spec("bull:3.175:0.79");
   const std::string alone_a = jobs::generate_toolpath(a).gcode;
   const std::string alone_b = jobs::generate_toolpath(b).gcode;
   std::string together_a, together_b;

@@ -24,7 +24,7 @@ constexpr double kThickness = 5, kLip = 3;
 
 cncsim::MachineOptions corner_machine(bool plate = true, const std::string& tool = "flat:6") {
   cncsim::MachineOptions o;
-  o.tool_shapes[0] = parse_cutter_spec(tool);
+  o.tool_shapes[0] = cam::parse_cutter_spec(tool);
   if (plate)
     o.probe_faces.push_back(cncsim::parse_corner_plate(fmt::format("{},{}", kThickness, kLip), kCornerX, kCornerY, kTopZ));
   return o;
@@ -46,14 +46,14 @@ struct CornerBench : test::RoutineBench {
     command("G10 L2 P1 X1 Y2 Z3");
     if (!setup.empty()) command(setup);
     command("G53 G0 X45 Y40 Z" + std::to_string(kTopZ + kThickness + 10));  // over the plate, 10 mm above it
-    m.set_motion_observer([this](const Vec3& a, const Vec3& b, bool rapid) {
+    m.set_motion_observer([this](const geometry::Vec3& a, const geometry::Vec3& b, bool rapid) {
       if (rapid && std::hypot(b.x - a.x, b.y - a.y) > 2.5)
         lowest_xy_travel_z = std::min(lowest_xy_travel_z, std::min(a.z, b.z));
     });
   }
-  Vec3 g54() const { return m.parser().coords.wcs[0]; }
+  geometry::Vec3 g54() const { return m.parser().coords.wcs[0]; }
   // Where the block's corner (on its top) is in work coordinates now.
-  Vec3 corner_in_work() const { return Vec3{kCornerX, kCornerY, kTopZ} - m.parser().wco(); }
+  geometry::Vec3 corner_in_work() const { return geometry::Vec3{kCornerX, kCornerY, kTopZ} - m.parser().wco(); }
 };
 
 }  // namespace
@@ -70,7 +70,7 @@ TEST(CornerProbe, FindsTheBlocksCornerWithin10Microns) {
   EXPECT_NEAR(*res.top_z, kTopZ, 0.01);
   EXPECT_TRUE(res.applied);
   // Work zero is the corner on the block's top.
-  const Vec3 c = b.corner_in_work();
+  const geometry::Vec3 c = b.corner_in_work();
   EXPECT_NEAR(c.x, 0, 0.01);
   EXPECT_NEAR(c.y, 0, 0.01);
   EXPECT_NEAR(c.z, 0, 0.01);
@@ -95,7 +95,7 @@ TEST(CornerProbe, AccountsForABallCuttersRadiusAndAnActiveG92) {
   CornerProbeRoutine r(corner_config(CornerAxes::XYZ, 3.175));
   b.run(r);
   ASSERT_TRUE(r.succeeded()) << r.failure();
-  const Vec3 c = b.corner_in_work();
+  const geometry::Vec3 c = b.corner_in_work();
   EXPECT_NEAR(c.x, 0, 0.01);
   EXPECT_NEAR(c.y, 0, 0.01);
   EXPECT_NEAR(c.z, 0, 0.01);

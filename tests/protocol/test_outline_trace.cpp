@@ -3,6 +3,8 @@
 // link leaves at most the segment in flight.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 
 #include "cncstream/gcode/program_extent.hpp"
@@ -19,22 +21,22 @@ const std::vector<std::string> kOutlineProgram = {
 
 struct OutlineBench : test::RoutineBench {
   struct Move {
-    Vec3 a, b;
+    geometry::Vec3 a, b;
     bool rapid;
   };
   std::vector<Move> moves;
   OutlineBench() : RoutineBench(cncsim::MachineOptions{}) {
     command("G10 L2 P1 X100 Y50 Z-20");
     command("G0 X0 Y0 Z1");  // work: below the program's travel height
-    m.set_motion_observer([this](const Vec3& a, const Vec3& b, bool rapid) { moves.push_back({a, b, rapid}); });
+    m.set_motion_observer([this](const geometry::Vec3& a, const geometry::Vec3& b, bool rapid) { moves.push_back({a, b, rapid}); });
   }
 };
 
 }  // namespace
 
-TEST(OutlineTrace, TracesTheProgramsExtentAtTheSafeHeight) {
+TEST(OutlineTrace, TracesTheProgramsBoxAtTheSafeHeight) {
   const auto extent = gcode::program_extent(kOutlineProgram);
-  const OutlineConfig c = outline_from_extent(extent, std::nullopt, 2000, "part.nc");
+  const OutlineConfig c = outline_from_extent(extent, std::nullopt, 2000, "part.nc", OutlineShape::Box);
   // The arc bulges to X50: the extent is the chorded arc's, as the firmware runs it.
   EXPECT_NEAR(c.x0, 2, 1e-9);
   EXPECT_NEAR(c.x1, 50, 0.01);
@@ -45,10 +47,10 @@ TEST(OutlineTrace, TracesTheProgramsExtentAtTheSafeHeight) {
   OutlineTraceRoutine r(c);
   b.run(r);
   ASSERT_TRUE(r.succeeded()) << r.failure();
-  const Vec3 wco{100, 50, -20};
+  const geometry::Vec3 wco{100, 50, -20};
   bool corners[4] = {false, false, false, false};
   for (const auto& mv : b.moves) {
-    const Vec3 a = mv.a - wco, e = mv.b - wco;
+    const geometry::Vec3 a = mv.a - wco, e = mv.b - wco;
     if (std::hypot(e.x - a.x, e.y - a.y) < 1e-9) continue;  // the climb
     // Every XY move at the safe height...
     EXPECT_NEAR(a.z, 5, 1e-6);
@@ -69,8 +71,65 @@ TEST(OutlineTrace, TracesTheProgramsExtentAtTheSafeHeight) {
   EXPECT_TRUE(b.sent_any("G1 X50.000 Y3.000 F2000.000") || b.sent_any("G1 X49.999") || b.sent_any("G1 X50.001"));
 }
 
+// The default trace: the hull of the program's moves, corner to corner, at
+// the safe height; the box's empty corner (X50 Y3, beside the arc) is never
+// visited, and every position the program moves to lies within the
+// tolerance of the traced polygon.
+TEST(OutlineTrace, TracesTheHullOfTheProgramsMovesByDefault) {
+  const auto extent = gcode::program_extent(kOutlineProgram);
+  const OutlineConfig c = outline_from_extent(extent, std::nullopt, 2000, "part.nc");
+  ASSERT_EQ(c.shape, OutlineShape::Hull);
+  ASSERT_GE(c.path.size(), 5u);
+  OutlineBench b;
+  OutlineTraceRoutine r(c);
+  b.run(r);
+  ASSERT_TRUE(r.succeeded()) << r.failure();
+  EXPECT_NE(r.summary().find("hull"), std::string::npos) << r.summary();
+  const geometry::Vec3 wco{100, 50, -20};
+  const auto segment_distance = [](const gcode::XyPoint& u, const gcode::XyPoint& v, double x, double y) {
+    const double dx = v[0] - u[0], dy = v[1] - u[1];
+    const double s = std::clamp(((x - u[0]) * dx + (y - u[1]) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
+    return std::hypot(u[0] + s * dx - x, u[1] + s * dy - y);
+  };
+  std::vector<bool> visited(c.path.size(), false);
+  for (const auto& mv : b.moves) {
+    const geometry::Vec3 a = mv.a - wco, e = mv.b - wco;
+    if (std::hypot(e.x - a.x, e.y - a.y) < 1e-9) continue;  // the climb
+    EXPECT_NEAR(a.z, 5, 1e-6);
+    EXPECT_NEAR(e.z, 5, 1e-6);
+    EXPECT_GT(std::hypot(e.x - 50, e.y - 3), 1.0) << "the box's corner beside the arc";
+    if (mv.rapid) continue;  // to the first corner
+    // Every traced piece runs along one edge of the hull...
+    bool on_edge = false;
+    for (std::size_t i = 0; i < c.path.size() && !on_edge; ++i) {
+      const auto& u = c.path[i];
+      const auto& v = c.path[(i + 1) % c.path.size()];
+      on_edge = segment_distance(u, v, a.x, a.y) < 1e-3 && segment_distance(u, v, e.x, e.y) < 1e-3;
+    }
+    EXPECT_TRUE(on_edge) << a.x << "," << a.y << " -> " << e.x << "," << e.y;
+    // ...and reaches its corners.
+    for (std::size_t k = 0; k < c.path.size(); ++k)
+      if (std::hypot(e.x - c.path[k][0], e.y - c.path[k][1]) < 1e-3) visited[k] = true;
+  }
+  for (std::size_t k = 0; k < visited.size(); ++k) EXPECT_TRUE(visited[k]) << "corner " << k;
+  // The arc's chords (what the program runs) lie within the tolerance of it.
+  for (int k = 0; k <= 90; ++k) {
+    const double a = -M_PI / 2 + M_PI * k / 90.0;
+    const gcode::XyPoint p{40 + 10 * std::cos(a), 13 + 10 * std::sin(a)};
+    double inside = 1e300;
+    for (std::size_t i = 0; i < c.path.size(); ++i) {
+      const auto& u = c.path[i];
+      const auto& v = c.path[(i + 1) % c.path.size()];
+      inside = std::min(inside, ((v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0])) /
+                                    std::hypot(v[0] - u[0], v[1] - u[1]));
+    }
+    EXPECT_GE(inside, -kOutlineHullTolerance - 0.003) << "arc point " << k;
+  }
+}
+
 TEST(OutlineTrace, ALostLinkLeavesAtMostTheSegmentInFlight) {
-  const OutlineConfig c = outline_from_extent(gcode::program_extent(kOutlineProgram), 10.0, 2000, "part.nc");
+  const OutlineConfig c =
+      outline_from_extent(gcode::program_extent(kOutlineProgram), 10.0, 2000, "part.nc", OutlineShape::Box);
   OutlineBench b;
   OutlineTraceRoutine r(c);
   std::size_t at_loss = 0;
@@ -86,7 +145,7 @@ TEST(OutlineTrace, ALostLinkLeavesAtMostTheSegmentInFlight) {
   EXPECT_EQ(b.sent.size(), at_loss);
   b.m.run_until_idle();
   // It stopped where the second segment ends: (x1, y1), not further.
-  const Vec3 w = b.m.work_position();
+  const geometry::Vec3 w = b.m.work_position();
   EXPECT_NEAR(w.x, c.x1, 1e-6);
   EXPECT_NEAR(w.y, c.y1, 1e-6);
   EXPECT_NEAR(w.z, 10, 1e-6);

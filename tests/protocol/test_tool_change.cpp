@@ -69,7 +69,7 @@ struct Bench {
     command("G1 F600");
     m.run_until_idle();
     m.take_output();
-    m.set_motion_observer([this](const Vec3& a, const Vec3& b, bool) {
+    m.set_motion_observer([this](const geometry::Vec3& a, const geometry::Vec3& b, bool) {
       if (std::hypot(b.x - a.x, b.y - a.y) > 1e-9)
         lowest_xy_travel_z = std::min(lowest_xy_travel_z, std::min(a.z, b.z) + m.tip_drop());
     });

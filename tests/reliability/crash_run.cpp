@@ -303,8 +303,8 @@ class CrashRun {
   }
 
   void compare_surfaces() {
-    const auto ref = cncstream::read_height_field(reference_);
-    const auto got = cncstream::read_height_field(result_);
+    const auto ref = cncstream::cam::read_height_field(reference_);
+    const auto got = cncstream::cam::read_height_field(result_);
     if (ref.z.size() != got.z.size()) return problem("the result grids differ in size");
     report_.nodes = ref.z.size();
     double worst = 0;

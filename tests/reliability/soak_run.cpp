@@ -413,7 +413,7 @@ class Soak {
     if (last) {
       in.last_line = last->last_line;
       if (last->status_work_pos)
-        in.status_work_pos = cncstream::Vec3{(*last->status_work_pos)[0], (*last->status_work_pos)[1],
+        in.status_work_pos = cncstream::geometry::Vec3{(*last->status_work_pos)[0], (*last->status_work_pos)[1],
                                              (*last->status_work_pos)[2]};
       in.status_line = last->status_line;
     }

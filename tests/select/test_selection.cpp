@@ -18,56 +18,56 @@ namespace {
 constexpr double kDeg = M_PI / 180;
 
 // Ball and bull-nose of 6 mm with rc = rk = R / 2, as in the thesis.
-CutterPair thesis_pair() { return CutterPair(Cutter::ball(6), Cutter::bull(6, 1.5)); }
+cam::CutterPair thesis_pair() { return cam::CutterPair(cam::Cutter::ball(6), cam::Cutter::bull(6, 1.5)); }
 
 // An X raster over [-10, 10]^2 at stepover s, machined on `sim` from a stock
 // at `top`; the scallops and the passes' y.
 struct Scallops {
-  ScallopMap map;
+  cam::ScallopMap map;
   std::vector<double> rows;
 };
-Scallops raster_scallops(const Mesh& mesh, const Cutter& cut, double s, const GridSpec& sim, const DesignHeights& design,
+Scallops raster_scallops(const geometry::Mesh& mesh, const cam::Cutter& cut, double s, const cam::GridSpec& sim, const cam::DesignHeights& design,
                          double top) {
-  const ClEngine e(mesh, cut);
-  RasterOptions o;
+  const cam::ClEngine e(mesh, cut);
+  cam::RasterOptions o;
   o.stepover = s;
   o.step = 0.1;
-  const RasterPath path = build_raster(e, {-10, -10, 10, 10}, o);
-  const auto machined = machine_path(sim, std::vector<double>(sim.size(), top), raster_pieces(path), cut);
+  const cam::RasterPath path = cam::build_raster(e, {-10, -10, 10, 10}, o);
+  const auto machined = cam::machine_path(sim, std::vector<double>(sim.size(), top), cam::raster_pieces(path), cut);
   Scallops out;
   for (const auto& r : path.rows) out.rows.push_back(r.front().y);
-  out.map = scallops_from_cut(sim, machined, design, out.rows, true);
+  out.map = cam::scallops_from_cut(sim, machined, design, out.rows, true);
   return out;
 }
 }  // namespace
 
 TEST(Selection, SwitchAnglesOfTheCorrectedFormulas) {
-  const CutterPair c = thesis_pair();
-  const double vol = switch_angle(c.rc(), d_base(RemovalCriterion::Volume, c.rc(), c.rk())) / kDeg;
-  const double area = switch_angle(c.rc(), d_base(RemovalCriterion::Area, c.rc(), c.rk())) / kDeg;
+  const cam::CutterPair c = thesis_pair();
+  const double vol = cam::switch_angle(c.rc(), cam::d_base(cam::RemovalCriterion::Volume, c.rc(), c.rk())) / kDeg;
+  const double area = cam::switch_angle(c.rc(), cam::d_base(cam::RemovalCriterion::Area, c.rc(), c.rk())) / kDeg;
   EXPECT_NEAR(vol, 34.7, 0.05);
   EXPECT_NEAR(area, 21.8, 0.1);
   // The formulas scale with the cutter: the angles depend on rk / R only.
-  EXPECT_NEAR(switch_angle(3.0, d_base(RemovalCriterion::Volume, 3.0, 3.0)) / kDeg, vol, 1e-9);
-  EXPECT_THROW(CutterPair(Cutter::ball(6), Cutter::bull(8, 1)), std::invalid_argument);
-  EXPECT_THROW(CutterPair(Cutter::flat(6), Cutter::bull(6, 1)), std::invalid_argument);
+  EXPECT_NEAR(cam::switch_angle(3.0, cam::d_base(cam::RemovalCriterion::Volume, 3.0, 3.0)) / kDeg, vol, 1e-9);
+  EXPECT_THROW(cam::CutterPair(cam::Cutter::ball(6), cam::Cutter::bull(8, 1)), std::invalid_argument);
+  EXPECT_THROW(cam::CutterPair(cam::Cutter::flat(6), cam::Cutter::bull(6, 1)), std::invalid_argument);
 }
 
 // On a plane inclined at alpha the engine's CL grids give d = rc (1 - sin a) / cos a.
 TEST(Selection, DOnInclinedPlanesMatchesTheClosedForm) {
-  const CutterPair c = thesis_pair();
-  const double dv = d_base(RemovalCriterion::Volume, c.rc(), c.rk());
+  const cam::CutterPair c = thesis_pair();
+  const double dv = cam::d_base(cam::RemovalCriterion::Volume, c.rc(), c.rk());
   for (double a_deg : {0.0, 10.0, 25.0, 34.0, 36.0, 50.0, 65.0}) {
     SCOPED_TRACE(a_deg);
     const double t = std::tan(a_deg * kDeg);
-    const Mesh plane = cl_test::terrain(0, 0, 40, 4, [&](double x, double) { return t * x; });
-    const GridSpec g = GridSpec::covering(12, 12, 28, 28, 0.5, 0.5);
-    const ClGrid ball = ClEngine(plane, c.ball).compute(g), bull = ClEngine(plane, c.radiused).compute(g);
-    const RemovalChoice ch = choose_by_removal(c, ball, bull);
-    const double expect = inclined_plane_d(c.rc(), a_deg * kDeg);
+    const geometry::Mesh plane = cl_test::terrain(0, 0, 40, 4, [&](double x, double) { return t * x; });
+    const cam::GridSpec g = cam::GridSpec::covering(12, 12, 28, 28, 0.5, 0.5);
+    const cam::ClGrid ball = cam::ClEngine(plane, c.ball).compute(g), bull = cam::ClEngine(plane, c.radiused).compute(g);
+    const cam::RemovalChoice ch = cam::choose_by_removal(c, ball, bull);
+    const double expect = cam::inclined_plane_d(c.rc(), a_deg * kDeg);
     for (std::size_t k = 0; k < g.size(); ++k) {
       ASSERT_NEAR(ch.d[k], expect, 1e-6);
-      EXPECT_EQ(ch.by_volume[k], expect > dv ? Choice::Radiused : Choice::Ball);
+      EXPECT_EQ(ch.by_volume[k], expect > dv ? cam::Choice::Radiused : cam::Choice::Ball);
       EXPECT_NEAR(ch.slope_deg[k], a_deg, 1e-6);
     }
   }
@@ -76,20 +76,20 @@ TEST(Selection, DOnInclinedPlanesMatchesTheClosedForm) {
 // The sphere and the torus: the radiused cutter wins below the switch
 // angle, the ball above it.
 TEST(Selection, SphereAndTorusSwitchAtTheAngle) {
-  const CutterPair c = thesis_pair();
-  const double sw = switch_angle(c.rc(), d_base(RemovalCriterion::Volume, c.rc(), c.rk())) / kDeg;
-  const Mesh sphere = cl_test::terrain(-40, -40, 80, 240, [](double x, double y) {
+  const cam::CutterPair c = thesis_pair();
+  const double sw = cam::switch_angle(c.rc(), cam::d_base(cam::RemovalCriterion::Volume, c.rc(), c.rk())) / kDeg;
+  const geometry::Mesh sphere = cl_test::terrain(-40, -40, 80, 240, [](double x, double y) {
     return std::sqrt(std::max(0.0, 35.0 * 35.0 - x * x - y * y));
   });
-  const Mesh torus = cl_test::terrain(-40, -40, 80, 240, [](double x, double y) {
+  const geometry::Mesh torus = cl_test::terrain(-40, -40, 80, 240, [](double x, double y) {
     const double q = std::hypot(x, y) - 22;
     return std::sqrt(std::max(0.0, 12.0 * 12.0 - q * q));
   });
-  for (const Mesh* m : {&sphere, &torus}) {
+  for (const geometry::Mesh* m : {&sphere, &torus}) {
     SCOPED_TRACE(m == &sphere ? "sphere" : "torus");
-    const GridSpec g = GridSpec::covering(-30, -30, 30, 30, 0.4, 0.4);
-    const ClGrid ball = ClEngine(*m, c.ball).compute(g), bull = ClEngine(*m, c.radiused).compute(g);
-    const RemovalChoice ch = choose_by_removal(c, ball, bull);
+    const cam::GridSpec g = cam::GridSpec::covering(-30, -30, 30, 30, 0.4, 0.4);
+    const cam::ClGrid ball = cam::ClEngine(*m, c.ball).compute(g), bull = cam::ClEngine(*m, c.radiused).compute(g);
+    const cam::RemovalChoice ch = cam::choose_by_removal(c, ball, bull);
     // On a curved surface the two cutters touch at different points (the
     // ball R sin a from its axis, the radiused rc + rk sin a), so the plane's
     // rule holds up to the curvature: nearly everywhere 2 degrees away from
@@ -100,57 +100,57 @@ TEST(Selection, SphereAndTorusSwitchAtTheAngle) {
       if (!std::isfinite(s) || s > 70) continue;
       if (s < sw - 2) {
         ++below;
-        below_ok += ch.by_volume[k] == Choice::Radiused;
+        below_ok += ch.by_volume[k] == cam::Choice::Radiused;
       } else if (s > sw + 2) {
         ++above;
-        above_ok += ch.by_volume[k] == Choice::Ball;
+        above_ok += ch.by_volume[k] == cam::Choice::Ball;
       }
     }
     EXPECT_GT(below, 1000u);
     EXPECT_GT(above, 1000u);
     EXPECT_GE(double(below_ok), 0.995 * double(below)) << below_ok << " of " << below;
     EXPECT_GE(double(above_ok), 0.98 * double(above)) << above_ok << " of " << above;
-    const SlopeProfile p = slope_profile(ch, 5);
+    const cam::SlopeProfile p = cam::slope_profile(ch, 5);
     EXPECT_NEAR(p.switch_deg_volume, sw, 2.5);
   }
 }
 
 TEST(Selection, TwoDimensionalScallopEstimate) {
-  const Cutter ball = Cutter::ball(6), bull = Cutter::bull(6, 1.5);
-  EXPECT_NEAR(scallop_2d(ball, 1.0, 0), 3 - std::sqrt(9 - 0.25), 1e-5);
-  EXPECT_NEAR(scallop_2d(bull, 1.0, 0), 0, 1e-9);  // flat bottom wider than the stepover
-  EXPECT_GT(scallop_2d(bull, 1.0, 30 * kDeg), scallop_2d(ball, 1.0, 30 * kDeg));
+  const cam::Cutter ball = cam::Cutter::ball(6), bull = cam::Cutter::bull(6, 1.5);
+  EXPECT_NEAR(cam::scallop_2d(ball, 1.0, 0), 3 - std::sqrt(9 - 0.25), 1e-5);
+  EXPECT_NEAR(cam::scallop_2d(bull, 1.0, 0), 0, 1e-9);  // flat bottom wider than the stepover
+  EXPECT_GT(cam::scallop_2d(bull, 1.0, 30 * kDeg), cam::scallop_2d(ball, 1.0, 30 * kDeg));
   // A ball's scallop on a slope: the passes are s / cos(a) apart along it;
   // vertically the cusp is taller by 1 / cos(a).
   const double a = 30 * kDeg, w = 1.0 / std::cos(a);
-  EXPECT_NEAR(scallop_2d(ball, 1.0, a), (3 - std::sqrt(9 - w * w / 4)) / std::cos(a), 1e-4);
+  EXPECT_NEAR(cam::scallop_2d(ball, 1.0, a), (3 - std::sqrt(9 - w * w / 4)) / std::cos(a), 1e-4);
 }
 
 // Table 4.1's shape: on the sphere's flat top the radiused cutter leaves no
 // scallop (stepover below its flat width), the ball always leaves one; the
 // cut simulation agrees with the 2-D estimate on the flat.
 TEST(Selection, CutSimulationScallopsOnTheSphere) {
-  const CutterPair c = thesis_pair();
-  const Mesh sphere = cl_test::terrain(-40, -40, 80, 240, [](double x, double y) {
+  const cam::CutterPair c = thesis_pair();
+  const geometry::Mesh sphere = cl_test::terrain(-40, -40, 80, 240, [](double x, double y) {
     return std::sqrt(std::max(0.0, 35.0 * 35.0 - x * x - y * y));
   });
   const double s = 1.0;
-  const GridSpec sim = GridSpec::covering(-8, -8, 8, 8, 0.1, s / 10);
-  const DesignHeights design = design_heights(sphere, sim);
-  for (const Cutter& cut : {c.ball, c.radiused}) {
+  const cam::GridSpec sim = cam::GridSpec::covering(-8, -8, 8, 8, 0.1, s / 10);
+  const cam::DesignHeights design = cam::design_heights(sphere, sim);
+  for (const cam::Cutter& cut : {c.ball, c.radiused}) {
     SCOPED_TRACE(cut.spec());
     const Scallops sc = raster_scallops(sphere, cut, s, sim, design, 40.0);
-    const ScallopMap& m = sc.map;
+    const cam::ScallopMap& m = sc.map;
     const std::vector<double>& rows = sc.rows;
     ASSERT_GT(m.stats.samples, 100u);
     // Near the apex (slope < 2 degrees within 1.2 mm of the top) compare with the 2-D estimate.
-    const double flat = scallop_2d(cut, s, 0);
+    const double flat = cam::scallop_2d(cut, s, 0);
     double near_apex = 0;
     for (std::size_t p = 0; p + 1 < rows.size(); ++p)
       if (std::fabs(rows[p]) < 1.2 && std::fabs(rows[p + 1]) < 1.2)
         for (std::size_t col = 0; col < m.columns; ++col)
           if (std::fabs(sim.x(col)) < 1.2) near_apex = std::max(near_apex, m.pair_scallop[p * m.columns + col]);
-    if (cut.type == CutterType::Bull) {
+    if (cut.type == cam::CutterType::Bull) {
       // The flat bottom spans the stepover: what is left near the apex is
       // only the sphere's own fall between passes, s^2 / (8 * 35).
       EXPECT_LT(m.stats.min, s * s / (8 * 35.0) + 1e-3);
@@ -166,17 +166,17 @@ TEST(Selection, CutSimulationScallopsOnTheSphere) {
 // Where the surface is flat and the stepover below the flat width (2 rc) the
 // radiused cutter leaves no scallop at all; the ball leaves R - sqrt(R^2 - s^2/4).
 TEST(Selection, NoScallopOnAFlatForTheRadiusedCutter) {
-  const CutterPair c = thesis_pair();
-  const Mesh flat = cl_test::terrain(-20, -20, 40, 8, [](double, double) { return 2.0; });
+  const cam::CutterPair c = thesis_pair();
+  const geometry::Mesh flat = cl_test::terrain(-20, -20, 40, 8, [](double, double) { return 2.0; });
   const double s = 2.5;  // below 2 rc = 3
-  const GridSpec sim = GridSpec::covering(-6, -6, 6, 6, 0.1, s / 10);
-  const DesignHeights design = design_heights(flat, sim);
-  for (const Cutter& cut : {c.ball, c.radiused}) {
-    const ScallopMap m = raster_scallops(flat, cut, s, sim, design, 5.0).map;
+  const cam::GridSpec sim = cam::GridSpec::covering(-6, -6, 6, 6, 0.1, s / 10);
+  const cam::DesignHeights design = cam::design_heights(flat, sim);
+  for (const cam::Cutter& cut : {c.ball, c.radiused}) {
+    const cam::ScallopMap m = raster_scallops(flat, cut, s, sim, design, 5.0).map;
     ASSERT_GT(m.stats.samples, 100u);
-    const double expect = cut.type == CutterType::Ball ? 3 - std::sqrt(9 - s * s / 4) : 0.0;
+    const double expect = cut.type == cam::CutterType::Ball ? 3 - std::sqrt(9 - s * s / 4) : 0.0;
     EXPECT_NEAR(m.stats.max, expect, 2e-3) << cut.spec();
     EXPECT_NEAR(m.stats.min, expect, 2e-3) << cut.spec();
-    EXPECT_NEAR(scallop_2d(cut, s, 0), expect, 1e-4);
+    EXPECT_NEAR(cam::scallop_2d(cut, s, 0), expect, 1e-4);
   }
 }

@@ -34,10 +34,10 @@ struct CornerRig {
 
   explicit CornerRig(std::size_t vanish_after = 0) {
     SimulatorOptions so;
-    so.stock = Box3{Vec3{20, 20, -50}, Vec3{120, 100, -30}};
-    so.cutter = parse_cutter_spec("flat:6");
+    so.stock = geometry::Box3{geometry::Vec3{20, 20, -50}, geometry::Vec3{120, 100, -30}};
+    so.cutter = cam::parse_cutter_spec("flat:6");
     so.corner_plate = "5,3";
-    so.start_position = Vec3{42, 42, -15};
+    so.start_position = geometry::Vec3{42, 42, -15};
     so.faults.vanish_after = vanish_after;
     sim = std::make_shared<SimulatorPort>(so);
     MachineOptions o;

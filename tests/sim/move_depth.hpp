@@ -23,15 +23,15 @@ struct MoveDepth {
   double rim = 0.01;            // mm; at least the program's arc tolerance
   std::map<int, double> rim_of;  // per tool, where not `rim`
   std::map<int, double> deepest;  // per tool
-  std::map<int, std::pair<cncstream::Vec3, cncstream::Vec3>> where;  // the move
-  std::map<int, cncstream::Vec3> node;  // the node (x, y, its height before)
+  std::map<int, std::pair<cncstream::geometry::Vec3, cncstream::geometry::Vec3>> where;  // the move
+  std::map<int, cncstream::geometry::Vec3> node;  // the node (x, y, its height before)
 
   // Cuts a -> b into `removal` with `cutter` (tool `tool`), noting the depth.
-  void cut(cncsim::MaterialRemoval& removal, int tool, const cncstream::Cutter& cutter, const cncstream::Vec3& a,
-           const cncstream::Vec3& b) {
-    const cncstream::HeightFieldStock& s = removal.stock();
+  void cut(cncsim::MaterialRemoval& removal, int tool, const cncstream::cam::Cutter& cutter, const cncstream::geometry::Vec3& a,
+           const cncstream::geometry::Vec3& b) {
+    const cncstream::cam::HeightFieldStock& s = removal.stock();
     if (std::min(a.z, b.z) >= s.top()) return removal.cut(a, b);  // above the stock: cuts nothing
-    const cncstream::GridSpec& g = s.grid();
+    const cncstream::cam::GridSpec& g = s.grid();
     const double R = cutter.radius;
     const long i0 = std::max(0L, static_cast<long>(std::floor((std::min(a.x, b.x) - R - g.x0) / g.dx)));
     const long i1 = std::min(static_cast<long>(g.nx) - 1, static_cast<long>(std::ceil((std::max(a.x, b.x) + R - g.x0) / g.dx)));
@@ -42,7 +42,7 @@ struct MoveDepth {
       for (long i = i0; i <= i1; ++i) before_.push_back(s.at(static_cast<std::size_t>(i), static_cast<std::size_t>(j)));
     removal.cut(a, b);
     if (s.nodes_cut() == 0) return;
-    cncstream::Cutter inner = cutter;
+    cncstream::cam::Cutter inner = cutter;
     inner.radius = cutter.radius - (rim_of.count(tool) ? rim_of.at(tool) : rim);
     inner.corner_radius = std::min(cutter.corner_radius, inner.radius);
     double& d = deepest[tool];
@@ -51,7 +51,7 @@ struct MoveDepth {
       for (long i = i0; i <= i1; ++i, ++q) {
         const double now = s.at(static_cast<std::size_t>(i), static_cast<std::size_t>(j));
         if (!(now < before_[q])) continue;
-        const double low = std::max(now, cncstream::swept_lowest_height(a, b, inner, g.x(static_cast<std::size_t>(i)),
+        const double low = std::max(now, cncstream::cam::swept_lowest_height(a, b, inner, g.x(static_cast<std::size_t>(i)),
                                                                         g.y(static_cast<std::size_t>(j))));
         if (before_[q] - low > d) {
           d = before_[q] - low;

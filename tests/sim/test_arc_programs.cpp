@@ -21,10 +21,10 @@ namespace {
 
 constexpr double kTolerance = 0.02;  // mm, vertical (the raster's)
 
-jobs::ToolpathProgram plaque_program(bool arcs, RasterDirection direction, double tolerance) {
+jobs::ToolpathProgram plaque_program(bool arcs, cam::RasterDirection direction, double tolerance) {
   jobs::ToolpathParams p;
   p.part.stl = (std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "examples/plaque.stl").string();
-  p.cutter = parse_cutter_spec("ball:3.175");
+  p.cutter = cam::parse_cutter_spec("ball:3.175");
   p.stepover = 1.0;
   p.tolerance = tolerance;
   p.arcs = arcs;
@@ -35,7 +35,7 @@ jobs::ToolpathProgram plaque_program(bool arcs, RasterDirection direction, doubl
 }
 
 // The stock the simulator leaves after the program, on a fixed grid over the part.
-HeightFieldStock machined(const jobs::ToolpathProgram& prog) {
+cam::HeightFieldStock machined(const jobs::ToolpathProgram& prog) {
   cncsim::MachineOptions mo;
   mo.instant_waits = true;
   cncsim::Machine m(mo);
@@ -57,7 +57,7 @@ HeightFieldStock machined(const jobs::ToolpathProgram& prog) {
 }  // namespace
 
 // Rows along X are G18 arcs, rows along Y G19 arcs.
-class ArcPrograms : public ::testing::TestWithParam<RasterDirection> {};
+class ArcPrograms : public ::testing::TestWithParam<cam::RasterDirection> {};
 
 TEST_P(ArcPrograms, PlaqueWithArcsCutsTheSameSurfaceInFewerLines) {
   // With arcs the rows' lines take half the tolerance and the arcs over
@@ -72,20 +72,20 @@ TEST_P(ArcPrograms, PlaqueWithArcsCutsTheSameSurfaceInFewerLines) {
     with_arcs.arcs = true;
     ASSERT_EQ(jobs::rows_tolerance(with_arcs), kTolerance / 2);
   }
-  const std::string plane_word = GetParam() == RasterDirection::X ? "G18" : "G19";
+  const std::string plane_word = GetParam() == cam::RasterDirection::X ? "G18" : "G19";
   EXPECT_NE(arcs.gcode.find(plane_word), std::string::npos);
   EXPECT_EQ(lines.stats.arcs, 0u);
   EXPECT_GT(arcs.stats.arcs, 1000u);
   const double drop = double(lines.stats.lines) / double(arcs.stats.lines);
   RecordProperty("lines_without_arcs", int(lines.stats.lines));
   RecordProperty("lines_with_arcs", int(arcs.stats.lines));
-  std::cout << "plaque at stepover 1, rows along " << (GetParam() == RasterDirection::X ? "X" : "Y") << ", tolerance " << kTolerance << ": " << lines.stats.lines << " lines without arcs, "
+  std::cout << "plaque at stepover 1, rows along " << (GetParam() == cam::RasterDirection::X ? "X" : "Y") << ", tolerance " << kTolerance << ": " << lines.stats.lines << " lines without arcs, "
             << arcs.stats.lines << " with " << arcs.stats.arcs << " arcs (" << drop << " x fewer)\n";
   // Against lines fitted in the band (2.3-2.5 x measured; it was 3 x against
   // lines through the CL samples, before the band).
   EXPECT_GE(drop, 2.0);
 
-  const HeightFieldStock a = machined(lines), b = machined(arcs);
+  const cam::HeightFieldStock a = machined(lines), b = machined(arcs);
   ASSERT_EQ(a.heights().size(), b.heights().size());
   double deeper = 0, higher = 0;
   std::size_t cut = 0;
@@ -121,5 +121,5 @@ TEST_P(ArcPrograms, PlaqueWithArcsCutsTheSameSurfaceInFewerLines) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Rows, ArcPrograms, ::testing::Values(RasterDirection::X, RasterDirection::Y),
-                         [](const auto& info) { return info.param == RasterDirection::X ? "AlongX" : "AlongY"; });
+INSTANTIATE_TEST_SUITE_P(Rows, ArcPrograms, ::testing::Values(cam::RasterDirection::X, cam::RasterDirection::Y),
+                         [](const auto& info) { return info.param == cam::RasterDirection::X ? "AlongX" : "AlongY"; });

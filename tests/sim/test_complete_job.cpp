@@ -36,18 +36,18 @@ namespace {
 jobs::ToolpathParams plaque_job() {
   jobs::ToolpathParams p;
   p.part.stl = (std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "examples/plaque.stl").string();
-  p.cutter = parse_cutter_spec("ball:3.175");
+  p.cutter = cam::parse_cutter_spec("ball:3.175");
   p.stepover = 1.0;  // coarse: the test is about depths, not the finish
   p.tolerance = 0.01;
   p.feed = 3000;
   p.rpm = 0;
   p.stock = jobs::StockSpec{};  // auto: the part's box grown by 1 mm
-  p.rough = parse_cutter_spec("flat:6");
+  p.rough = cam::parse_cutter_spec("flat:6");
   return p;
 }
 
 struct Cut {
-  HeightFieldStock stock;
+  cam::HeightFieldStock stock;
   // The largest depth one move took off, per operation (1, 2, ... in the
   // program's order; the machine runs dry at each operation's first line).
   simtest::MoveDepth depth;
@@ -57,13 +57,13 @@ struct Cut {
 // Runs `gcode` line by line from `start` with the job's tool table, the
 // operator's cycle start at each pause; stops after `max_lines` lines.
 // Moves' depths leave out slivers narrower than `tolerance` (the arcs').
-Cut run(const jobs::ToolpathProgram& prog, HeightFieldStock start, double tolerance, std::size_t max_lines = SIZE_MAX,
+Cut run(const jobs::ToolpathProgram& prog, cam::HeightFieldStock start, double tolerance, std::size_t max_lines = SIZE_MAX,
         double leave = 0.3) {
   cncsim::MachineOptions mo;
   mo.instant_waits = true;
   // Where the operator left it: above the stock (the machine's zero is the
   // part's top, inside a stock with a margin above it).
-  mo.start_position = Vec3{0, 0, prog.stock->hi.z + 5};
+  mo.start_position = geometry::Vec3{0, 0, prog.stock->hi.z + 5};
   cncsim::Machine m(mo);
   cncsim::MaterialRemoval removal(std::move(start), prog.operations.front().cutter);
   cncsim::ToolTable tools;
@@ -74,11 +74,11 @@ Cut run(const jobs::ToolpathProgram& prog, HeightFieldStock start, double tolera
   // wall is as tall as the wall, a leave wide (and the roughing's regions'
   // tolerance): not its depth of cut.
   if (prog.operations.size() > 1) {
-    c.depth.rim_of[static_cast<int>(prog.operations.size())] = leave + RoughingParams{}.tolerance + 0.01;
+    c.depth.rim_of[static_cast<int>(prog.operations.size())] = leave + cam::RoughingParams{}.tolerance + 0.01;
   }
   int op = 1;
   m.set_tool_observer([&](int t) { removal.set_cutter(tools.at(t)); });
-  m.set_motion_observer([&](const Vec3& a, const Vec3& b, bool) { c.depth.cut(removal, op, removal.cutter(), a, b); });
+  m.set_motion_observer([&](const geometry::Vec3& a, const geometry::Vec3& b, bool) { c.depth.cut(removal, op, removal.cutter(), a, b); });
   std::istringstream in(prog.gcode);
   std::string line;
   for (std::size_t n = 0; n < max_lines && std::getline(in, line); ++n) {
@@ -101,10 +101,10 @@ Cut run(const jobs::ToolpathProgram& prog, HeightFieldStock start, double tolera
 
 // The job's stock block, its nodes off round numbers (none on the part's
 // silhouette).
-HeightFieldStock block_of(const jobs::ToolpathProgram& prog) {
-  const Box3 s = *prog.stock;
-  GridSpec g = GridSpec::covering(s.lo.x + 0.0373, s.lo.y + 0.0411, s.hi.x, s.hi.y, 0.25, 0.25);
-  return HeightFieldStock(g, s.hi.z);
+cam::HeightFieldStock block_of(const jobs::ToolpathProgram& prog) {
+  const geometry::Box3 s = *prog.stock;
+  cam::GridSpec g = cam::GridSpec::covering(s.lo.x + 0.0373, s.lo.y + 0.0411, s.hi.x, s.hi.y, 0.25, 0.25);
+  return cam::HeightFieldStock(g, s.hi.z);
 }
 
 void print_deepest(const Cut& c) {
@@ -115,9 +115,9 @@ void print_deepest(const Cut& c) {
 }
 
 // Nothing of the machined stock below the design (beyond a micron).
-void expect_no_gouge(const jobs::ToolpathProgram& prog, const HeightFieldStock& stock) {
-  const DesignHeights design = design_heights(prog.work_mesh, stock.grid());
-  const DeviationResult dev = compare_to_design(stock, design, 0.01);
+void expect_no_gouge(const jobs::ToolpathProgram& prog, const cam::HeightFieldStock& stock) {
+  const cam::DesignHeights design = cam::design_heights(prog.work_mesh, stock.grid());
+  const cam::DeviationResult dev = cam::compare_to_design(stock, design, 0.01);
   EXPECT_FALSE(dev.stats.has_gouge && dev.stats.largest_gouge.value < -1e-3)
       << "gouge of " << dev.stats.largest_gouge.value << " at X" << dev.stats.largest_gouge.x << " Y"
       << dev.stats.largest_gouge.y;
@@ -212,7 +212,7 @@ TEST(CompleteJob, PlaqueRoughedThenFinishedWithoutGougeOrOverDeepPass) {
 TEST(CompleteJob, GearwheelRoughedThenFinishedWithoutGougeOrOverDeepPass) {
   jobs::ToolpathParams p = plaque_job();
   p.part.stl = std::string(CNCSTREAM_SHARED_MESHES) + "/gearwheel.bin.stl";
-  p.rough = parse_cutter_spec("flat:3");
+  p.rough = cam::parse_cutter_spec("flat:3");
   p.strategy = jobs::FinishStrategy::SteepShallow;  // the command's default
   const jobs::ToolpathProgram prog = jobs::generate_toolpath(p);
   std::vector<std::string> names;
@@ -238,7 +238,7 @@ TEST(CompleteJob, GearwheelRoughedThenFinishedWithoutGougeOrOverDeepPass) {
 // deeper than its cutter may cut, no gouge.
 TEST(CompleteJob, PlaqueRoughedWithAFlatThenFinishedWithATaperedBallWithoutGougeOrOverDeepPass) {
   jobs::ToolpathParams p = plaque_job();
-  p.cutter = parse_cutter_spec("taper:1:5:3.175");
+  p.cutter = cam::parse_cutter_spec("taper:1:5:3.175");
   p.strategy = jobs::FinishStrategy::SteepShallow;  // the command's default
   const jobs::ToolpathProgram prog = jobs::generate_toolpath(p);
   for (const auto& n : prog.notes) std::cout << n << "\n";
@@ -289,11 +289,11 @@ TEST(CompleteJob, PlaqueRoughedAgainFromAnInterruptedRoughingCutsOnlyWhatIsLeft)
   const auto dir = std::filesystem::temp_directory_path() / ("cncstream_rough_again_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const auto map = dir / "half.f32";
-  write_height_field(map, half.stock.grid(), half.stock.heights());
+  cam::write_height_field(map, half.stock.grid(), half.stock.heights());
   jobs::ToolpathParams again = p;
   again.stock = jobs::parse_stock_spec(map.string());
   const jobs::ToolpathProgram second = jobs::generate_toolpath(again);
-  const HeightFieldData read = read_height_field(map);
+  const cam::HeightFieldData read = cam::read_height_field(map);
   std::filesystem::remove_all(dir);
   ASSERT_GE(second.operations.size(), 2u);
   const jobs::OperationSummary& r2 = second.operations[0];

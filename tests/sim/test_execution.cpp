@@ -175,7 +175,7 @@ TEST(Execution, WireFaultsAtAPointDamageOneLineOnce) {
 
 TEST(Execution, StartsWhereASavedStateLeftTheTool) {
   MachineOptions o;
-  o.start_position = cncstream::Vec3{-10, -20, -3};
+  o.start_position = cncstream::geometry::Vec3{-10, -20, -3};
   Machine m(o);
   m.take_output();
   EXPECT_EQ(m.status_report().rfind("<Idle|MPos:-10.000,-20.000,-3.000|", 0), 0u);

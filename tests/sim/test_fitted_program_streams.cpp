@@ -25,7 +25,7 @@ namespace {
 jobs::ToolpathProgram plaque_default_at_f3000() {
   jobs::ToolpathParams p;
   p.part.stl = (std::filesystem::path(CNCSTREAM_SOURCE_DIR) / "examples/plaque.stl").string();
-  p.cutter = parse_cutter_spec("ball:3.175");
+  p.cutter = cam::parse_cutter_spec("ball:3.175");
   p.strategy = jobs::FinishStrategy::SteepShallow;
   p.stock = jobs::StockSpec{};
   p.feed = 3000;

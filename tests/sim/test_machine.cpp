@@ -144,7 +144,7 @@ TEST(Machine, SoftLimitsAndHoming) {
   send(m, "$22=1");
   send(m, "$20=1");
   EXPECT_EQ(send(m, "$H", 120), "ok\r\n");
-  EXPECT_EQ(m.machine_position(), (cncstream::Vec3{-1, -1, -1}));
+  EXPECT_EQ(m.machine_position(), (cncstream::geometry::Vec3{-1, -1, -1}));
   EXPECT_EQ(send(m, "$J=G91 X50 F100"), "error:15\r\n");
   EXPECT_EQ(send(m, "G0 X-10"), "ok\r\n");
   m.take_output();

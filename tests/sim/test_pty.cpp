@@ -205,7 +205,7 @@ TEST(Pty, MaterialRemovalKnownAnswer) {
   EXPECT_TRUE(r.errors.empty());
   wait_idle_status(port);
   EXPECT_EQ(sim.stop(), 0);
-  const auto field = cncstream::read_height_field(result);
+  const auto field = cncstream::cam::read_height_field(result);
   auto z_at = [&](double x, double y) {
     const auto i = static_cast<std::size_t>(std::lround((x - field.grid.x0) / field.grid.dx));
     const auto j = static_cast<std::size_t>(std::lround((y - field.grid.y0) / field.grid.dy));
@@ -225,8 +225,8 @@ TEST(Pty, MaterialRemovalKnownAnswer) {
 TEST(Pty, DesignVerifiedAtExitWithAToolTable) {
   const std::string base = "/tmp/cncsim_test_design_" + std::to_string(getpid());
   // The design: a 20 x 20 mm block with its top at Z0; the stock is its box.
-  const auto grid = cncstream::GridSpec::covering(0, 0, 20, 20, 1, 1);
-  cncstream::write_height_field_stl(base + ".stl", grid, std::vector<double>(grid.size(), 0.0), -10);
+  const auto grid = cncstream::cam::GridSpec::covering(0, 0, 20, 20, 1, 1);
+  cncstream::cam::write_height_field_stl(base + ".stl", grid, std::vector<double>(grid.size(), 0.0), -10);
   SimProcess sim({"--speed", "max", "--design", base + ".stl", "--resolution", "0.1", "--tool-table",
                   "1=flat:6,2=ball:2", "--result", base + "-cut.f32", "--png", base + "-map.png"});
   Port port(sim.slave());
@@ -240,7 +240,7 @@ TEST(Pty, DesignVerifiedAtExitWithAToolTable) {
   const std::string err = sim.stderr_text();
   EXPECT_NE(err.find("largest gouge 2.0000 mm"), std::string::npos) << err;
   EXPECT_TRUE(std::filesystem::exists(base + "-map.png"));
-  const auto field = cncstream::read_height_field(base + "-cut.f32");
+  const auto field = cncstream::cam::read_height_field(base + "-cut.f32");
   auto z_at = [&](double x, double y) {
     const auto i = static_cast<std::size_t>(std::lround((x - field.grid.x0) / field.grid.dx));
     const auto j = static_cast<std::size_t>(std::lround((y - field.grid.y0) / field.grid.dy));
@@ -248,7 +248,7 @@ TEST(Pty, DesignVerifiedAtExitWithAToolTable) {
   };
   EXPECT_NEAR(z_at(10, 7.5), -2, 1e-6);                          // flat:6 slot, 3 mm radius
   EXPECT_NEAR(z_at(10, 15.5), -0.5 + 1 - std::sqrt(0.75), 1e-6);  // ball:2 groove, 0.5 mm aside
-  const auto solid = cncstream::summarize(cncstream::load_stl(base + "-cut.stl").mesh);
+  const auto solid = cncstream::geometry::summarize(cncstream::geometry::load_stl(base + "-cut.stl").mesh);
   EXPECT_TRUE(solid.closed()) << solid.to_string();
   for (const char* ext : {".stl", "-cut.f32", "-cut.f32.txt", "-cut.stl", "-map.png"}) std::filesystem::remove(base + ext);
 }

@@ -15,7 +15,7 @@ using namespace cncsim;
 
 TEST(Removal, MachineMotionCutsTheStock) {
   Machine m;
-  MaterialRemoval removal(parse_stock_box("0,0,-5:10,10,0", 0.1), cncstream::Cutter::ball(2));
+  MaterialRemoval removal(parse_stock_box("0,0,-5:10,10,0", 0.1), cncstream::cam::Cutter::ball(2));
   removal.attach(m);
   simtest::send(m, "G0 Z1");
   simtest::send(m, "G0 X2 Y5");
@@ -30,19 +30,19 @@ TEST(Removal, MachineMotionCutsTheStock) {
 }
 
 TEST(Removal, ResultFileRoundTripForVerify) {
-  MaterialRemoval removal(parse_stock_box("0,0,-5:6,4,0", 0.2), cncstream::Cutter::flat(1.5));
+  MaterialRemoval removal(parse_stock_box("0,0,-5:6,4,0", 0.2), cncstream::cam::Cutter::flat(1.5));
   removal.cut({1, 1, 1}, {1, 1, -2});
   removal.cut({1, 1, -2}, {5, 3, -1});
   const std::string path = "/tmp/cncsim_removal_" + std::to_string(::getpid()) + ".f32";
   const auto stl = removal.write_result(path);
   EXPECT_EQ(stl.extension(), ".stl");
   // The STL is the machined stock as a closed solid: top, walls, bottom.
-  const auto solid = cncstream::summarize(cncstream::load_stl(stl).mesh);
+  const auto solid = cncstream::geometry::summarize(cncstream::geometry::load_stl(stl).mesh);
   EXPECT_TRUE(solid.closed()) << solid.to_string();
   EXPECT_NEAR(solid.bounds.hi.z, 0, 1e-6);
   EXPECT_NEAR(solid.bounds.lo.z, -5, 1e-6);
   std::filesystem::remove(stl);
-  const auto field = cncstream::read_height_field(path);
+  const auto field = cncstream::cam::read_height_field(path);
   const auto rebuilt = stock_from_heights(field.grid, field.z);
   ASSERT_EQ(rebuilt.heights().size(), removal.stock().heights().size());
   for (std::size_t k = 0; k < rebuilt.heights().size(); ++k)
@@ -63,7 +63,7 @@ TEST(Removal, BadStockTextIsNamed) {
 
 TEST(Removal, ToolTableSwitchesTheCutterOnceTheQueuedMotionHasRun) {
   Machine m;
-  MaterialRemoval removal(parse_stock_box("0,0,-5:10,10,0", 0.1), cncstream::Cutter::ball(2));
+  MaterialRemoval removal(parse_stock_box("0,0,-5:10,10,0", 0.1), cncstream::cam::Cutter::ball(2));
   removal.set_tool_table(parse_tool_table("1=flat:2, 2=ball:2"));
   removal.attach(m);
   // T2 is parsed (and answered) while the T1 groove is still in the planner:
@@ -83,7 +83,7 @@ TEST(Removal, ToolTableSwitchesTheCutterOnceTheQueuedMotionHasRun) {
 TEST(Removal, ToolTableErrorsNameTheEntry) {
   const auto table = parse_tool_table("1=ball:3.175,2=bull:3.175:0.79");
   ASSERT_EQ(table.size(), 2u);
-  EXPECT_EQ(table.at(2).type, cncstream::CutterType::Bull);
+  EXPECT_EQ(table.at(2).type, cncstream::cam::CutterType::Bull);
   auto message = [](const std::string& text) {
     try {
       parse_tool_table(text);

@@ -25,21 +25,21 @@ using namespace cncstream;
 namespace {
 
 struct Result {
-  HeightFieldStock stock;
+  cam::HeightFieldStock stock;
   int pauses = 0;
 };
 
 // The program run in the simulator from a block at the part's top (work
 // coordinates), each operation with its own cutter; up to `last_line`.
-Result machine(const jobs::ToolpathProgram& prog, const GridSpec& grid, std::size_t last_line = SIZE_MAX) {
+Result machine(const jobs::ToolpathProgram& prog, const cam::GridSpec& grid, std::size_t last_line = SIZE_MAX) {
   cncsim::MachineOptions mo;
   mo.instant_waits = true;
   cncsim::Machine m(mo);
-  cncsim::MaterialRemoval removal(HeightFieldStock(grid, 0), prog.operations.front().cutter);
+  cncsim::MaterialRemoval removal(cam::HeightFieldStock(grid, 0), prog.operations.front().cutter);
   cncsim::ToolTable tools;
   for (const auto& op : prog.operations) tools[op.tool] = op.cutter;
   m.set_tool_observer([&](int t) { removal.set_cutter(tools.at(t)); });
-  m.set_motion_observer([&](const Vec3& a, const Vec3& b, bool) { removal.cut(a, b); });
+  m.set_motion_observer([&](const geometry::Vec3& a, const geometry::Vec3& b, bool) { removal.cut(a, b); });
   Result r{removal.stock(), 0};
   std::istringstream in(prog.gcode);
   std::string line;
@@ -78,8 +78,8 @@ TEST(RestMachining, VGrooveCreaseComesDownFromTheBigBallsReachToTheSmallOnes) {
   EXPECT_LE(prog.operations[1].max_depth, jobs::default_max_depth(prog.operations[1].cutter));
 
   // Work coordinates: X from the part's minimum, Z0 at its top.
-  const GridSpec grid = GridSpec::covering(6.0131, 6.0173, 34, 14, 0.05, 0.25);
-  const DesignHeights design = design_heights(prog.work_mesh, grid);
+  const cam::GridSpec grid = cam::GridSpec::covering(6.0131, 6.0173, 34, 14, 0.05, 0.25);
+  const cam::DesignHeights design = cam::design_heights(prog.work_mesh, grid);
   const Result finished = machine(prog, grid, prog.operations[1].first_line - 1);
   const Result rested = machine(prog, grid);
   EXPECT_EQ(finished.pauses, 0);

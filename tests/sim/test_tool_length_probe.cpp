@@ -178,7 +178,7 @@ TEST(ToolChangeSim, TheTipCutsSoALongerToolNotCompensatedGouges) {
   MachineOptions o = tool_machine();
   Machine m(o);
   StockBox box{{0, 0, -10}, {20, 20, 0}, 0.5};
-  MaterialRemoval removal(box, cncstream::parse_cutter_spec("flat:6"));
+  MaterialRemoval removal(box, cncstream::cam::parse_cutter_spec("flat:6"));
   removal.set_tool_table(parse_tool_table("1=flat:6@30,2=flat:6@37.3"));
   removal.attach(m);
   m.take_output();

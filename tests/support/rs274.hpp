@@ -26,7 +26,7 @@ struct CanonMove {
   bool rapid = false;
   bool arc = false;
   gcode::Plane plane = gcode::Plane::XY;
-  Vec3 to, centre;
+  geometry::Vec3 to, centre;
   int turn = 0;
 };
 

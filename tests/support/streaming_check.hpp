@@ -135,7 +135,7 @@ inline std::vector<std::string> densest_stretch(const std::vector<std::string>& 
     std::vector<double> feed_mm(lines.size() + 1, 0.0), bytes(lines.size() + 1, 0.0);
     std::vector<double> per_line(lines.size(), 0.0);
     for (const auto& s : trace.segments)
-      if (!s.rapid) per_line[s.source_line] += cncstream::norm(s.to - s.from);
+      if (!s.rapid) per_line[s.source_line] += cncstream::geometry::norm(s.to - s.from);
     for (std::size_t i = 0; i < lines.size(); ++i) {
       feed_mm[i + 1] = feed_mm[i] + per_line[i];
       bytes[i + 1] = bytes[i] + static_cast<double>(lines[i].size() + 1);
@@ -151,7 +151,7 @@ inline std::vector<std::string> densest_stretch(const std::vector<std::string>& 
   std::vector<std::string> out;
   if (first > 0) {
     const gc::ParserState s = gc::state_before_line(text, first);
-    const cncstream::Vec3 p = s.position;  // machine = work: the simulator's offsets are zero
+    const cncstream::geometry::Vec3 p = s.position;  // machine = work: the simulator's offsets are zero
     const char* plane = s.modal.plane == gc::Plane::XY ? "G17" : s.modal.plane == gc::Plane::ZX ? "G18" : "G19";
     out.push_back(std::string("G21G90G94") + plane);
     out.push_back(fmt::format("G0Z{:.3f}", p.z + 5.0));

@@ -9,8 +9,8 @@
 
 namespace cncstream::test {
 
-inline Mesh v_groove() {
-  Mesh m;
+inline geometry::Mesh v_groove() {
+  geometry::Mesh m;
   const double xs[] = {0, 16, 20, 24, 40}, zs[] = {10, 10, 6, 10, 10};
   for (int k = 0; k < 5; ++k) {
     m.vertices.push_back({xs[k], 0, zs[k]});

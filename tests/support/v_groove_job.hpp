@@ -13,11 +13,11 @@ namespace cncstream::test {
 
 inline jobs::ToolpathParams v_groove_job(std::string_view finish, std::string_view rest) {
   jobs::ToolpathParams p;
-  p.part.mesh = std::make_shared<const Mesh>(v_groove());
+  p.part.mesh = std::make_shared<const geometry::Mesh>(v_groove());
   p.part.stl = "v-groove";
-  p.cutter = parse_cutter_spec(finish);
-  p.rest = parse_cutter_spec(rest);
-  p.bounds = XYBounds{3, 3, 37, 17};
+  p.cutter = cam::parse_cutter_spec(finish);
+  p.rest = cam::parse_cutter_spec(rest);
+  p.bounds = cam::XYBounds{3, 3, 37, 17};
   return p;
 }
 

@@ -66,7 +66,7 @@ TEST(ToolSpec, EveryShapeRoundTrips) {
   EXPECT_NEAR(t.tip_diameter, 0.79375, 1e-12);
   EXPECT_NEAR(t.diameter, 3.175, 1e-12);
   // The flat, ball and bull specs are the cam's own: they parse into a Cutter.
-  for (const char* s : {"flat:6", "ball:3.175", "bull:6:1"}) EXPECT_EQ(parse_cutter_spec(parse_tool_spec(s).spec()).spec(), s);
+  for (const char* s : {"flat:6", "ball:3.175", "bull:6:1"}) EXPECT_EQ(cam::parse_cutter_spec(parse_tool_spec(s).spec()).spec(), s);
   EXPECT_EQ(parse_tool_spec("bull:6:3").shape, ToolShape::Ball);
   EXPECT_EQ(parse_tool_spec("vbit:90:12").description(), "90° V-bit, 12 mm");
   EXPECT_EQ(parse_tool_spec("taper:1:5:3.175").description(), "1 mm tapered ball-nose, 5° per side, 3.175 mm at the top");

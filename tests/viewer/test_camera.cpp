@@ -13,14 +13,14 @@ using namespace cncstream::viewer;
 
 namespace {
 
-void expect_near(const Vec3& a, const Vec3& b, double tol) {
+void expect_near(const geometry::Vec3& a, const geometry::Vec3& b, double tol) {
   EXPECT_NEAR(a.x, b.x, tol);
   EXPECT_NEAR(a.y, b.y, tol);
   EXPECT_NEAR(a.z, b.z, tol);
 }
 
-Box3 box(Vec3 lo, Vec3 hi) {
-  Box3 b;
+geometry::Box3 box(geometry::Vec3 lo, geometry::Vec3 hi) {
+  geometry::Box3 b;
   b.add(lo);
   b.add(hi);
   return b;
@@ -29,7 +29,7 @@ Box3 box(Vec3 lo, Vec3 hi) {
 Camera camera(NamedView v, int w = 400, int h = 300) {
   Camera c;
   c.set_viewport(w, h);
-  const Box3 b = box({0, 0, -10}, {120, 100, 0});
+  const geometry::Box3 b = box({0, 0, -10}, {120, 100, 0});
   c.set_scene(b);
   c.set_view(v);
   c.fit(b);
@@ -51,7 +51,7 @@ TEST(ViewerCamera, NamedViewsLookWhereTheySay) {
   expect_near(side.right(), {0, 1, 0}, 1e-12);
   expect_near(side.up(), {0, 0, 1}, 1e-12);
   const Camera iso = camera(NamedView::Iso);
-  expect_near(iso.back(), normalized(Vec3{1, -1, 1}), 1e-12);
+  expect_near(iso.back(), normalized(geometry::Vec3{1, -1, 1}), 1e-12);
   // A point higher in z is higher on the screen (smaller window y) in the iso view.
   EXPECT_LT(iso.project({60, 50, 10}).y, iso.project({60, 50, 0}).y);
   // Top view: +x to the right, +y up the screen.
@@ -74,14 +74,14 @@ TEST(ViewerCamera, ProjectAndUnprojectAreInverses) {
   c.orbit(37, -12);
   c.pan(15, 7);
   c.zoom_at(1.7, 100, 120);
-  for (const Vec3 p : {Vec3{0, 0, 0}, Vec3{120, 100, -10}, Vec3{33.3, 71.2, -4.5}}) {
+  for (const geometry::Vec3 p : {geometry::Vec3{0, 0, 0}, geometry::Vec3{120, 100, -10}, geometry::Vec3{33.3, 71.2, -4.5}}) {
     const WindowPoint w = c.project(p);
     EXPECT_GT(w.depth, 0);
     EXPECT_LT(w.depth, 1);
     expect_near(c.unproject(w), p, 1e-9);
   }
   // The matrices say the same as project(): GL will put the point there.
-  const Vec3 p{33.3, 71.2, -4.5};
+  const geometry::Vec3 p{33.3, 71.2, -4.5};
   const Mat4 m = c.view_projection();
   double clip[4];
   for (int r = 0; r < 4; ++r) clip[r] = m.at(r, 0) * p.x + m.at(r, 1) * p.y + m.at(r, 2) * p.z + m.at(r, 3);
@@ -93,7 +93,7 @@ TEST(ViewerCamera, ProjectAndUnprojectAreInverses) {
 
 TEST(ViewerCamera, ZoomKeepsThePointUnderTheCursor) {
   Camera c = camera(NamedView::Iso, 640, 480);
-  const Vec3 p{100, 20, -3};
+  const geometry::Vec3 p{100, 20, -3};
   const WindowPoint before = c.project(p);
   const double h = c.half_height();
   c.zoom_at(2.5, before.x, before.y);
@@ -109,7 +109,7 @@ TEST(ViewerCamera, ZoomKeepsThePointUnderTheCursor) {
 
 TEST(ViewerCamera, PanMovesTheSceneWithTheMouse) {
   Camera c = camera(NamedView::Iso, 640, 480);
-  const Vec3 p{60, 50, -5};
+  const geometry::Vec3 p{60, 50, -5};
   const WindowPoint before = c.project(p);
   c.pan(40, -25);
   const WindowPoint after = c.project(p);
@@ -123,7 +123,7 @@ TEST(ViewerCamera, PanMovesTheSceneWithTheMouse) {
 }
 
 TEST(ViewerCamera, FitFramesTheBoxInEveryView) {
-  const Box3 b = box({-20, 5, -30}, {220, 75, 12});
+  const geometry::Box3 b = box({-20, 5, -30}, {220, 75, 12});
   for (const NamedView v : {NamedView::Top, NamedView::Front, NamedView::Side, NamedView::Iso})
     for (const auto& [w, h] : {std::pair{400, 300}, std::pair{300, 600}}) {
       Camera c;
@@ -170,5 +170,5 @@ TEST(ViewerCamera, MaySeeWhatIsInTheViewportOnly) {
   EXPECT_FALSE(c.may_see(box({500, 10, 0}, {600, 20, 0})));
   c.zoom_at(10, 0, 0);  // toward the top-left corner
   EXPECT_FALSE(c.may_see(box({100, 10, 0}, {120, 20, 0})));
-  EXPECT_FALSE(c.may_see(Box3{}));
+  EXPECT_FALSE(c.may_see(geometry::Box3{}));
 }

@@ -34,10 +34,10 @@ TEST(LiveCut, AJobProgramNamesItsStockAndEachOperationsCutter) {
   const auto cutters = program_cutters(testparts::kSlotProgram);
   ASSERT_EQ(cutters.size(), 2u);
   EXPECT_EQ(cutters[0].line, 3u);  // its comment (0-based): the first tool needs no change
-  EXPECT_EQ(cutters[0].cutter.type, CutterType::Flat);
+  EXPECT_EQ(cutters[0].cutter.type, cam::CutterType::Flat);
   EXPECT_EQ(cutters[0].cutter.radius, 3);
   EXPECT_EQ(cutters[1].line, 15u);  // from its M0 on
-  EXPECT_EQ(cutters[1].cutter.type, CutterType::Ball);
+  EXPECT_EQ(cutters[1].cutter.type, cam::CutterType::Ball);
   EXPECT_EQ(cutters[1].cutter.radius, 1);
   // Another program says neither.
   EXPECT_FALSE(program_stock("G0 X1\n(stock: X 1..0 Y 0..1 Z 0..1)\n"));
@@ -60,17 +60,17 @@ TEST(LiveCut, OnlyTheExecutedMovesAreCutAndTheSlotHasItsVolume) {
   const double before = cut.removed_volume();
   EXPECT_EQ(cut.advance(1), 0u);
   EXPECT_EQ(cut.removed_volume(), before);
-  EXPECT_EQ(cut.cutter_in_spindle().type, CutterType::Flat);
+  EXPECT_EQ(cut.cutter_in_spindle().type, cam::CutterType::Flat);
 
   // The whole program: the slot, and the ball after the tool change removes nothing above the stock.
   cut.advance(static_cast<double>(path.size()));
   EXPECT_EQ(cut.segments_cut(), path.size());
   const double slot = (10 * 6 + std::numbers::pi * 9) * 2;
   EXPECT_NEAR(cut.removed_volume(), slot, 0.02 * slot);
-  EXPECT_EQ(cut.cutter_in_spindle().type, CutterType::Ball);
+  EXPECT_EQ(cut.cutter_in_spindle().type, cam::CutterType::Ball);
   // The slot's floor is at Z-2, the stock beside it untouched.
   const auto h = cut.heights();
-  const GridSpec& g = cut.grid();
+  const cam::GridSpec& g = cut.grid();
   auto at = [&](double x, double y) {
     const auto i = static_cast<std::size_t>(std::lround((x - g.x0) / g.dx));
     const auto j = static_cast<std::size_t>(std::lround((y - g.y0) / g.dy));
@@ -95,7 +95,7 @@ TEST(LiveCut, CuttingInSlicesEqualsCuttingAtOnce) {
 TEST(LiveCut, WithoutAStockItIsTheMovesExtentUpToTheirTop) {
   // A program that names neither stock nor cutter: the cutter comes from the user.
   const Toolpath path = build_toolpath("G21 G90\nG0 Z5\nX0 Y0\nG1 Z-1 F300\nX10 F600\nY10\nG0 Z5\n");
-  LiveCut cut(path, {{0, Cutter::flat(2)}});
+  LiveCut cut(path, {{0, cam::Cutter::flat(2)}});
   // The cutting moves span X 0..10, Y 0..10: grown by the radius. The
   // plunge starts above Z0, so the stock's top is Z0, not the plunge's start.
   EXPECT_NEAR(cut.grid().x0, -1, 1e-9);
@@ -107,5 +107,5 @@ TEST(LiveCut, WithoutAStockItIsTheMovesExtentUpToTheirTop) {
   EXPECT_NEAR(cut.removed_volume(), l_slot, 0.03 * l_slot);
   EXPECT_THROW(LiveCut(path, {}), std::invalid_argument);
   const Toolpath rapids_only = build_toolpath("G0 X1 Y1\nG0 X2\n");
-  EXPECT_THROW(LiveCut(rapids_only, {{0, Cutter::flat(2)}}), std::invalid_argument);
+  EXPECT_THROW(LiveCut(rapids_only, {{0, cam::Cutter::flat(2)}}), std::invalid_argument);
 }

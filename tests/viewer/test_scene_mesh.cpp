@@ -16,20 +16,20 @@ using namespace cncstream::viewer;
 namespace {
 
 // A 10 x 10 mm plate's top at z = 1 (two facets).
-Mesh plate() {
-  Mesh m;
+geometry::Mesh plate() {
+  geometry::Mesh m;
   m.vertices = {{0, 0, 1}, {10, 0, 1}, {10, 10, 1}, {0, 10, 1}};
   m.triangles = {{0, 1, 2}, {0, 2, 3}};
   return m;
 }
 
-Rgb colour(const MeshVertex& v) { return {v.r, v.g, v.b}; }
+image::Rgb colour(const MeshVertex& v) { return {v.r, v.g, v.b}; }
 
 }  // namespace
 
 TEST(ViewerSceneMesh, CutterLiesOnItsProfile) {
-  const Vec3 tip{12, -3, 4};
-  for (const Cutter& c : {Cutter::ball(6), Cutter::flat(3.175), Cutter::bull(8, 1)}) {
+  const geometry::Vec3 tip{12, -3, 4};
+  for (const cam::Cutter& c : {cam::Cutter::ball(6), cam::Cutter::flat(3.175), cam::Cutter::bull(8, 1)}) {
     const TriangleMesh m = cutter_surface(c, tip, 20, 24);
     ASSERT_FALSE(m.indices.empty());
     double lowest = 1e9, highest = -1e9;
@@ -47,7 +47,7 @@ TEST(ViewerSceneMesh, CutterLiesOnItsProfile) {
     EXPECT_NEAR(highest, 20, 1e-5);
     for (const std::uint32_t i : m.indices) EXPECT_LT(i, m.vertices.size());
   }
-  EXPECT_THROW(cutter_surface(Cutter::ball(6), tip, 0, 2), std::invalid_argument);
+  EXPECT_THROW(cutter_surface(cam::Cutter::ball(6), tip, 0, 2), std::invalid_argument);
 }
 
 TEST(ViewerSceneMesh, PartKeepsEveryFacet) {
@@ -61,7 +61,7 @@ TEST(ViewerSceneMesh, PartKeepsEveryFacet) {
 
 TEST(ViewerSceneMesh, CutIsColouredByDeviationWithTheMapsScale) {
   // Nodes every 0.5 mm over 0..12: the plate covers 0..10, the rest is off it.
-  GridSpec g;
+  cam::GridSpec g;
   g.nx = g.ny = 25;
   g.dx = g.dy = 0.5;
   std::vector<float> z(g.size(), 1.0f);
@@ -74,13 +74,13 @@ TEST(ViewerSceneMesh, CutIsColouredByDeviationWithTheMapsScale) {
   EXPECT_EQ(cut.stats.gouged, 1u);
   EXPECT_EQ(cut.stats.excess, 1u);
   ASSERT_EQ(cut.mesh.vertices.size(), g.size());
-  EXPECT_EQ(colour(cut.mesh.vertices[gouge]), DeviationPalette::gouge(1));  // the worst gouge: darkest
-  EXPECT_EQ(colour(cut.mesh.vertices[excess]), DeviationPalette::excess(1));
-  EXPECT_EQ(colour(cut.mesh.vertices[slight]), DeviationPalette::within);
-  EXPECT_EQ(colour(cut.mesh.vertices[2 * g.nx + 3]), DeviationPalette::within);
-  EXPECT_EQ(colour(cut.mesh.vertices[23 * g.nx + 23]), DeviationPalette::off_part);
-  const DeviationScale scale{0.05, 0.5, 0.3};
-  EXPECT_EQ(scale.colour(-0.275), DeviationPalette::gouge(0.5));
+  EXPECT_EQ(colour(cut.mesh.vertices[gouge]), image::DeviationPalette::gouge(1));  // the worst gouge: darkest
+  EXPECT_EQ(colour(cut.mesh.vertices[excess]), image::DeviationPalette::excess(1));
+  EXPECT_EQ(colour(cut.mesh.vertices[slight]), image::DeviationPalette::within);
+  EXPECT_EQ(colour(cut.mesh.vertices[2 * g.nx + 3]), image::DeviationPalette::within);
+  EXPECT_EQ(colour(cut.mesh.vertices[23 * g.nx + 23]), image::DeviationPalette::off_part);
+  const image::DeviationScale scale{0.05, 0.5, 0.3};
+  EXPECT_EQ(scale.colour(-0.275), image::DeviationPalette::gouge(0.5));
   // The node without a value leaves out the triangles that touch it.
   EXPECT_EQ(cut.mesh.triangles(), 2u * 24 * 24 - 2);  // the corner cell's two
   EXPECT_THROW(cut_surface(g, std::vector<float>(3, 1.0f), plate(), 0.05), std::invalid_argument);
@@ -95,11 +95,11 @@ TEST(ViewerScene, TimelineStepsAndTheSlider) {
   EXPECT_EQ(timeline_step(s, -1), 0);
   EXPECT_EQ(timeline_at_bar(60, 10, 200, 2000), 500);
   EXPECT_EQ(timeline_at_bar(-60, 10, 200, 2000), 0);
-  s.cutter = Cutter::ball(2);
+  s.cutter = cam::Cutter::ball(2);
   s.progress = 2.5;
   ASSERT_TRUE(s.cutter_tip());
   EXPECT_NEAR(s.cutter_tip()->x, 2.5, 1e-9);
-  s.cutter_at = Vec3{7, 8, 9};
+  s.cutter_at = geometry::Vec3{7, 8, 9};
   EXPECT_EQ(s.cutter_tip()->y, 8);
   EXPECT_EQ(format_position({1, -2.5, 0.0004}), "X 1.000 Y -2.500 Z 0.000");
   EXPECT_EQ(format_progress(*s.program, 2.5), "segment 2 of 2000, line 1");

@@ -22,13 +22,13 @@ namespace {
 
 constexpr int kSize = 256;
 
-const Mesh& plaque() {
-  static const Mesh m = load_stl(CNCSTREAM_SOURCE_DIR "/examples/plaque.stl").mesh;
+const geometry::Mesh& plaque() {
+  static const geometry::Mesh m = geometry::load_stl(CNCSTREAM_SOURCE_DIR "/examples/plaque.stl").mesh;
   return m;
 }
 
 struct Frame {
-  RgbImage image;
+  image::RgbImage image;
   Camera camera;
   std::vector<float> depth;  // a few probed pixels
 };
@@ -36,7 +36,7 @@ struct Frame {
 Frame render(const Scene& scene, NamedView view, const std::vector<std::pair<int, int>>& probes = {}) {
   HeadlessView hv(kSize, kSize);
   load_scene(hv.renderer(), scene);
-  Frame f{RgbImage(), camera_for(scene, view, kSize, kSize), {}};
+  Frame f{image::RgbImage(), camera_for(scene, view, kSize, kSize), {}};
   hv.draw(f.camera);
   f.image = hv.read_image();
   for (const auto& [x, y] : probes) f.depth.push_back(static_cast<float>(hv.depth_at(x, y)));
@@ -44,7 +44,7 @@ Frame render(const Scene& scene, NamedView view, const std::vector<std::pair<int
 }
 
 // The mesh's projected footprint: pixel centres inside a projected facet.
-std::vector<std::uint8_t> footprint(const Mesh& mesh, const Camera& cam) {
+std::vector<std::uint8_t> footprint(const geometry::Mesh& mesh, const Camera& cam) {
   std::vector<std::uint8_t> mask(static_cast<std::size_t>(kSize) * kSize, 0);
   for (std::size_t t = 0; t < mesh.size(); ++t) {
     const WindowPoint a = cam.project(mesh.corner(t, 0)), b = cam.project(mesh.corner(t, 1)),
@@ -66,9 +66,9 @@ std::vector<std::uint8_t> footprint(const Mesh& mesh, const Camera& cam) {
   return mask;
 }
 
-bool is_background(Rgb c) { return c == kBackground; }
-bool is_gouge_red(Rgb c) { return c.r > c.g + 60 && c.r > c.b + 60; }
-bool near(Rgb a, Rgb b, int tol) {
+bool is_background(image::Rgb c) { return c == kBackground; }
+bool is_gouge_red(image::Rgb c) { return c.r > c.g + 60 && c.r > c.b + 60; }
+bool near(image::Rgb a, image::Rgb b, int tol) {
   return std::abs(a.r - b.r) <= tol && std::abs(a.g - b.g) <= tol && std::abs(a.b - b.b) <= tol;
 }
 
@@ -105,8 +105,8 @@ TEST(ViewerScreenshot, DepthUnderAPixelUnprojectsOntoThePart) {
   Scene s;
   s.part = part_surface(plaque());
   // Probe the pixels where 25 points of the part's top project.
-  GridSpec top = GridSpec::covering(20, 15, 100, 85, 20, 17.5);
-  const DesignHeights tops = design_heights(plaque(), top);
+  cam::GridSpec top = cam::GridSpec::covering(20, 15, 100, 85, 20, 17.5);
+  const cam::DesignHeights tops = cam::design_heights(plaque(), top);
   const Camera cam = camera_for(s, NamedView::Iso, kSize, kSize);
   std::vector<std::pair<int, int>> probes;
   for (std::size_t j = 0; j < top.ny; ++j)
@@ -120,10 +120,10 @@ TEST(ViewerScreenshot, DepthUnderAPixelUnprojectsOntoThePart) {
   for (std::size_t k = 0; k < probes.size(); ++k) {
     if (f.depth[k] >= 1.0f) continue;
     ++on_part;
-    const Vec3 p = f.camera.unproject({probes[k].first + 0.5, probes[k].second + 0.5, f.depth[k]});
-    GridSpec g;
+    const geometry::Vec3 p = f.camera.unproject({probes[k].first + 0.5, probes[k].second + 0.5, f.depth[k]});
+    cam::GridSpec g;
     g.x0 = p.x, g.y0 = p.y, g.nx = g.ny = 1;
-    const DesignHeights h = design_heights(plaque(), g);
+    const cam::DesignHeights h = cam::design_heights(plaque(), g);
     if (!h.off_part[0] && std::fabs(h.z[0] - p.z) < 0.05) ++agree;
   }
   EXPECT_EQ(on_part, 25);
@@ -141,7 +141,7 @@ TEST(ViewerScreenshot, ProgramShowsCutsDashedRapidsAndTheTimeline) {
   Scene s;
   s.program = build_toolpath(program);
   ASSERT_EQ(s.program->rapids, 5u);
-  const Rgb fast = colormap_viridis(1);
+  const image::Rgb fast = image::colormap_viridis(1);
   auto pixel_at = [](const Frame& f, double x, double y) {
     const WindowPoint w = f.camera.project({x, y, 0});
     return f.image.get(static_cast<int>(w.x), static_cast<int>(w.y));
@@ -154,7 +154,7 @@ TEST(ViewerScreenshot, ProgramShowsCutsDashedRapidsAndTheTimeline) {
     const WindowPoint a = f.camera.project({10, 97, 5}), b = f.camera.project({110, 97, 5});
     int drawn = 0, gaps = 0;
     for (int x = static_cast<int>(a.x); x <= static_cast<int>(b.x); ++x) {
-      const Rgb c = f.image.get(x, static_cast<int>(a.y));
+      const image::Rgb c = f.image.get(x, static_cast<int>(a.y));
       if (near(c, kRapidColour, 8)) ++drawn;
       else if (is_background(c)) ++gaps;
     }
@@ -167,15 +167,15 @@ TEST(ViewerScreenshot, ProgramShowsCutsDashedRapidsAndTheTimeline) {
   // timeline is.
   {
     s.progress = static_cast<double>(s.program->size()) / 2;
-    s.cutter = Cutter::ball(6);
-    const Vec3 tip = s.program->point_at(s.progress);
+    s.cutter = cam::Cutter::ball(6);
+    const geometry::Vec3 tip = s.program->point_at(s.progress);
     const Frame f = render(s, NamedView::Top);
     EXPECT_TRUE(near(pixel_at(f, 60.3, 10), fast, 8));
-    const Rgb dim = pixel_at(f, 60.3, 90);
+    const image::Rgb dim = pixel_at(f, 60.3, 90);
     EXPECT_FALSE(near(dim, fast, 40));
     EXPECT_GT(dim.b, fast.b + 100);  // faded toward the background
     const WindowPoint c = f.camera.project(tip);
-    const Rgb under_cutter = f.image.get(static_cast<int>(c.x), static_cast<int>(c.y));
+    const image::Rgb under_cutter = f.image.get(static_cast<int>(c.x), static_cast<int>(c.y));
     EXPECT_FALSE(is_background(under_cutter));
     EXPECT_FALSE(near(under_cutter, fast, 40));
     EXPECT_LT(std::abs(under_cutter.r - under_cutter.b), 40);  // the cutter's grey
@@ -183,8 +183,8 @@ TEST(ViewerScreenshot, ProgramShowsCutsDashedRapidsAndTheTimeline) {
 }
 
 TEST(ViewerScreenshot, GougeColourOnlyWhereTheCutIsGouged) {
-  GridSpec g = GridSpec::covering(-2, -2, 122, 102, 1, 1);
-  const DesignHeights d = design_heights(plaque(), g);
+  cam::GridSpec g = cam::GridSpec::covering(-2, -2, 122, 102, 1, 1);
+  const cam::DesignHeights d = cam::design_heights(plaque(), g);
   const double floor = plaque().bounds().lo.z;
   std::vector<float> clean(g.size());
   for (std::size_t k = 0; k < g.size(); ++k) clean[k] = static_cast<float>(d.off_part[k] ? floor : d.z[k]);
@@ -200,9 +200,9 @@ TEST(ViewerScreenshot, GougeColourOnlyWhereTheCutIsGouged) {
     red = green = 0;
     for (int y = 0; y < kSize; ++y)
       for (int x = 0; x < kSize; ++x) {
-        const Rgb c = f.image.get(x, y);
+        const image::Rgb c = f.image.get(x, y);
         red += is_gouge_red(c);
-        green += near(c, DeviationPalette::within, 6);
+        green += near(c, image::DeviationPalette::within, 6);
       }
   };
   std::size_t red = 0, green = 0, nodes = 0;

@@ -15,7 +15,7 @@ using namespace cncstream::viewer;
 
 namespace {
 
-Rgb colour_of(const Toolpath& p, std::size_t segment) {
+image::Rgb colour_of(const Toolpath& p, std::size_t segment) {
   const PathVertex& v = p.vertices[p.segments[segment].vertex];
   return {v.r, v.g, v.b};
 }
@@ -32,7 +32,7 @@ TEST(ViewerToolpath, ArcsAreSampledOnTheCircle) {
     EXPECT_FALSE(p.rapid(k));
     EXPECT_EQ(p.segments[k].line, 2u);
     EXPECT_FLOAT_EQ(p.segments[k].feed, 500);
-    for (const Vec3& q : {p.from(k), p.to(k)}) {
+    for (const geometry::Vec3& q : {p.from(k), p.to(k)}) {
       EXPECT_NEAR(std::hypot(q.x, q.y), 10, 1e-5);
       EXPECT_NEAR(q.z, -1, 1e-6);
       EXPECT_LE(q.x, 10 + 1e-5);
@@ -40,10 +40,10 @@ TEST(ViewerToolpath, ArcsAreSampledOnTheCircle) {
     }
     // Each chord's middle is about the arc tolerance inside the circle
     // (GRBL's chord count is an approximation: a few percent over).
-    const Vec3 m = (p.from(k) + p.to(k)) * 0.5;
+    const geometry::Vec3 m = (p.from(k) + p.to(k)) * 0.5;
     EXPECT_LE(10 - std::hypot(m.x, m.y), 0.002 * 1.05);
   }
-  const Vec3 end = p.to(p.size() - 1);
+  const geometry::Vec3 end = p.to(p.size() - 1);
   EXPECT_NEAR(end.x, 0, 1e-6);
   EXPECT_NEAR(end.y, -10, 1e-6);
 }
@@ -52,7 +52,7 @@ TEST(ViewerToolpath, ArcsInTheXzPlane) {
   const Toolpath p = build_toolpath("G18 G0 X5 Y2 Z0\nG3 X-5 Z0 I-5 K0 F100\n", {0.01, {}, {}});
   ASSERT_GT(p.size(), 4u);
   for (std::size_t k = 1; k < p.size(); ++k) {
-    const Vec3 q = p.to(k);
+    const geometry::Vec3 q = p.to(k);
     EXPECT_NEAR(std::hypot(q.x, q.z), 5, 1e-5);
     EXPECT_NEAR(q.y, 2, 1e-6);
   }
@@ -82,8 +82,8 @@ TEST(ViewerToolpath, RapidsAreFlaggedAndDashedAlongTheirRun) {
   EXPECT_EQ(p.max_feed, 400);
   // Colours: rapids orange, cuts on the feed ramp.
   EXPECT_EQ(colour_of(p, 0), kRapidColour);
-  EXPECT_EQ(colour_of(p, 2), colormap_viridis(0));
-  EXPECT_EQ(colour_of(p, 3), colormap_viridis(1));
+  EXPECT_EQ(colour_of(p, 2), image::colormap_viridis(0));
+  EXPECT_EQ(colour_of(p, 3), image::colormap_viridis(1));
   EXPECT_EQ(colour_of(p, 4), kRapidColour);
 }
 
@@ -131,7 +131,7 @@ TEST(ViewerToolpath, OperationsBeginAtNamesAndToolChanges) {
   EXPECT_EQ(p.segments[5].operation, 2u);
   colour_toolpath(p, PathColouring::Operation);
   for (std::size_t k = 1; k < p.size(); ++k)
-    EXPECT_EQ(colour_of(p, k), category_colour(p.segments[k].operation));
+    EXPECT_EQ(colour_of(p, k), image::category_colour(p.segments[k].operation));
   EXPECT_THROW(parse_path_colouring("speed"), std::invalid_argument);
 }
 
@@ -156,14 +156,14 @@ TEST(ViewerToolpath, TimelineCountsTheStripsVertices) {
 TEST(ViewerToolpath, DistantStripDropsOnlyWhatCannotBeSeen) {
   // A wavy cut, 0.05 mm steps, then a rapid along the same line.
   Toolpath p;
-  Vec3 at{0, 0, 0};
+  geometry::Vec3 at{0, 0, 0};
   for (int k = 1; k <= 2000; ++k) {
-    const Vec3 next{k * 0.05, 0, 0.3 * std::sin(k * 0.05)};
+    const geometry::Vec3 next{k * 0.05, 0, 0.3 * std::sin(k * 0.05)};
     append_segment(p, at, next, false, 1000, 0, 0);
     at = next;
   }
-  append_segment(p, at, at + Vec3{10, 0, 0}, true, 0, 1, 0);
-  append_segment(p, at + Vec3{10, 0, 0}, at + Vec3{20, 0, 0}, true, 0, 2, 0);
+  append_segment(p, at, at + geometry::Vec3{10, 0, 0}, true, 0, 1, 0);
+  append_segment(p, at + geometry::Vec3{10, 0, 0}, at + geometry::Vec3{20, 0, 0}, true, 0, 2, 0);
   colour_toolpath(p, PathColouring::Feed);
   const double tol = 0.01;
   const auto keep = display_strip(p, tol);
@@ -175,11 +175,11 @@ TEST(ViewerToolpath, DistantStripDropsOnlyWhatCannotBeSeen) {
   EXPECT_NE(std::find(keep.begin(), keep.end(), p.segments[1999].vertex), keep.end());
   for (std::size_t q = 0; q + 1 < keep.size(); ++q) {
     const PathVertex &a = p.vertices[keep[q]], &b = p.vertices[keep[q + 1]];
-    const Vec3 pa{a.x, a.y, a.z}, pb{b.x, b.y, b.z};
+    const geometry::Vec3 pa{a.x, a.y, a.z}, pb{b.x, b.y, b.z};
     for (std::uint32_t v = keep[q] + 1; v < keep[q + 1]; ++v) {
       const PathVertex& m = p.vertices[v];
-      const Vec3 pm{m.x, m.y, m.z};
-      const Vec3 ab = pb - pa;
+      const geometry::Vec3 pm{m.x, m.y, m.z};
+      const geometry::Vec3 ab = pb - pa;
       const double t = std::clamp(dot(pm - pa, ab) / dot(ab, ab), 0.0, 1.0);
       EXPECT_LE(norm(pm - (pa + ab * t)), tol + 1e-6);
       EXPECT_EQ(m.kind, b.kind);  // one kind per merged line

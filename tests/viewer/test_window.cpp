@@ -26,7 +26,7 @@ TEST(ViewerWindow, DrawsAndFollowsALiveJob) {
   scene.program = Toolpath{};
   for (int k = 0; k < 100; ++k)
     append_segment(*scene.program, {k * 1.0, 0, 0}, {k + 1.0, 0, 0}, false, 500, static_cast<std::uint32_t>(k), 0);
-  scene.cutter = Cutter::ball(3);
+  scene.cutter = cam::Cutter::ball(3);
   LiveCursor live;
   WindowOptions o;
   o.width = 320;
@@ -41,16 +41,16 @@ TEST(ViewerWindow, DrawsAndFollowsALiveJob) {
       job = std::thread([&live] {
         live.set_cutter_position({5, 0, 0});
         // The material removed so far and the tool changed to.
-        GridSpec g{0, -5, 1, 1, 11, 11};
+        cam::GridSpec g{0, -5, 1, 1, 11, 11};
         live.set_cut(std::make_shared<const TriangleMesh>(stock_surface(g, std::vector<float>(g.size(), -1.0f))));
-        live.set_cutter(Cutter::flat(6));
+        live.set_cutter(cam::Cutter::flat(6));
         live.set_status("job 7 running, line 6 of 100");
         live.set_progress(5);
       });
       return true;
     }
     return title.find("segment 5 of 100") == std::string::npos || title.find("job 7 running") == std::string::npos ||
-           !scene.cut || !scene.cutter || scene.cutter->type != CutterType::Flat;
+           !scene.cut || !scene.cutter || scene.cutter->type != cam::CutterType::Flat;
   };
   run_window(scene, o);
   if (job.joinable()) job.join();

@@ -9,7 +9,7 @@
 // workers may arrive slightly out of order. An empty checkpoint costs nothing.
 #include <functional>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 using Checkpoint = std::function<void(double fraction_done)>;
 
@@ -20,4 +20,4 @@ inline Checkpoint checkpoint_part(const Checkpoint& whole, double from, double t
   return [&whole, from, to](double f) { whole(from + (to - from) * f); };
 }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -13,7 +13,7 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/geometry/mesh.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 struct ClOptions {
   // Height for nodes the cutter cannot touch; default: the mesh's lowest z.
@@ -58,8 +58,8 @@ struct ClTile {
 // query is const and may run concurrently.
 class ClEngine {
  public:
-  ClEngine(const Mesh& mesh, const Cutter& cutter, ClOptions options = {});
-  ClEngine(Mesh&& mesh, const Cutter& cutter, ClOptions options = {}) = delete;
+  ClEngine(const geometry::Mesh& mesh, const Cutter& cutter, ClOptions options = {});
+  ClEngine(geometry::Mesh&& mesh, const Cutter& cutter, ClOptions options = {}) = delete;
   ~ClEngine();
   ClEngine(ClEngine&&) noexcept;
   ClEngine& operator=(ClEngine&&) noexcept;
@@ -90,4 +90,4 @@ class ClEngine {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

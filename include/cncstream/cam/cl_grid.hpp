@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 struct GridSpec {
   double x0 = 0, y0 = 0;
@@ -32,4 +32,4 @@ struct ClGrid {
   double& at(std::size_t i, std::size_t j) { return z[j * spec.nx + i]; }
 };
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

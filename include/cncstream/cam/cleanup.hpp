@@ -7,7 +7,7 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/raster.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // residual: per node of `grid`, material left (NaN off part). A row needs
 // cleaning where some node within half a stepover across it holds more than
@@ -17,4 +17,4 @@ namespace cncstream {
 std::vector<Polyline> cleanup_pieces(const RasterPath& path, const GridSpec& grid, const std::vector<double>& residual,
                                      double tol, double reach, bool passes_along_x);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

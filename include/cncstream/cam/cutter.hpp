@@ -21,7 +21,7 @@
 #include <string>
 #include <string_view>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 enum class CutterType { Flat, Ball, Bull, VBit, TaperedBall };
 
@@ -127,4 +127,4 @@ class CutterSpecError : public std::invalid_argument {
 // A bull with corner radius 0 is a flat, with corner radius = R a ball.
 Cutter parse_cutter_spec(std::string_view spec);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -15,7 +15,7 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/cutter.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 enum class RemovalCriterion { Volume, Area };
 
@@ -76,4 +76,4 @@ SlopeProfile slope_profile(const RemovalChoice& choice, double bin_deg = 5);
 // like the cut simulation's residual).
 double scallop_2d(const Cutter& cutter, double stepover, double slope);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -14,7 +14,7 @@
 #include "cncstream/geometry/mesh.hpp"
 #include "cncstream/image/deviation_map.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 struct DesignHeights {
   GridSpec grid;
@@ -26,7 +26,7 @@ struct DesignHeights {
 // Casts a vertical ray through every node of `grid` (hits on a triangle's
 // edge or corner count). Triangles seen edge-on from above are skipped: the
 // faces around them give the same top-most heights.
-DesignHeights design_heights(const Mesh& design, const GridSpec& grid);
+DesignHeights design_heights(const geometry::Mesh& design, const GridSpec& grid);
 
 struct DeviationAt {
   double value = 0;  // machined - design, mm
@@ -62,9 +62,9 @@ struct DeviationResult {
 DeviationResult compare_to_design(const HeightFieldStock& machined, const DesignHeights& design, double tolerance);
 
 // The deviation map (see image/deviation_map.hpp) of a result.
-RgbImage render_deviation(const DeviationResult& result, const std::string& title, const std::string& subtitle = {},
+image::RgbImage render_deviation(const DeviationResult& result, const std::string& title, const std::string& subtitle = {},
                           int max_map_pixels = 800);
 void write_deviation_png(const std::filesystem::path& path, const DeviationResult& result, const std::string& title,
                          const std::string& subtitle = {});
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -11,11 +11,11 @@
 
 #include "cncstream/cam/cl_grid.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // `inside`: grid.size() flags (1 = in the mask). Outside nodes get 0.
 // Throws std::invalid_argument if the sizes differ.
 std::vector<double> distance_to_outside(const GridSpec& grid, const std::vector<std::uint8_t>& inside,
                                         bool beyond_is_outside = true);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -33,13 +33,13 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 struct HeightFieldData {
   GridSpec grid;
   std::vector<float> z;  // grid.size() values, NaN = no value
-  std::optional<Vec3> work_offset;  // work = model + offset, where the file says
-  std::optional<Vec3> work_origin;  // machine coordinates of the work zero the surface is relative to
+  std::optional<geometry::Vec3> work_offset;  // work = model + offset, where the file says
+  std::optional<geometry::Vec3> work_origin;  // machine coordinates of the work zero the surface is relative to
 };
 
 class HeightFieldError : public std::runtime_error {
@@ -56,14 +56,14 @@ std::filesystem::path height_field_sidecar(const std::filesystem::path& data_pat
 class HeightFieldWriter {
  public:
   HeightFieldWriter(const std::filesystem::path& data_path, const GridSpec& grid,
-                    std::optional<Vec3> work_offset = std::nullopt, std::optional<Vec3> work_origin = std::nullopt);
+                    std::optional<geometry::Vec3> work_offset = std::nullopt, std::optional<geometry::Vec3> work_origin = std::nullopt);
   void append(std::span<const double> z);
   void finish();
 
  private:
   std::filesystem::path path_;
   GridSpec grid_;
-  std::optional<Vec3> work_offset_, work_origin_;
+  std::optional<geometry::Vec3> work_offset_, work_origin_;
   std::ofstream out_;
   std::size_t written_ = 0;
 };
@@ -71,10 +71,10 @@ class HeightFieldWriter {
 // Writes both files. Throws HeightFieldError naming the path on failure and
 // std::invalid_argument if z.size() != grid.size().
 void write_height_field(const std::filesystem::path& data_path, const GridSpec& grid, std::span<const double> z,
-                        std::optional<Vec3> work_offset = std::nullopt, std::optional<Vec3> work_origin = std::nullopt);
+                        std::optional<geometry::Vec3> work_offset = std::nullopt, std::optional<geometry::Vec3> work_origin = std::nullopt);
 
 // Reads both files; errors name the file and the sidecar line, or the data
 // file's expected and actual size.
 HeightFieldData read_height_field(const std::filesystem::path& data_path);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

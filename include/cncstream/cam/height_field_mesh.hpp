@@ -8,14 +8,14 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/geometry/mesh.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // Throws std::invalid_argument for a grid smaller than 2 x 2, a size
 // mismatch, a non-finite height or a bottom not below every height.
-Mesh height_field_solid(const GridSpec& grid, std::span<const double> z, double bottom);
+geometry::Mesh height_field_solid(const GridSpec& grid, std::span<const double> z, double bottom);
 
 // height_field_solid written with write_stl_binary.
 void write_height_field_stl(const std::filesystem::path& path, const GridSpec& grid, std::span<const double> z,
                             double bottom);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -12,7 +12,7 @@
 
 #include "cncstream/cam/raster.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // Stretches of equal z are fitted separately, their ends kept; a point of
 // another height (lifted over the part) is kept as it is. The first and the
@@ -22,9 +22,9 @@ namespace cncstream {
 // meet the slot's other wall. `clear` (the exact CL along a move, at or
 // below the level) is asked of every move with a moved vertex; where none
 // is clear the run keeps its own points there.
-using LevelMoveCheck = std::function<bool(const Vec3& from, const Vec3& to)>;
+using LevelMoveCheck = std::function<bool(const geometry::Vec3& from, const geometry::Vec3& to)>;
 Polyline fit_level_run_in_band(const Polyline& run, double tolerance,
                                const std::optional<XYLattice>& lattice = std::nullopt,
                                const LevelMoveCheck& clear = {});
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -21,7 +21,7 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/raster.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // The exact value of the sampled function at (x, y).
 using PointQuery = std::function<double(double x, double y)>;
@@ -53,7 +53,7 @@ struct LevelContours {
   std::vector<LevelContour> contours;
   std::size_t queries = 0;    // point queries spent on refinement
   std::size_t crossings = 0;  // cell edges crossed
-  std::vector<Vec3> corner_points;  // sharp corners added (points of the contours)
+  std::vector<geometry::Vec3> corner_points;  // sharp corners added (points of the contours)
 };
 
 // `values`: grid.size() samples, node (i, j) at index j * nx + i; a NaN
@@ -71,4 +71,4 @@ LevelContours level_contours(const ClGrid& grid, double level, const PointQuery&
 // Twice the signed area of a closed loop (positive: counter-clockwise).
 double signed_area2(const Polyline& loop);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

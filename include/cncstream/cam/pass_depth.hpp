@@ -17,7 +17,7 @@
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/cam/stock.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // The stock's height at (x, y), bilinear between its nodes; NaN beyond its
 // grid (no stock there).
@@ -25,10 +25,10 @@ double stock_height_at(const HeightFieldStock& stock, double x, double y);
 
 struct PassDepth {
   double deepest = 0;  // mm: the deepest move's depth
-  Vec3 at;             // its lower end (the tip)
+  geometry::Vec3 at;             // its lower end (the tip)
   // Along the moves deeper than the limit, points a third of the radius
   // apart, each at the move's lower end's z.
-  std::vector<Vec3> over;
+  std::vector<geometry::Vec3> over;
   std::vector<MoveCut> too_deep;  // those moves
   double deepest_within = 0;      // the deepest of the other moves
 };
@@ -50,4 +50,4 @@ PassDepth pass_depth(const HeightFieldStock& stock, const std::vector<Polyline>&
 PassDepth pass_depth_bound(const HeightFieldStock& lower, const PassDepth& before, const Cutter& cutter, double rim,
                            double limit);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

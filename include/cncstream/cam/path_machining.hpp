@@ -11,7 +11,7 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/cam/raster.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // `pieces` are cut in order; consecutive pieces are joined by a straight move
 // from one's last point to the next's first (as in a raster: row, link,
@@ -25,7 +25,7 @@ std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heigh
 // A move of a path that cut, and its depth of cut: the largest height drop
 // of a stock node in it (HeightFieldStock::last_max_depth, over all bands).
 struct MoveCut {
-  Vec3 a, b;
+  geometry::Vec3 a, b;
   double depth = 0;
 };
 
@@ -36,4 +36,4 @@ std::vector<double> machine_path(const GridSpec& grid, std::vector<double> heigh
 // A raster's pieces in cutting order: row 0, link 0, row 1, ...
 std::vector<Polyline> raster_pieces(const RasterPath& path);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -12,7 +12,7 @@
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/cam/raster.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 struct PencilOptions {
   double step = 0.1;              // mm: the CL grid the creases are found on
@@ -32,4 +32,4 @@ struct PencilOptions {
 std::vector<Polyline> pencil_passes(const ClEngine& engine, const XYBounds& bounds, const PencilOptions& options,
                                     const std::function<bool(double, double)>& wanted);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

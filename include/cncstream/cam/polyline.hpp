@@ -5,11 +5,11 @@
 
 #include "cncstream/geometry/vec3.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
-using Polyline = std::vector<Vec3>;
+using Polyline = std::vector<geometry::Vec3>;
 
 // Distance seen from above (what a level pass covers).
-inline double xy_dist(const Vec3& a, const Vec3& b) { return std::hypot(b.x - a.x, b.y - a.y); }
+inline double xy_dist(const geometry::Vec3& a, const geometry::Vec3& b) { return std::hypot(b.x - a.x, b.y - a.y); }
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

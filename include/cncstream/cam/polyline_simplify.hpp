@@ -14,7 +14,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // s must be strictly increasing; returns the indices of kept samples,
 // always including the first and the last.
@@ -34,4 +34,4 @@ struct BandVertex {
 std::vector<BandVertex> fit_profile_in_band(const std::vector<double>& s, const std::vector<double>& z,
                                             double tolerance);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -12,7 +12,7 @@
 #include "cncstream/cam/polyline.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 enum class RasterDirection { X, Y };
 
@@ -74,7 +74,7 @@ struct RasterPath {
   ClGrid grid;
 };
 
-XYBounds default_bounds(const Mesh& mesh, const Cutter& cutter);
+XYBounds default_bounds(const geometry::Mesh& mesh, const Cutter& cutter);
 
 // Rows are refined as oneTBB tasks in the caller's task arena; the path does
 // not depend on how they were scheduled. `checkpoint` is called as the CL grid
@@ -82,4 +82,4 @@ XYBounds default_bounds(const Mesh& mesh, const Cutter& cutter);
 RasterPath build_raster(const ClEngine& engine, const XYBounds& bounds, const RasterOptions& options,
                         const Checkpoint& checkpoint = {});
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

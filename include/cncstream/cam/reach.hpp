@@ -12,7 +12,7 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/cutter.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 // A dense CL lattice for reach_heights(): pitch about pitch_x and pitch_y,
 // placed so that every node of `at` lies on it or on a fixed fraction of a
@@ -29,4 +29,4 @@ GridSpec reach_lattice(const GridSpec& at, double x0, double y0, double x1, doub
 std::vector<double> reach_heights(const ClGrid& cl, const Cutter& cutter, const GridSpec& at,
                                   const std::vector<std::uint8_t>& wanted, const Checkpoint& checkpoint = {});
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

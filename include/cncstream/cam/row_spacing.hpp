@@ -11,7 +11,7 @@
 
 #include "cncstream/cam/cl_grid.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 class RowSpacing {
  public:
@@ -39,4 +39,4 @@ class RowSpacing {
   std::vector<double> line_angle_;  // per grid line along the rows
 };
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

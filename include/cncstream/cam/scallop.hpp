@@ -13,7 +13,7 @@
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/deviation.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 struct ScallopStats {
   double max = 0, min = 0, mean = 0;  // over pass pairs x columns with material between them
@@ -59,4 +59,4 @@ ScallopMap scallops_from_cut(const GridSpec& grid, const std::vector<double>& ma
 
 ScallopStats scallop_stats(const std::vector<double>& values);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -9,7 +9,7 @@
 
 #include "cncstream/cam/cl_grid.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 class SlopeMap {
  public:
@@ -31,4 +31,4 @@ class SlopeMap {
   std::vector<double> angle_;
 };
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

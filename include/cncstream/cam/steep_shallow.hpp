@@ -14,7 +14,7 @@
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/cam/slope_map.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 struct SteepSkip {
   std::vector<Polyline> pieces;
@@ -26,4 +26,4 @@ struct SteepSkip {
 // their points and the points beside them) are bridged.
 SteepSkip skip_steep(const std::vector<Polyline>& pieces, const SlopeMap& slope, double angle);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -12,7 +12,7 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/geometry/vec3.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 class HeightFieldStock {
  public:
@@ -40,7 +40,7 @@ class HeightFieldStock {
   // of the path's XY footprint are visited. Returns the volume removed
   // (mm^3): the sum of height drops times the node area dx*dy. Throws
   // std::invalid_argument for non-finite points or a bad cutter.
-  double cut_segment(const Vec3& a, const Vec3& b, const Cutter& cutter);
+  double cut_segment(const geometry::Vec3& a, const geometry::Vec3& b, const Cutter& cutter);
 
   // Nodes whose height changed in the last cut_segment call (for live views).
   std::size_t nodes_cut() const { return nodes_cut_; }
@@ -68,6 +68,6 @@ class HeightFieldStock {
 // The lowest height the cutter's surface reaches above (x, y) while its tip
 // moves straight from a to b; +infinity if it never passes over (x, y). This
 // is the per-node rule cut_segment applies, exposed for checks.
-double swept_lowest_height(const Vec3& a, const Vec3& b, const Cutter& cutter, double x, double y);
+double swept_lowest_height(const geometry::Vec3& a, const geometry::Vec3& b, const Cutter& cutter, double x, double y);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -9,8 +9,8 @@
 // workers than that and warns when an arena asks for more.
 #include <functional>
 
-namespace cncstream {
+namespace cncstream::cam {
 
 void run_with_thread_limit(unsigned threads, const std::function<void()>& work);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -22,7 +22,7 @@
 #include "cncstream/cam/raster.hpp"
 #include "cncstream/cam/slope_map.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 struct WaterlineOptions {
   double z_step = 0.5;            // between levels, mm
@@ -60,4 +60,4 @@ struct WaterlinePath {
 WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const SlopeMap& slope,
                               const WaterlineOptions& options, const Checkpoint& checkpoint = {});
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -35,7 +35,7 @@
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/cam/raster.hpp"
 
-namespace cncstream {
+namespace cncstream::cam {
 
 class HeightFieldStock;
 
@@ -77,7 +77,7 @@ struct RoughingParams {
   // within step_down + leave of (a finishing tip): where the cutter's tip
   // can go low enough there, a level is added if none lies between that
   // and z + step_down + leave less the scallop between loops.
-  std::vector<Vec3> near;
+  std::vector<geometry::Vec3> near;
   double near_radius = 0;
 };
 
@@ -154,4 +154,4 @@ struct LevelPlan {
 LevelPlan plan_levels(const std::vector<double>& tips, const std::vector<double>& flat_tips, double cell_area,
                       double stock_top, const RoughingParams& params, double min_flat_area);
 
-}  // namespace cncstream
+}  // namespace cncstream::cam

@@ -39,10 +39,10 @@ struct Program {
   std::int64_t total_lines = 0;
   std::string sha256;              // of the program text
   std::filesystem::path path;      // written under <data>/programs/ (the journal's `file`)
-  std::optional<Mesh> work_mesh;   // STL jobs: the part in work coordinates (the simulator's verify)
-  std::optional<Cutter> cutter;
-  std::map<int, Cutter> tools;     // T number -> cutter, for a program of several tools
-  std::optional<Box3> stock;       // the job's stock block (work coordinates)
+  std::optional<geometry::Mesh> work_mesh;   // STL jobs: the part in work coordinates (the simulator's verify)
+  std::optional<cam::Cutter> cutter;
+  std::map<int, cam::Cutter> tools;     // T number -> cutter, for a program of several tools
+  std::optional<geometry::Box3> stock;       // the job's stock block (work coordinates)
   std::vector<jobs::OperationSummary> operations;  // STL jobs: roughing, finishing ...
   std::vector<std::string> notes;  // what the plan decided and why
   double seconds = 0;              // generation time

@@ -39,8 +39,8 @@ class SimMachinePort final : public session::MachinePort {
   std::string describe() override { return "the built-in simulator"; }
   // The next simulator cuts a stock and verifies it against `design` (work = machine coordinates),
   // with `cutter`, or the cutter of `tools` each T word selects.
-  void set_next_design(std::optional<Mesh> design, std::optional<Cutter> cutter, std::map<int, Cutter> tools = {},
-                       std::optional<Box3> stock = std::nullopt);
+  void set_next_design(std::optional<geometry::Mesh> design, std::optional<cam::Cutter> cutter, std::map<int, cam::Cutter> tools = {},
+                       std::optional<geometry::Box3> stock = std::nullopt);
   // Hands over the current simulator (to be finished or dropped off the event loop).
   std::shared_ptr<session::SimulatorPort> retire();
   // The simulated operator mounts tool T (what the operator confirms at a tool change's prompt).
@@ -111,9 +111,9 @@ class Machines {
   // Starts a job's lines. `verify`: on a sim machine, cut a fresh stock
   // and check it against this design (work coordinates) with this cutter.
   // `tools`: T number -> cutter for a program of several tools.
-  session::CommandResult start_job(Machine& m, session::JobInput job, std::optional<Mesh> design,
-                                   std::optional<Cutter> cutter, std::map<int, Cutter> tools = {},
-                                   std::optional<Box3> stock = std::nullopt);
+  session::CommandResult start_job(Machine& m, session::JobInput job, std::optional<geometry::Mesh> design,
+                                   std::optional<cam::Cutter> cutter, std::map<int, cam::Cutter> tools = {},
+                                   std::optional<geometry::Box3> stock = std::nullopt);
 
   // Control: throws ApiError (428 no client id, 409 held by another / nobody holds it).
   void require_control(Machine& m, const std::string& client_id);

@@ -47,12 +47,12 @@ struct ArcFitOptions {
 
 struct FittedMove {
   bool arc = false;  // false: a straight feed move to `to`
-  Vec3 to;
+  geometry::Vec3 to;
   // Arcs only: plane, direction as G2 (clockwise) or G3 sees it in that plane,
   // and the centre offset from the move's start (I, J, K; zero off the plane).
   gcode::Plane plane = gcode::Plane::XY;
   bool clockwise = false;
-  Vec3 center_offset;
+  geometry::Vec3 center_offset;
   double radius = 0;  // from the start point to the (rounded) centre
   double sweep = 0;   // rad, positive
 };
@@ -61,6 +61,6 @@ struct FittedMove {
 // the cut starts). The moves end exactly at the input points they keep; the
 // last one ends at the last point. Throws std::invalid_argument for bad
 // options.
-std::vector<FittedMove> fit_arcs(const std::vector<Vec3>& points, const ArcFitOptions& options);
+std::vector<FittedMove> fit_arcs(const std::vector<geometry::Vec3>& points, const ArcFitOptions& options);
 
 }  // namespace cncstream

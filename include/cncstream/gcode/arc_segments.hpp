@@ -27,13 +27,13 @@ constexpr PlaneAxes axes_of(Plane p) {
 double arc_angular_travel(const ArcMove& arc);
 
 // The chord end points, the last one exactly arc.to. Never empty.
-std::vector<Vec3> segment_arc(const ArcMove& arc, double arc_tolerance);
+std::vector<geometry::Vec3> segment_arc(const ArcMove& arc, double arc_tolerance);
 
 // An arc as the straight moves that run it: its chords (segment_arc) and the
 // feed every chord runs at, mm/min. In inverse time (G93) the whole arc takes
 // 1/F minutes, so the feed is F times the chords' length.
 struct ArcChords {
-  std::vector<Vec3> points;  // chord end points, from segment_arc
+  std::vector<geometry::Vec3> points;  // chord end points, from segment_arc
   double feed = 0;
 };
 ArcChords arc_chords(const ArcMove& arc, double arc_tolerance);

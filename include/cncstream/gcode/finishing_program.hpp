@@ -17,7 +17,7 @@ enum class XYOrigin { PartMin, PartCenter, Model };  // work X0 Y0 at ...
 enum class ZZero { PartTop, PartBottom, Model };      // work Z0 at ...
 
 // Offset added to model coordinates to get work coordinates.
-Vec3 work_offset(const Box3& part, XYOrigin xy, ZZero z);
+geometry::Vec3 work_offset(const geometry::Box3& part, XYOrigin xy, ZZero z);
 
 struct MachiningParams {
   double feed = 1000;        // mm/min
@@ -42,19 +42,19 @@ struct ProgramStats {
   double cut_length = 0;      // mm at feed
   double rapid_length = 0;    // mm at rapid
   double feed_time_s = 0;     // cut length / feed (no acceleration)
-  Box3 work_bounds;           // of the tool tip over the cut, in work coordinates
+  geometry::Box3 work_bounds;           // of the tool tip over the cut, in work coordinates
 };
 
 // Throws std::invalid_argument if safe_z is not above the whole path.
-std::string finishing_program(const RasterPath& path, const Vec3& offset, const MachiningParams& params,
+std::string finishing_program(const cam::RasterPath& path, const geometry::Vec3& offset, const MachiningParams& params,
                               ProgramStats* stats = nullptr);
 
 // The raster as one continuous cut: row, link, row, ...
-std::vector<Polyline> raster_as_one_cut(const RasterPath& path);
+std::vector<cam::Polyline> raster_as_one_cut(const cam::RasterPath& path);
 
 // Separate cuts (e.g. clean-up pieces): for each, a rapid over its start at
 // the safe Z, a plunge at the plunge feed, the cut, a retract.
-std::string pieces_program(const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& params,
+std::string pieces_program(const std::vector<cam::Polyline>& pieces, const geometry::Vec3& offset, const MachiningParams& params,
                            ProgramStats* stats = nullptr);
 
 class GcodeWriter;
@@ -69,14 +69,14 @@ void write_program_end(GcodeWriter& w, const MachiningParams& p, ProgramStats& s
 // and time added to `stats`; `at` follows the tool. With `bounds`, every
 // move's end is added to it.
 void write_fitted_moves(GcodeWriter& w, const std::vector<FittedMove>& moves, double feed, ProgramStats& stats,
-                        Vec3& at, Box3* bounds = nullptr);
+                        geometry::Vec3& at, geometry::Box3* bounds = nullptr);
 
 // The body of pieces_program, for a program of several operations
 // (job_program.hpp): from the safe Z over each piece's start, plunge at the
 // plunge feed, cut (arcs where p.arcs), retract to the safe Z. Uses p's
 // feeds, decimals, safe_z and arcs; adds to `stats` (not lines). Throws as
 // pieces_program.
-void write_pieces(GcodeWriter& w, const std::vector<Polyline>& pieces, const Vec3& offset, const MachiningParams& p,
+void write_pieces(GcodeWriter& w, const std::vector<cam::Polyline>& pieces, const geometry::Vec3& offset, const MachiningParams& p,
                   ProgramStats& stats);
 
 }  // namespace cncstream

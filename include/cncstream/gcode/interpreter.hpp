@@ -40,38 +40,38 @@ struct ModalState {
 
 // Stored coordinate data (EEPROM on the firmware): G54..G59, G28, G30.
 struct CoordinateTable {
-  std::array<Vec3, 6> wcs{};
-  Vec3 g28{};
-  Vec3 g30{};
+  std::array<geometry::Vec3, 6> wcs{};
+  geometry::Vec3 g28{};
+  geometry::Vec3 g30{};
 };
 
 struct ParserState {
   ModalState modal;
-  Vec3 position{};          // where the parser thinks the tool is (machine mm)
+  geometry::Vec3 position{};          // where the parser thinks the tool is (machine mm)
   double feed_rate = 0;     // mm/min (G94) or inverse-time value (G93)
   double spindle_speed = 0; // rpm
   int tool = 0;
   std::int32_t line_number = 0;
-  Vec3 coord_system{};      // active WCS offset
-  Vec3 g92{};               // G92 offset
+  geometry::Vec3 coord_system{};      // active WCS offset
+  geometry::Vec3 g92{};               // G92 offset
   double tool_length_offset = 0;  // G43.1 Z
   CoordinateTable coords;
 
   // Work coordinate offset: WPos = MPos - wco().
-  Vec3 wco() const { return coord_system + g92 + Vec3{0, 0, tool_length_offset}; }
-  Vec3 work_position() const { return position - wco(); }
+  geometry::Vec3 wco() const { return coord_system + g92 + geometry::Vec3{0, 0, tool_length_offset}; }
+  geometry::Vec3 work_position() const { return position - wco(); }
 };
 
 // ---- actions -------------------------------------------------------------
 struct LinearMove {
-  Vec3 from, to;
+  geometry::Vec3 from, to;
   bool rapid = false;
   double feed = 0;  // mm/min; for rapids 0 (the machine uses its max rates)
   std::int32_t line_number = 0;
 };
 struct ArcMove {
-  Vec3 from, to;
-  Vec3 center;  // in the plane; the linear axis of center is unused
+  geometry::Vec3 from, to;
+  geometry::Vec3 center;  // in the plane; the linear axis of center is unused
   double radius = 0;
   Plane plane = Plane::XY;
   bool clockwise = true;
@@ -80,7 +80,7 @@ struct ArcMove {
   std::int32_t line_number = 0;
 };
 struct ProbeMove {
-  Vec3 from, to;
+  geometry::Vec3 from, to;
   double feed = 0;
   bool toward = true;        // G38.2/3 (else away: G38.4/5)
   bool error_on_fail = true; // G38.2/4 (else G38.3/5)
@@ -93,9 +93,9 @@ struct ProgramPause { bool optional = false; };  // M0 (M1 is ignored by GRBL, n
 struct ProgramEnd { int code = 2; };             // M2 / M30
 // Persistent coordinate data was written (G10, G28.1, G30.1): index 0..5 =
 // G54..G59, 6 = G28, 7 = G30. The machine stores it (EEPROM).
-struct CoordinateWrite { int index = 0; Vec3 value; };
+struct CoordinateWrite { int index = 0; geometry::Vec3 value; };
 struct WorkOffsetChange {};  // WCO changed (status reports refresh WCO)
-struct JogMove { Vec3 from, to; double feed = 0; };
+struct JogMove { geometry::Vec3 from, to; double feed = 0; };
 
 using Action = std::variant<LinearMove, ArcMove, ProbeMove, Dwell, SpindleChange, CoolantChange,
                             ProgramPause, ProgramEnd, CoordinateWrite, WorkOffsetChange, JogMove>;

@@ -33,7 +33,7 @@ struct JobProgramOptions {
 struct OperationHeader {
   std::string name;  // "roughing", "finishing", ...
   int tool = 1;      // T number
-  Cutter cutter;
+  cam::Cutter cutter;
   double rpm = 18000;  // 0: no spindle commands
 };
 

@@ -20,13 +20,13 @@
 namespace cncstream::gcode {
 
 struct MotionLimits {
-  Vec3 max_rate{500, 500, 500};      // mm/min per axis ($110-$112)
-  Vec3 acceleration{10, 10, 10};     // mm/s^2 per axis ($120-$122)
+  geometry::Vec3 max_rate{500, 500, 500};      // mm/min per axis ($110-$112)
+  geometry::Vec3 acceleration{10, 10, 10};     // mm/s^2 per axis ($120-$122)
   double junction_deviation = 0.01;  // mm ($11)
 };
 
 struct MotionBlock {
-  Vec3 from, to;
+  geometry::Vec3 from, to;
   double feed = 0;     // mm/min; ignored for rapids
   bool rapid = false;
   std::int32_t line_number = 0;
@@ -54,7 +54,7 @@ class MotionQueue {
   bool push(const MotionBlock& block);
 
   // Called for every straight piece the tool traverses.
-  using Traverse = std::function<void(const Vec3& a, const Vec3& b, const MotionBlock& block)>;
+  using Traverse = std::function<void(const geometry::Vec3& a, const geometry::Vec3& b, const MotionBlock& block)>;
   struct Advance {
     double time = 0;             // seconds of motion simulated (<= dt)
     std::size_t completed = 0;   // blocks finished
@@ -74,8 +74,8 @@ class MotionQueue {
   // Drops every block; the tool stays where it is (reset, jog cancel).
   void clear();
 
-  Vec3 position() const { return position_; }
-  void set_position(const Vec3& p);  // only meaningful when empty
+  geometry::Vec3 position() const { return position_; }
+  void set_position(const geometry::Vec3& p);  // only meaningful when empty
   double speed() const { return speed_; }  // mm/s
   const MotionBlock* current() const { return blocks_.empty() ? nullptr : &blocks_.front().src; }
 
@@ -87,7 +87,7 @@ class MotionQueue {
  private:
   struct Planned {
     MotionBlock src;
-    Vec3 unit;
+    geometry::Vec3 unit;
     double length = 0;
     double remaining = 0;
     double accel = 0;        // mm/s^2 along the block
@@ -103,8 +103,8 @@ class MotionQueue {
   MotionLimits limits_;
   std::size_t capacity_;
   std::deque<Planned> blocks_;
-  Vec3 position_{};
-  Vec3 last_unit_{};
+  geometry::Vec3 position_{};
+  geometry::Vec3 last_unit_{};
   bool has_last_unit_ = false;
   double speed_ = 0;
   bool holding_ = false;

@@ -15,13 +15,13 @@
 namespace cncstream::gcode {
 
 struct PathSegment {
-  Vec3 from, to;           // machine coordinates, mm
-  Vec3 wco;                // work offset in force: work = machine - wco
+  geometry::Vec3 from, to;           // machine coordinates, mm
+  geometry::Vec3 wco;                // work offset in force: work = machine - wco
   bool rapid = false;
   double feed = 0;         // mm/min (0 for rapids)
   std::size_t source_line = 0;  // 0-based line index in the program text
-  Vec3 work_from() const { return from - wco; }
-  Vec3 work_to() const { return to - wco; }
+  geometry::Vec3 work_from() const { return from - wco; }
+  geometry::Vec3 work_to() const { return to - wco; }
 };
 
 struct LineError {

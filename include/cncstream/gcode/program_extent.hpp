@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "cncstream/gcode/xy_hull.hpp"
+
 namespace cncstream::gcode {
 
 struct AxisExtent {
@@ -25,6 +27,10 @@ struct AxisExtent {
 
 struct ProgramExtent {
   std::array<AxisExtent, 3> axes;  // X, Y, Z
+  // The convex hull (counter-clockwise) of the XY positions where both X and
+  // Y are known, in the frame the X measure comes from; fewer than 3
+  // vertices when the program moves along a line.
+  std::vector<XyPoint> xy_hull;
 };
 
 // Lines are raw program lines (comments, '%' and '$' lines allowed); lines

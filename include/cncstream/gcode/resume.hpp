@@ -56,7 +56,7 @@ struct ResumeChoice {
   std::string reason;          // for the operator
 };
 struct LastSeen {
-  Vec3 work;                  // work position from the last status report, mm
+  geometry::Vec3 work;                  // work position from the last status report, mm
   std::size_t answered = 0;   // last answered 1-based line when it came
 };
 ResumeChoice choose_resume_line(const ProgramTrace& trace, std::size_t last_answered,

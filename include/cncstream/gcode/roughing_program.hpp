@@ -15,12 +15,12 @@ namespace cncstream {
 // left there. Adds to `stats` (lines and bounds are the caller's). Throws
 // std::invalid_argument for bad feeds, an empty path, or a safe Z below the
 // path's clearance height.
-void write_roughing(GcodeWriter& w, const RoughingPath& path, const Vec3& offset, const MachiningParams& params,
+void write_roughing(GcodeWriter& w, const cam::RoughingPath& path, const geometry::Vec3& offset, const MachiningParams& params,
                     ProgramStats& stats);
 
 // A whole program like finishing_program: header, tool, spindle, the body,
 // spindle off, program end.
-std::string roughing_program(const RoughingPath& path, const Vec3& offset, const MachiningParams& params,
+std::string roughing_program(const cam::RoughingPath& path, const geometry::Vec3& offset, const MachiningParams& params,
                              ProgramStats* stats = nullptr);
 
 }  // namespace cncstream

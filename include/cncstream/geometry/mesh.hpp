@@ -9,7 +9,7 @@
 
 #include "cncstream/geometry/vec3.hpp"
 
-namespace cncstream {
+namespace cncstream::geometry {
 
 struct Mesh {
   std::vector<Vec3> vertices;
@@ -47,4 +47,4 @@ struct MeshSummary {
 };
 MeshSummary summarize(const Mesh& mesh, std::size_t dropped_degenerate = 0);
 
-}  // namespace cncstream
+}  // namespace cncstream::geometry

@@ -8,7 +8,7 @@
 
 #include "cncstream/geometry/mesh.hpp"
 
-namespace cncstream {
+namespace cncstream::geometry {
 
 enum class LengthUnit { Millimetre, Inch, Metre };
 LengthUnit parse_length_unit(const std::string& s);  // "mm" | "in" | "m"
@@ -43,4 +43,4 @@ StlLoadResult parse_stl(const std::string& bytes, const std::string& name,
 void write_stl_binary(const std::filesystem::path& path, const Mesh& mesh,
                       const std::string& header = "cncstream");
 
-}  // namespace cncstream
+}  // namespace cncstream::geometry

@@ -3,7 +3,7 @@
 // 1e-6 mm, which float cannot hold at part scale.
 #include <cmath>
 
-namespace cncstream {
+namespace cncstream::geometry {
 
 struct Vec3 {
   double x = 0, y = 0, z = 0;
@@ -54,4 +54,4 @@ struct Box3 {
   Vec3 size() const { return empty() ? Vec3{} : hi - lo; }
 };
 
-}  // namespace cncstream
+}  // namespace cncstream::geometry

@@ -12,6 +12,6 @@ namespace cncstream::gl {
 // The highest (or lowest) exact CL height on 32 points of a circle of radius
 // r around (x, y); the lowest is -inf where a point of the circle touches
 // nothing (any height is consistent there).
-double exact_height_around(const ClEngine& exact, double x, double y, double r, bool highest);
+double exact_height_around(const cam::ClEngine& exact, double x, double y, double r, bool highest);
 
 }  // namespace cncstream::gl

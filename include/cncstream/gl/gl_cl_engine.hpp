@@ -63,7 +63,7 @@ struct GlClStats {
 // Throws std::invalid_argument for a bad spec or tolerance, GlError when no
 // GL context can be made or used. Calls from several threads run one after
 // the other (one EGL display per process).
-ClGrid compute_cl_grid_gl(const Mesh& mesh, const Cutter& cutter, const GridSpec& spec,
+cam::ClGrid compute_cl_grid_gl(const geometry::Mesh& mesh, const cam::Cutter& cutter, const cam::GridSpec& spec,
                           const GlClOptions& options = {}, GlClStats* stats = nullptr);
 
 }  // namespace cncstream::gl

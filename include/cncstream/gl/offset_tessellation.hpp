@@ -43,13 +43,13 @@ namespace cncstream::gl {
 // point, rings at radii rho[k] (the last at R), `spokes` points per ring.
 class CutterCap {
  public:
-  CutterCap(const Cutter& cutter, double tolerance);
+  CutterCap(const cam::Cutter& cutter, double tolerance);
 
   std::size_t spokes() const { return spokes_; }
   const std::vector<double>& ring_radius() const { return rho_; }   // increasing, last = R
   const std::vector<double>& ring_height() const { return z_; }     // -h(rho), <= 0
   // Points: [0] the centre, then ring k's spoke j at 1 + k * spokes + j.
-  const std::vector<Vec3>& points() const { return points_; }
+  const std::vector<geometry::Vec3>& points() const { return points_; }
   // Top triangles (counter-clockwise seen from above), indices into points().
   const std::vector<std::array<std::uint32_t, 3>>& triangles() const { return triangles_; }
   // Widest gap between P's shadow and the exact disc of radius R.
@@ -63,7 +63,7 @@ class CutterCap {
   // opposite sides of d.
   // Their parallelograms swept along a segment parallel to d, with P at both
   // ends, bound the segment's offset from above.
-  void silhouette_edges(const Vec3& d, std::vector<std::array<std::uint32_t, 2>>& out) const;
+  void silhouette_edges(const geometry::Vec3& d, std::vector<std::array<std::uint32_t, 2>>& out) const;
 
  private:
   struct CapEdge {
@@ -72,9 +72,9 @@ class CutterCap {
   };
   std::size_t spokes_ = 0;
   std::vector<double> rho_, z_;
-  std::vector<Vec3> points_;
+  std::vector<geometry::Vec3> points_;
   std::vector<std::array<std::uint32_t, 3>> triangles_;
-  std::vector<Vec3> face_normal_;  // per polar cell (fan triangle or quad), then the side wall per rim edge
+  std::vector<geometry::Vec3> face_normal_;  // per polar cell (fan triangle or quad), then the side wall per rim edge
   std::vector<CapEdge> edges_;
   double R_ = 0;
   double height_error_bound_ = 0;
@@ -90,7 +90,7 @@ class CutterCap {
 // consecutive generators, from a + q_k to b + q_k, are the edge offset's
 // tessellation (the ends beyond them are the vertex offsets'). Empty for a
 // vertical segment (its offset is its upper vertex's).
-void edge_generators(const Cutter& cutter, const Vec3& a, const Vec3& b, double tolerance, std::vector<Vec3>& out);
+void edge_generators(const cam::Cutter& cutter, const geometry::Vec3& a, const geometry::Vec3& b, double tolerance, std::vector<geometry::Vec3>& out);
 
 // The thesis's face offset (eq. 3.3) of a facet for the tool tip: the facet
 // moved by rk * n + rc * n_xy / |n_xy| - rk * z, n its upward unit normal.
@@ -99,10 +99,10 @@ void edge_generators(const Cutter& cutter, const Vec3& a, const Vec3& b, double 
 // matches the facet's (the maximum of t rho - h(rho), t its slope).
 // false for a (near-)vertical facet (n_z < 1e-8), whose offset is seen only
 // through its edges and vertices.
-bool face_offset_triangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Cutter& cutter,
-                          std::array<Vec3, 3>& out);
+bool face_offset_triangle(const geometry::Vec3& p0, const geometry::Vec3& p1, const geometry::Vec3& p2, const cam::Cutter& cutter,
+                          std::array<geometry::Vec3, 3>& out);
 
 // Upward unit normal of a triangle (n_z >= 0); zero for a degenerate one.
-Vec3 upward_unit_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2);
+geometry::Vec3 upward_unit_normal(const geometry::Vec3& p0, const geometry::Vec3& p1, const geometry::Vec3& p2);
 
 }  // namespace cncstream::gl

@@ -8,7 +8,7 @@
 #include "cncstream/image/image.hpp"
 #include "cncstream/image/map_grid.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 struct MapCategory {
   std::string name;
@@ -30,4 +30,4 @@ struct CategoryMapOptions {
 RgbImage render_category_map(const MapGrid& grid, std::span<const int> category,
                              const std::vector<MapCategory>& categories, const CategoryMapOptions& options);
 
-}  // namespace cncstream
+}  // namespace cncstream::image

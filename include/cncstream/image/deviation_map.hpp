@@ -11,7 +11,7 @@
 #include "cncstream/image/image.hpp"
 #include "cncstream/image/map_grid.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 struct DeviationMapOptions {
   std::string title;
@@ -57,4 +57,4 @@ void draw_deviation_legend(RgbImage& image, int x, int y, const DeviationLegend&
 RgbImage render_deviation_map(const MapGrid& grid, std::span<const double> deviation,
                               std::span<const std::uint8_t> off_part, const DeviationMapOptions& options);
 
-}  // namespace cncstream
+}  // namespace cncstream::image

@@ -10,7 +10,7 @@
 #include "cncstream/image/image.hpp"
 #include "cncstream/image/map_grid.hpp"
 
-namespace cncstream {
+namespace cncstream::image {
 
 struct HeightMapOptions {
   std::string title;
@@ -44,4 +44,4 @@ struct HeightImageOptions {
 // no_data. Throws std::invalid_argument on a bad size or mismatched values.
 RgbImage render_height_image(const MapGrid& grid, std::span<const float> values, const HeightImageOptions& options);
 
-}  // namespace cncstream
+}  // namespace cncstream::image

@@ -7,7 +7,7 @@
 #include <string_view>
 #include <vector>
 
-namespace cncstream {
+namespace cncstream::image {
 
 struct Rgb {
   std::uint8_t r = 0, g = 0, b = 0;
@@ -51,4 +51,4 @@ Rgb colormap_viridis(double t);
 // t in [-1, 1]: blue (negative) - white (0) - red (positive).
 Rgb colormap_diverging(double t);
 
-}  // namespace cncstream
+}  // namespace cncstream::image

@@ -4,7 +4,7 @@
 // (+y) up. Kept separate from cam's GridSpec so images do not depend on cam.
 #include <cstddef>
 
-namespace cncstream {
+namespace cncstream::image {
 
 struct MapGrid {
   std::size_t nx = 0, ny = 0;
@@ -14,4 +14,4 @@ struct MapGrid {
   std::size_t size() const { return nx * ny; }
 };
 
-}  // namespace cncstream
+}  // namespace cncstream::image

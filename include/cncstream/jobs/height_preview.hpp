@@ -16,12 +16,12 @@
 namespace cncstream::jobs {
 
 struct HeightPreview {
-  MapGrid grid;                 // node (i, j) at (x0 + i*dx, y0 + j*dy), work coordinates
+  image::MapGrid grid;                 // node (i, j) at (x0 + i*dx, y0 + j*dy), work coordinates
   std::vector<float> z;         // grid.size() tip heights; NaN: nothing cut near
   double z_min = 0, z_max = 0;  // the lowest and highest tip (the colour ramp's ends)
 
   bool empty() const { return z.empty(); }
-  XYBounds bounds() const;  // the nodes' extent
+  cam::XYBounds bounds() const;  // the nodes' extent
 };
 
 // Nodes a side at most: 1024 x 1024 floats is 4 MB, where the CL grid of a
@@ -33,7 +33,7 @@ inline constexpr std::size_t kPreviewSideMax = 1024;
 // path's rows, which may reach a shorter last row the grid lacks), each node
 // keeping the highest grid node under it (a thin ridge survives), then moved
 // by `offset` into work coordinates. z_min/z_max are the whole grid's.
-HeightPreview height_preview_from_grid(const ClGrid& grid, const XYBounds& extent, const Vec3& offset,
+HeightPreview height_preview_from_grid(const cam::ClGrid& grid, const cam::XYBounds& extent, const geometry::Vec3& offset,
                                        std::size_t max_side = kPreviewSideMax);
 
 // The cutting moves (not rapids) rasterised onto at most max_side nodes a
@@ -45,6 +45,6 @@ HeightPreview height_preview_from_trace(const gcode::ProgramTrace& trace, std::s
 
 // The picture (render_height_image): the long side max_px pixels, the other
 // by the bounds' aspect, at least 1. Throws std::invalid_argument when empty.
-RgbImage render_height_preview(const HeightPreview& h, int max_px, Rgb no_data);
+image::RgbImage render_height_preview(const HeightPreview& h, int max_px, image::Rgb no_data);
 
 }  // namespace cncstream::jobs

@@ -13,8 +13,8 @@
 namespace cncstream::jobs {
 
 struct PathPreview {
-  std::vector<std::vector<Vec3>> cuts;    // feed moves, in program order
-  std::vector<std::vector<Vec3>> rapids;  // G0 moves, in program order
+  std::vector<std::vector<geometry::Vec3>> cuts;    // feed moves, in program order
+  std::vector<std::vector<geometry::Vec3>> rapids;  // G0 moves, in program order
   std::size_t points = 0;                 // in cuts and rapids together (a point shared by both counts twice)
   std::size_t total_points = 0;           // the program's path: where it starts and every move's end
 };

@@ -45,7 +45,7 @@ struct PlanResult {
   bool radiused_first = false;
   const CutterRun& first() const { return radiused_first ? selection.radiused : selection.ball; }
   const CutterRun& second() const { return radiused_first ? selection.ball : selection.radiused; }
-  std::vector<Polyline> cleanup_pieces;  // the second cutter's, model coordinates
+  std::vector<cam::Polyline> cleanup_pieces;  // the second cutter's, model coordinates
   std::string program_first;             // T1: finishing with the first cutter
   std::string program_second;            // T2: the clean-up; empty when none is needed
   // The same as one job (gcode/job_program.hpp): the finishing with T1, the

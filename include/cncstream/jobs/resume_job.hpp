@@ -27,7 +27,7 @@ struct ResumeInput {
   // answered 1-based line, and the controller's last reported work position
   // with the last answered line when that report came.
   std::int64_t last_line = 0;
-  std::optional<Vec3> status_work_pos;
+  std::optional<geometry::Vec3> status_work_pos;
   std::int64_t status_line = 0;
   // When the job was itself a resume: the line it continued after. If it
   // answered no file line past it (killed in its preamble, before its first

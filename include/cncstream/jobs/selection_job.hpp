@@ -20,36 +20,36 @@ namespace cncstream::jobs {
 
 struct SelectionParams {
   PartSource part;
-  CutterPair cutters;       // the ball and the radiused cutter, same diameter
+  cam::CutterPair cutters;       // the ball and the radiused cutter, same diameter
   // A third cutter on the same passes, beside the pair (its scallops and what
   // it cannot reach; the choice stays the pair's): the sign maker's tapered
   // ball against ball and bull-nose (issue 28).
-  std::optional<Cutter> tapered;
+  std::optional<cam::Cutter> tapered;
   double stepover = 0.4;
   double step = 0.05;       // along the passes
-  RasterDirection direction = RasterDirection::X;
+  cam::RasterDirection direction = cam::RasterDirection::X;
   double scallop_tol = 0.01;
   double reach_pitch = -1;  // reach-limit lattice, mm; 0: no scallop/unreachable split; < 0: min(0.15, stepover/3)
   double sim_along = 0;     // cut simulation column spacing along the passes; 0: one per stepover
 };
 
 struct CutterRun {
-  Cutter cutter;
-  RasterPath path;
+  cam::Cutter cutter;
+  cam::RasterPath path;
   std::vector<double> machined;  // on the simulation grid
-  ScallopMap scallops;           // scallop and unreachable material, split by the reach limit
+  cam::ScallopMap scallops;           // scallop and unreachable material, split by the reach limit
   std::vector<double> reach;     // the cutter's reach limit per simulation node (NaN where not computed)
-  ScallopStats estimate_2d;      // the thesis's 2-D tangent estimate over the part
+  cam::ScallopStats estimate_2d;      // the thesis's 2-D tangent estimate over the part
 };
 
 struct SelectionResult {
   SelectionParams params;
   std::size_t facets = 0;
-  CutterPair pair;
-  Vec3 work_offset;                  // model -> work coordinates (G-code)
-  RemovalChoice choice;              // on the analysis grid
-  SlopeProfile profile;
-  DesignHeights design;              // on the simulation grid
+  cam::CutterPair pair;
+  geometry::Vec3 work_offset;                  // model -> work coordinates (G-code)
+  cam::RemovalChoice choice;              // on the analysis grid
+  cam::SlopeProfile profile;
+  cam::DesignHeights design;              // on the simulation grid
   CutterRun ball, radiused;
   std::optional<CutterRun> tapered;  // when params.tapered
   // The runs in the report's order: ball, radiused, then the tapered.

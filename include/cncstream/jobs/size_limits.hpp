@@ -15,13 +15,13 @@ constexpr double kDefaultMaxPartMm = 3000;
 
 // Throws std::invalid_argument naming `source`, the part's size and the
 // likely cause (its units) when an extent exceeds `limit_mm`.
-void check_part_size(const Box3& bounds, const std::string& source, double limit_mm = kDefaultMaxPartMm);
+void check_part_size(const geometry::Box3& bounds, const std::string& source, double limit_mm = kDefaultMaxPartMm);
 
 // A part whose size suggests it was read in the wrong units: smaller than
 // the cutter, or a few millimetres when its numbers were probably metres or
 // inches. Returns a warning naming the likely --units (and the size it would
 // have), or "" when the size is plausible. `units`: what it was read in.
-std::string units_warning(const Box3& bounds, LengthUnit units, double cutter_diameter, const std::string& source);
+std::string units_warning(const geometry::Box3& bounds, geometry::LengthUnit units, double cutter_diameter, const std::string& source);
 
 // Half of this machine's physical memory: what one job may plan to use.
 std::size_t memory_budget_bytes();

@@ -18,14 +18,14 @@ struct StockSpec {
   enum class Kind { Auto, Box, HeightMap };
   Kind kind = Kind::Auto;
   double margin = 1.0;  // Auto
-  Box3 box;             // Box: work coordinates
+  geometry::Box3 box;             // Box: work coordinates
   std::filesystem::path height_map;
   // This job's work zero in machine coordinates (G5x + G92, as $# reports
   // them; `--work-origin`), to place a height map that records the work zero
   // it was saved with: the surface moves by (its origin − this one), so a
   // second setup with its zero elsewhere sees the stock where it physically
   // is. Unknown with a map that records one: refused.
-  std::optional<Vec3> work_origin;
+  std::optional<geometry::Vec3> work_origin;
 };
 
 // Throws std::invalid_argument naming the text and what is wrong with it.
@@ -35,8 +35,8 @@ StockSpec parse_stock_spec(std::string_view text);
 // extent and its highest value above the lowest of the part), and the map
 // itself when there is one. `part` is the part's box in work coordinates.
 struct WorkStock {
-  Box3 box;
-  std::optional<HeightFieldData> heights;
+  geometry::Box3 box;
+  std::optional<cam::HeightFieldData> heights;
   // Height of the stock's top at (x, y), work coordinates: the box's top, or
   // the map's value at the nearest node (the box's top off the map or where
   // it holds no value).
@@ -48,6 +48,6 @@ struct WorkStock {
 // before origins were recorded). Throws std::invalid_argument when the stock
 // does not contain the part's footprint or is below its top, or when the map
 // records a work origin and this job's is unknown (naming the map's).
-WorkStock resolve_stock(const StockSpec& spec, const Box3& part);
+WorkStock resolve_stock(const StockSpec& spec, const geometry::Box3& part);
 
 }  // namespace cncstream::jobs

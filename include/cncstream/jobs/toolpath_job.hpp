@@ -37,10 +37,10 @@ inline constexpr double kDefaultTolerance = 0.01;
 
 struct ToolpathParams {
   PartSource part;
-  Cutter cutter;
+  cam::Cutter cutter;
   double stepover = 0.4;
   double step = 0;  // along a row; 0: min(stepover / 4, 0.1)
-  RasterDirection direction = RasterDirection::X;
+  cam::RasterDirection direction = cam::RasterDirection::X;
   FinishStrategy strategy = FinishStrategy::Raster;
   double steep_angle = 45;  // degrees from the horizontal
   // Set: the scallop height to keep (mm): the row stepover and the waterline
@@ -60,7 +60,7 @@ struct ToolpathParams {
   // arrive in time at its feed, F is lowered there (gcode/link_feed_limit.hpp).
   // Unset or unbounded: the feeds stay as commanded.
   std::optional<gcode::StreamLink> link;
-  std::optional<XYBounds> bounds;         // of the tool tip, model coordinates; default: part box grown by the radius
+  std::optional<cam::XYBounds> bounds;         // of the tool tip, model coordinates; default: part box grown by the radius
   std::optional<double> floor;            // lowest tip height, model coordinates; default: the part's lowest z
   XYOrigin origin = XYOrigin::PartMin;
   ZZero z_zero = ZZero::PartTop;
@@ -76,7 +76,7 @@ struct ToolpathParams {
   // part's top.
   std::optional<StockSpec> stock;
   std::optional<double> max_depth;        // the finishing cutter's; default: default_max_depth(cutter)
-  std::optional<Cutter> rough;            // roughing cutter
+  std::optional<cam::Cutter> rough;            // roughing cutter
   std::optional<double> rough_max_depth;  // the roughing cutter's; default: default_max_depth(rough)
   double leave = 0.3;                     // mm of stock the roughing leaves on the part
   std::optional<double> step_down;        // default: the largest that keeps every pass within both depths
@@ -86,14 +86,14 @@ struct ToolpathParams {
   // Rest machining after the finishing: a smaller cutter, only where the
   // finishing cutter cannot reach the part (grooves, gaps and inside
   // corners narrower than it), with a tool change before it.
-  std::optional<Cutter> rest;
+  std::optional<cam::Cutter> rest;
   std::optional<double> rest_feed, rest_rpm;  // the rest machining's; default: feed, rpm
   ToolChangeCode tool_change = ToolChangeCode::PauseM0;
   // Set: the raster finishing's CL grids come from here instead of the exact
   // engine (the CLI's --engine gl: the depth buffer), and `grid_note` (asked
   // after them) says so in the program's header. Raster finishing only:
   // steep-and-shallow and rest machining work from exact point queries.
-  std::function<ClGrid(const Mesh&, const Cutter&, const GridSpec&)> raster_grid;
+  std::function<cam::ClGrid(const geometry::Mesh&, const cam::Cutter&, const cam::GridSpec&)> raster_grid;
   std::function<std::string()> grid_note;
   // Not empty: the program is written there (whole or not at all) as the
   // job's last stage.
@@ -111,7 +111,7 @@ inline double rows_tolerance(const ToolpathParams& p) { return p.arcs ? p.tolera
 struct OperationSummary {
   std::string name;  // "roughing", "rest roughing", "finishing", "rest machining"
   int tool = 1;
-  Cutter cutter;
+  cam::Cutter cutter;
   std::string detail;      // levels, stepover ... in words
   std::size_t first_line = 1;  // of the program (1-based): its tool change or first line
   std::size_t lines = 0;       // of the program's lines, those of this operation
@@ -129,31 +129,31 @@ struct OperationSummary {
 
 // The default maximum depth of cut of a cutter: half its diameter for a
 // ball or bull-nose, a quarter for a flat end mill.
-double default_max_depth(const Cutter& cutter);
+double default_max_depth(const cam::Cutter& cutter);
 
 struct ToolpathProgram {
   std::string gcode;
   ProgramStats stats;
-  RasterPath path;
+  cam::RasterPath path;
   // What the finishing operation cuts, in order (the program retracts
   // between pieces): the raster as one piece, or the waterlines then the
   // raster with its steep stretches bridged.
-  std::vector<Polyline> finish_pieces;
+  std::vector<cam::Polyline> finish_pieces;
   std::size_t waterline_pieces = 0;  // the first pieces of finish_pieces
   std::size_t waterline_levels = 0;
   double waterline_step = 0;         // mm between levels
   std::size_t steep_bridges = 0;     // raster stretches left to the waterlines
-  Cutter cutter;
+  cam::Cutter cutter;
   std::size_t facets = 0;
-  Vec3 work_offset;  // model -> work coordinates
-  Mesh work_mesh;    // the part placed in work coordinates (for a verify)
+  geometry::Vec3 work_offset;  // model -> work coordinates
+  geometry::Mesh work_mesh;    // the part placed in work coordinates (for a verify)
   // The CL grid the rows were sampled from, resampled small (at most
   // kPreviewSideMax nodes a side) in work coordinates, for a preview; the
   // full grid is not kept (path.grid is empty).
   HeightPreview preview;
   // In program order; one (finishing) without a stock.
   std::vector<OperationSummary> operations;
-  std::optional<Box3> stock;  // work coordinates, when the job had one
+  std::optional<geometry::Box3> stock;  // work coordinates, when the job had one
   // What the plan decided and why ("the finishing pass would cut 11.5 mm in
   // one pass, more than ... : roughing first").
   std::vector<std::string> notes;
@@ -166,7 +166,7 @@ struct ToolpathProgram {
 
 // The rows' spacing in words: "0.4" for even rows, "0.457 to 0.797" for
 // rows spaced by the slope across them.
-std::string row_spacing_text(const RasterPath& path);
+std::string row_spacing_text(const cam::RasterPath& path);
 
 // Stages: "load", "tool path", "rest machining" (with a rest cutter),
 // "roughing" (with a stock), "G-code", "write" (with an output), "done".

@@ -10,12 +10,12 @@
 namespace cncstream::jobs {
 
 struct WorkSetup {
-  Vec3 offset;        // model -> work coordinates
-  XYLattice lattice;  // the G-code's grid (10^-decimals mm), placed on the work origin, in model coordinates
+  geometry::Vec3 offset;        // model -> work coordinates
+  cam::XYLattice lattice;  // the G-code's grid (10^-decimals mm), placed on the work origin, in model coordinates
 };
 
 // `decimals`: those the G-code prints (MachiningParams::decimals).
-WorkSetup work_setup(const Box3& part, XYOrigin xy = XYOrigin::PartMin, ZZero z = ZZero::PartTop,
+WorkSetup work_setup(const geometry::Box3& part, XYOrigin xy = XYOrigin::PartMin, ZZero z = ZZero::PartTop,
                      int decimals = MachiningParams{}.decimals);
 
 }  // namespace cncstream::jobs

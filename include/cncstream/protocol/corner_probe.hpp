@@ -57,8 +57,8 @@ struct CornerProbeResult {
   // spindle's Z with its tip on the stock's top).
   std::optional<double> edge_x, edge_y, top_z;
   int wcs = 0;            // the active work offset, 0..5 for G54..G59
-  Vec3 offset_before{};   // its value read before
-  Vec3 offset_written{};  // the value written (the axes not probed: unchanged)
+  geometry::Vec3 offset_before{};   // its value read before
+  geometry::Vec3 offset_written{};  // the value written (the axes not probed: unchanged)
   bool applied = false;   // written and read back
 };
 
@@ -78,7 +78,7 @@ class CornerProbeRoutine final : public MachineRoutine {
 
   CornerProbeConfig cfg_;
   CornerProbeResult result_;
-  Vec3 start_{};
+  geometry::Vec3 start_{};
   double top_trigger_ = 0, x_trigger_ = 0, y_trigger_ = 0;
 };
 

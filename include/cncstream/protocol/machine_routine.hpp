@@ -28,7 +28,7 @@ namespace cncstream::protocol {
 
 // "[G54:1.000,2.000,-3.000]" -> {"G54", (1,2,-3)}; "[TLO:1.5]" -> {"TLO", (0,0,1.5)};
 // nullopt for any other line (a [PRB] included).
-std::optional<std::pair<std::string, Vec3>> parse_offset_report(std::string_view line);
+std::optional<std::pair<std::string, geometry::Vec3>> parse_offset_report(std::string_view line);
 // "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]" -> 0..5 for G54..G59; nullopt otherwise.
 std::optional<int> parse_active_coordinate_system(std::string_view line);
 // Millimetres on the wire: three decimals, no "-0.000".
@@ -94,7 +94,7 @@ class MachineRoutine {
 
   // Filled as the controller reports them.
   std::optional<ProbeReport> probe_;                // the last probe's [PRB] (machine mm)
-  std::map<std::string, Vec3> offsets_;             // the last $#: "G54".."G59", "G92", "TLO"
+  std::map<std::string, geometry::Vec3> offsets_;             // the last $#: "G54".."G59", "G92", "TLO"
   std::optional<int> wcs_;                          // the last $G's active G54..G59 (0..5)
   bool inches_ = false;                             // the last $G said G20
   std::optional<StatusReport> status_;              // the last report (for travel, never a trigger)

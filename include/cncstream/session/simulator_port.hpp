@@ -29,17 +29,17 @@ struct SimulatorOptions {
   cncsim::Faults faults;
   // Verification: the design in machine coordinates (the sim's G54 is zero,
   // so machine = work coordinates) and the cutter that cuts it.
-  std::optional<Mesh> design;
-  std::optional<Cutter> cutter;
+  std::optional<geometry::Mesh> design;
+  std::optional<cam::Cutter> cutter;
   double resolution = 0.1;  // stock grid step, mm
   double tolerance = 0.05;  // verify tolerance, mm
   std::string png;          // deviation map written after the job
   std::optional<cncsim::ToolTable> tools;  // T number -> cutter (else `cutter` throughout)
-  std::optional<Box3> stock;  // the block cut (machine coordinates); default: the design's box
+  std::optional<geometry::Box3> stock;  // the block cut (machine coordinates); default: the design's box
   std::string result;       // machined surface written here (.f32 + .txt, and .stl)
   // Recorded with the result: where the part's model sits (work = model +
   // offset), so a viewer or `cncsim verify` places the design on the cut.
-  std::optional<Vec3> work_offset;
+  std::optional<geometry::Vec3> work_offset;
   std::optional<std::filesystem::path> link;  // a stable symlink to the pty (e.g. for a reconnect test)
   std::optional<double> probe_surface_z;       // G38.x touches this Z plane (machine coordinates)
   // Tool lengths (T -> stick-out, mm; the lowest T is in the spindle at the
@@ -54,7 +54,7 @@ struct SimulatorOptions {
   // stock's X-min/Y-min corner (the stock: `stock`, else the design's box).
   std::string corner_plate;
   // Where the tool is at power-on (machine mm): e.g. over the corner plate.
-  std::optional<Vec3> start_position;
+  std::optional<geometry::Vec3> start_position;
 };
 
 // Parses "max" or a positive number; throws std::invalid_argument naming the text.

@@ -43,11 +43,11 @@ class Camera {
   int height() const { return height_; }
 
   // The scene's bounds: the depth range covers them wherever the target is.
-  void set_scene(const Box3& bounds);
+  void set_scene(const geometry::Box3& bounds);
 
   void set_view(NamedView v);
   // Centres the scene's bounds in the current direction with a small margin.
-  void fit(const Box3& bounds);
+  void fit(const geometry::Box3& bounds);
 
   // Left drag: dx, dy pixels turn the view (half a degree per pixel).
   void orbit(double dx_pixels, double dy_pixels);
@@ -59,34 +59,34 @@ class Camera {
 
   double azimuth_deg() const { return azimuth_deg_; }
   double elevation_deg() const { return elevation_deg_; }
-  const Vec3& target() const { return target_; }
+  const geometry::Vec3& target() const { return target_; }
   // Half the view's height in mm (the zoom).
   double half_height() const { return half_height_; }
   double mm_per_pixel() const { return 2 * half_height_ / height_; }
 
   // The screen's right and up and the direction toward the viewer (unit).
-  Vec3 right() const;
-  Vec3 up() const;
-  Vec3 back() const;
+  geometry::Vec3 right() const;
+  geometry::Vec3 up() const;
+  geometry::Vec3 back() const;
 
   Mat4 view_matrix() const;
   Mat4 projection_matrix() const;
   Mat4 view_projection() const { return projection_matrix() * view_matrix(); }
 
-  WindowPoint project(const Vec3& world) const;
+  WindowPoint project(const geometry::Vec3& world) const;
   // Whether any of the box can be in the view (its projected corners'
   // rectangle meets the viewport): what the renderer skips drawing.
-  bool may_see(const Box3& box) const;
-  Vec3 unproject(const WindowPoint& p) const;
+  bool may_see(const geometry::Box3& box) const;
+  geometry::Vec3 unproject(const WindowPoint& p) const;
 
  private:
   double depth_half() const;  // half the depth range around the target
 
   int width_ = 800, height_ = 600;
-  Vec3 target_{};
+  geometry::Vec3 target_{};
   double azimuth_deg_ = 45, elevation_deg_ = 35.264389682754654;
   double half_height_ = 50;
-  Vec3 scene_center_{};
+  geometry::Vec3 scene_center_{};
   double scene_radius_ = 100;
 };
 

@@ -33,7 +33,7 @@ class HeadlessView {
   // and waits for the frame to finish.
   void draw(const Camera& camera);
   // The last frame, top row first.
-  RgbImage read_image() const;
+  image::RgbImage read_image() const;
   // The last frame's depth at window pixel (x, y), 0 near .. 1 far (1:
   // nothing there).
   double depth_at(int x, int y) const;
@@ -55,9 +55,9 @@ Camera camera_for(const Scene& scene, NamedView view, int width, int height);
 // One frame of the scene from a named view, fitted: --screenshot. With a
 // cut, and room for it (height at least deviation_legend_size's), the
 // deviation map's legend stands at the right and the view is narrower.
-RgbImage screenshot(const Scene& scene, NamedView view, int width, int height, std::string* gl_renderer = nullptr);
+image::RgbImage screenshot(const Scene& scene, NamedView view, int width, int height, std::string* gl_renderer = nullptr);
 
 // The deviation map's legend for a cut (image/deviation_map.hpp).
-DeviationLegend legend_of(const CutSurface& cut);
+image::DeviationLegend legend_of(const CutSurface& cut);
 
 }  // namespace cncstream::viewer

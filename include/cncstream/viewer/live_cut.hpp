@@ -18,7 +18,7 @@ namespace cncstream::viewer {
 // The cutter in the spindle from a program line (0-based) on.
 struct MountedCutter {
   std::size_t line = 0;
-  Cutter cutter;
+  cam::Cutter cutter;
 };
 
 // What a cncstream job program says of itself in its comments: each
@@ -26,7 +26,7 @@ struct MountedCutter {
 // and the stock block it was planned from, in work coordinates (nullopt
 // when it names none).
 std::vector<MountedCutter> program_cutters(std::string_view program);
-std::optional<Box3> program_stock(std::string_view program);
+std::optional<geometry::Box3> program_stock(std::string_view program);
 
 struct LiveCutOptions {
   std::size_t max_nodes = 250'000;  // the stock's step is the finest that keeps to this many nodes
@@ -42,7 +42,7 @@ class LiveCut {
   // across X or Y (plunges start in the air), or up to work Z0 when a cut
   // starts at or above it (programs set Z0 on the stock's top, usually).
   // Throws std::invalid_argument without a cutter or a cutting move.
-  LiveCut(const Toolpath& path, std::vector<MountedCutter> cutters, std::optional<Box3> stock = std::nullopt,
+  LiveCut(const Toolpath& path, std::vector<MountedCutter> cutters, std::optional<geometry::Box3> stock = std::nullopt,
           const LiveCutOptions& options = {});
 
   // Cuts the segments before timeline position `segments_done` (whole
@@ -52,16 +52,16 @@ class LiveCut {
   std::size_t advance(double segments_done, std::size_t max_segments = std::numeric_limits<std::size_t>::max());
   std::size_t segments_cut() const { return next_; }
   // The cutter in the spindle for the next segment to cut.
-  const Cutter& cutter_in_spindle() const { return cutters_[mounted_].cutter; }
+  const cam::Cutter& cutter_in_spindle() const { return cutters_[mounted_].cutter; }
 
-  const GridSpec& grid() const { return stock_.grid(); }
+  const cam::GridSpec& grid() const { return stock_.grid(); }
   std::vector<float> heights() const;
   double removed_volume() const { return stock_.removed_volume(); }
 
  private:
   const Toolpath& path_;
   std::vector<MountedCutter> cutters_;  // by line
-  HeightFieldStock stock_;
+  cam::HeightFieldStock stock_;
   std::size_t next_ = 0;     // the first segment not cut
   std::size_t mounted_ = 0;  // cutters_[mounted_] is in the spindle at segment next_
 };

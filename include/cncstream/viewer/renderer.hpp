@@ -21,7 +21,7 @@
 
 namespace cncstream::viewer {
 
-inline constexpr Rgb kBackground{245, 246, 248};
+inline constexpr image::Rgb kBackground{245, 246, 248};
 
 class Renderer {
  public:
@@ -41,7 +41,7 @@ class Renderer {
   // Timeline: segments before `segments_done` of `path` (the one uploaded)
   // bright, the rest dim; NaN: all bright.
   void set_progress(const Toolpath& path, double segments_done);
-  void set_cutter_position(std::optional<Vec3> tip) { cutter_at_ = tip; }
+  void set_cutter_position(std::optional<geometry::Vec3> tip) { cutter_at_ = tip; }
 
   void draw(const Camera& camera);
   // A slider along the window's bottom edge, `fraction` of it filled.
@@ -62,7 +62,7 @@ class Renderer {
   std::size_t path_vertices_ = 0, distant_vertices_ = 0;
   double distant_tolerance_ = 0;
   std::size_t bright_vertices_ = SIZE_MAX;
-  std::optional<Vec3> cutter_at_;
+  std::optional<geometry::Vec3> cutter_at_;
 };
 
 }  // namespace cncstream::viewer

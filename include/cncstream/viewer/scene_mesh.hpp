@@ -23,28 +23,28 @@ struct MeshVertex {  // 28 bytes
 struct TriangleMesh {
   std::vector<MeshVertex> vertices;
   std::vector<std::uint32_t> indices;  // 3 per triangle
-  Box3 bounds;
+  geometry::Box3 bounds;
   std::size_t triangles() const { return indices.size() / 3; }
 };
 
-inline constexpr Rgb kPartColour{120, 150, 190};
-inline constexpr Rgb kCutterColour{150, 150, 162};
+inline constexpr image::Rgb kPartColour{120, 150, 190};
+inline constexpr image::Rgb kCutterColour{150, 150, 162};
 
 // One vertex per facet corner with the facet's normal (any winding: the
 // shader lights both sides).
-TriangleMesh part_surface(const Mesh& mesh, Rgb colour = kPartColour);
+TriangleMesh part_surface(const geometry::Mesh& mesh, image::Rgb colour = kPartColour);
 
 // How much of the cutter is drawn above its tip: three diameters, at least 8 mm.
-double default_cutter_length(const Cutter& cutter);
+double default_cutter_length(const cam::Cutter& cutter);
 
 // The cutter with its tip at `tip`: the profile (flat bottom, corner, or
 // ball) swept around +Z, the side wall up `length` mm above the tip (0:
 // default_cutter_length), and a top disc. `segments` around the axis.
-TriangleMesh cutter_surface(const Cutter& cutter, const Vec3& tip, double length = 0, int segments = 32);
+TriangleMesh cutter_surface(const cam::Cutter& cutter, const geometry::Vec3& tip, double length = 0, int segments = 32);
 
 struct CutSurface {
   TriangleMesh mesh;
-  DeviationStats stats;  // as cncsim verify reports them
+  cam::DeviationStats stats;  // as cncsim verify reports them
 };
 
 // A machined height field (cncsim --result; NaN = no value) as its top
@@ -52,14 +52,14 @@ struct CutSurface {
 // map's scale (DeviationScale): gouges red, excess blue, within the
 // tolerance pale green, off the design grey. Throws std::invalid_argument
 // for a size mismatch or a grid smaller than 2 x 2.
-CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const Mesh& design, double tolerance);
+CutSurface cut_surface(const cam::GridSpec& grid, const std::vector<float>& heights, const geometry::Mesh& design, double tolerance);
 // As above with the design's heights on `grid` already sampled (a live cut
 // redrawn many times over one grid samples the design once).
-CutSurface cut_surface(const GridSpec& grid, const std::vector<float>& heights, const DesignHeights& design,
+CutSurface cut_surface(const cam::GridSpec& grid, const std::vector<float>& heights, const cam::DesignHeights& design,
                        double tolerance);
 
 // A stock's top surface without a design to compare with: one colour, shaded.
-inline constexpr Rgb kStockColour{214, 188, 146};
-TriangleMesh stock_surface(const GridSpec& grid, const std::vector<float>& heights, Rgb colour = kStockColour);
+inline constexpr image::Rgb kStockColour{214, 188, 146};
+TriangleMesh stock_surface(const cam::GridSpec& grid, const std::vector<float>& heights, image::Rgb colour = kStockColour);
 
 }  // namespace cncstream::viewer

@@ -51,27 +51,27 @@ struct Toolpath {
   std::vector<std::string> operations;  // names; an unnamed one is "operation N"
   std::vector<ToolpathError> errors;
   std::size_t lines = 0, rapids = 0, arcs = 0;
-  Box3 bounds;                         // of every vertex
+  geometry::Box3 bounds;                         // of every vertex
   double min_feed = 0, max_feed = 0;   // over the cutting segments
 
   std::size_t size() const { return segments.size(); }
-  Vec3 from(std::size_t k) const { return at(segments[k].vertex - 1); }
-  Vec3 to(std::size_t k) const { return at(segments[k].vertex); }
+  geometry::Vec3 from(std::size_t k) const { return at(segments[k].vertex - 1); }
+  geometry::Vec3 to(std::size_t k) const { return at(segments[k].vertex); }
   bool rapid(std::size_t k) const { return vertices[segments[k].vertex].kind == kRapid; }
   // The point at timeline position t in [0, size()]: segment floor(t), the
   // fraction of it done.
-  Vec3 point_at(double t) const;
+  geometry::Vec3 point_at(double t) const;
   // The strip's vertices before which the segments done at timeline t end
   // (the renderer draws lines whose end vertex is below it bright).
   std::uint32_t vertices_done(double t) const;
 
  private:
-  Vec3 at(std::size_t v) const { return {vertices[v].x, vertices[v].y, vertices[v].z}; }
+  geometry::Vec3 at(std::size_t v) const { return {vertices[v].x, vertices[v].y, vertices[v].z}; }
 };
 
 struct ToolpathOptions {
   double arc_tolerance = 0.002;  // chord error of arcs, mm ($12's default)
-  Vec3 offset{};                 // added to every point (work -> the part's frame)
+  geometry::Vec3 offset{};                 // added to every point (work -> the part's frame)
   gcode::ParserState initial;
 };
 
@@ -82,7 +82,7 @@ struct ToolpathOptions {
 Toolpath build_toolpath(std::string_view program, const ToolpathOptions& options = {});
 
 // Appends one segment (used by build_toolpath and for synthetic paths).
-void append_segment(Toolpath& path, const Vec3& from, const Vec3& to, bool rapid, double feed,
+void append_segment(Toolpath& path, const geometry::Vec3& from, const geometry::Vec3& to, bool rapid, double feed,
                     std::uint32_t line, std::uint32_t operation);
 
 enum class PathColouring { Feed, Operation };
@@ -90,7 +90,7 @@ PathColouring parse_path_colouring(const std::string& name);  // "feed" | "opera
 // Cutting segments: by feed on the viridis ramp from the slowest to the
 // fastest, or by operation (category_colour); rapids orange.
 void colour_toolpath(Toolpath& path, PathColouring how);
-inline constexpr Rgb kRapidColour{255, 140, 0};
+inline constexpr image::Rgb kRapidColour{255, 140, 0};
 
 // The strip for drawing at a distance: indices of the vertices kept, where
 // the dropped ones lie within `tolerance` (mm) of the line that replaces

@@ -31,17 +31,17 @@ class NoDisplayError : public std::runtime_error {
 // picks them up at its next frame.
 class LiveCursor {
  public:
-  void set_cutter_position(const Vec3& tip);
+  void set_cutter_position(const geometry::Vec3& tip);
   void set_progress(double segments_done);
   void set_cut(std::shared_ptr<const TriangleMesh> surface);
-  void set_cutter(const Cutter& cutter);  // after a tool change
+  void set_cutter(const cam::Cutter& cutter);  // after a tool change
   void set_status(std::string text);  // shown in the title
 
   struct Update {
-    std::optional<Vec3> cutter;
+    std::optional<geometry::Vec3> cutter;
     std::optional<double> progress;
     std::shared_ptr<const TriangleMesh> cut;
-    std::optional<Cutter> tool;
+    std::optional<cam::Cutter> tool;
     std::optional<std::string> status;
   };
   // What was set since the last take (nothing: both empty).

@@ -85,7 +85,7 @@ struct MachineOptions {
   Faults faults;
   // Where the tool is at power-on (machine coordinates): a simulator
   // restarted from a saved state, the tool left where the last one stopped.
-  std::optional<cncstream::Vec3> start_position;
+  std::optional<cncstream::geometry::Vec3> start_position;
   bool strict = false;  // an RX overflow throws RxOverflowError
   // --speed max: whenever the firmware waits for planner room, a buffer sync
   // or a dwell, the virtual clock jumps ahead instead of waiting for advance().
@@ -102,7 +102,7 @@ struct MachineOptions {
   // The cutters by T number: what touches a probe target is the mounted
   // tool's cutter (its flank against a corner plate's wall), the tip as a
   // point for a tool not listed.
-  std::map<int, cncstream::Cutter> tool_shapes;
+  std::map<int, cncstream::cam::Cutter> tool_shapes;
   // A real machine: a T word changes nothing physical; only the operator
   // mounts a tool (request_mount). Otherwise the T word mounts the tool once
   // the motion before it has run (the old simulated operator).
@@ -148,7 +148,7 @@ class RxOverflowError : public std::runtime_error {
 };
 
 // Called for every straight piece of tool motion (machine coordinates).
-using MotionObserver = std::function<void(const cncstream::Vec3& from, const cncstream::Vec3& to, bool rapid)>;
+using MotionObserver = std::function<void(const cncstream::geometry::Vec3& from, const cncstream::geometry::Vec3& to, bool rapid)>;
 // Called when a newly selected tool (T word) is in the spindle: after the
 // motion queued before it has run (GRBL has no M6; the swap is physical).
 using ToolObserver = std::function<void(int tool)>;
@@ -173,13 +173,13 @@ class Machine {
   MachineState state() const { return state_; }
   std::string state_name() const;  // "Idle", "Hold:0", "Door:0", ...
   std::string status_report();     // the '?' answer (advances the report counters)
-  cncstream::Vec3 machine_position() const { return queue_.position(); }
-  cncstream::Vec3 work_position() const { return queue_.position() - parser_.wco(); }
+  cncstream::geometry::Vec3 machine_position() const { return queue_.position(); }
+  cncstream::geometry::Vec3 work_position() const { return queue_.position() - parser_.wco(); }
   // The mounted tool, how far its tip sits below where the start tool's
   // would (stick-out difference), and where the tip is (machine coords).
   int mounted_tool() const { return mounted_tool_; }
   double tip_drop() const;
-  cncstream::Vec3 tip_position() const { return queue_.position() - cncstream::Vec3{0, 0, tip_drop()}; }
+  cncstream::geometry::Vec3 tip_position() const { return queue_.position() - cncstream::geometry::Vec3{0, 0, tip_drop()}; }
   bool probe_input() const { return probes_.triggered(tip_position(), probe_tool()); }
   // The mounted tool's cutter as the probe sees it (nullopt: a point).
   ProbeTool probe_tool() const;
@@ -248,7 +248,7 @@ class Machine {
   void process_system(const std::string& line);
   void process_gcode(const std::string& line);
   void queue_actions(const cncstream::gcode::BlockResult& result);
-  bool soft_limit_violated(const cncstream::Vec3& target) const;
+  bool soft_limit_violated(const cncstream::geometry::Vec3& target) const;
   void raise_critical_alarm(int code);
   void raise_alarm(int code);
   void after_motion();
@@ -259,7 +259,7 @@ class Machine {
   void apply_overrides();
   void persist();
   void run_startup_lines();
-  std::string format_vec(const cncstream::Vec3& v) const;
+  std::string format_vec(const cncstream::geometry::Vec3& v) const;
   void start_homing();
   void feed_hold();
   void cycle_start();
@@ -310,7 +310,7 @@ class Machine {
   bool spindle_stop_ = false;   // 0x9E in hold
   int feed_ovr_ = 100, rapid_ovr_ = 100, spindle_ovr_ = 100;
   int wco_counter_ = 0, ovr_counter_ = 0;
-  cncstream::Vec3 probe_position_{};
+  cncstream::geometry::Vec3 probe_position_{};
   ProbeTargets probes_;
   int mounted_tool_ = 0;
   // The operator's mount, from another thread; a Machine stays copyable and movable.

@@ -34,7 +34,7 @@ std::optional<T> number_from(std::string_view text) {
 }
 
 // "X,Y,Z".
-inline std::optional<cncstream::Vec3> vec3_from(std::string_view text) {
+inline std::optional<cncstream::geometry::Vec3> vec3_from(std::string_view text) {
   const auto c1 = text.find(',');
   const auto c2 = c1 == std::string_view::npos ? c1 : text.find(',', c1 + 1);
   if (c2 == std::string_view::npos) return std::nullopt;
@@ -42,7 +42,7 @@ inline std::optional<cncstream::Vec3> vec3_from(std::string_view text) {
   const auto y = number_from<double>(text.substr(c1 + 1, c2 - c1 - 1));
   const auto z = number_from<double>(text.substr(c2 + 1));
   if (!x || !y || !z) return std::nullopt;
-  return cncstream::Vec3{*x, *y, *z};
+  return cncstream::geometry::Vec3{*x, *y, *z};
 }
 
 // "LINE:VALUE" for the per-line faults (--error-at, --alarm-at, --stall-at, in

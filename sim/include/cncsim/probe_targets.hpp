@@ -45,7 +45,7 @@ ProbeFace parse_corner_plate(const std::string& text, double corner_x, double co
 
 // What touches: the cutter at the tip (nullopt: the tip as a point, the
 // shape before tools had one).
-using ProbeTool = std::optional<cncstream::Cutter>;
+using ProbeTool = std::optional<cncstream::cam::Cutter>;
 
 class ProbeTargets {
  public:
@@ -53,11 +53,11 @@ class ProbeTargets {
   bool empty() const { return faces_.empty(); }
   const std::vector<ProbeFace>& faces() const { return faces_; }
   // Whether the probe input is active with the tip at `tip`.
-  bool triggered(const cncstream::Vec3& tip, const ProbeTool& tool = std::nullopt) const;
+  bool triggered(const cncstream::geometry::Vec3& tip, const ProbeTool& tool = std::nullopt) const;
   // Along the straight tip move a -> b: the fraction (0..1] where the input
   // first changes to `to_state` (true: touches, false: lets go); nullopt when
   // it never does within the move.
-  std::optional<double> first_change(const cncstream::Vec3& a, const cncstream::Vec3& b, bool to_state,
+  std::optional<double> first_change(const cncstream::geometry::Vec3& a, const cncstream::geometry::Vec3& b, bool to_state,
                                      const ProbeTool& tool = std::nullopt) const;
 
  private:

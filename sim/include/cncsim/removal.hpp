@@ -16,7 +16,7 @@
 namespace cncsim {
 
 struct StockBox {
-  cncstream::Vec3 lo, hi;  // machine coordinates; the top is hi.z
+  cncstream::geometry::Vec3 lo, hi;  // machine coordinates; the top is hi.z
   double resolution = 0.1;  // grid step, mm
 };
 
@@ -24,13 +24,13 @@ struct StockBox {
 // naming the text.
 StockBox parse_stock_box(const std::string& text, double resolution);
 // The XY bounding box of a design with its top at the design's highest point.
-StockBox stock_box_for(const cncstream::Mesh& design, double resolution);
+StockBox stock_box_for(const cncstream::geometry::Mesh& design, double resolution);
 
 // Tool number -> cutter. `text` is "1=ball:3.175,2=bull:3.175:0.79" or the
 // path of a file with one "N=SPEC" per line ('#' starts a comment). Errors
 // name the entry (and the file and line).
 // An entry may give the tool's stick-out: "2=ball:3.175@37.3" (mm).
-using ToolTable = std::map<int, cncstream::Cutter>;
+using ToolTable = std::map<int, cncstream::cam::Cutter>;
 ToolTable parse_tool_table(const std::string& text);
 // The stick-outs of the same text (empty when it gives none; all or none).
 using StickOuts = std::map<int, double>;
@@ -38,9 +38,9 @@ StickOuts parse_tool_stick_outs(const std::string& text);
 
 class MaterialRemoval {
  public:
-  MaterialRemoval(const StockBox& box, const cncstream::Cutter& cutter);
+  MaterialRemoval(const StockBox& box, const cncstream::cam::Cutter& cutter);
   // Goes on cutting a stock an earlier run left (stock_from_heights of its result).
-  MaterialRemoval(cncstream::HeightFieldStock stock, const cncstream::Cutter& cutter);
+  MaterialRemoval(cncstream::cam::HeightFieldStock stock, const cncstream::cam::Cutter& cutter);
 
   // Routes the machine's motion into the stock (replaces its observers); a
   // T word then switches to that tool of the table, once the motion queued
@@ -49,12 +49,12 @@ class MaterialRemoval {
   void set_tool_table(ToolTable table) { tools_ = std::move(table); }
   // T numbers selected that the table does not hold (the cutter was kept).
   const std::set<int>& unknown_tools() const { return unknown_tools_; }
-  void cut(const cncstream::Vec3& from, const cncstream::Vec3& to);
+  void cut(const cncstream::geometry::Vec3& from, const cncstream::geometry::Vec3& to);
 
-  const cncstream::HeightFieldStock& stock() const { return stock_; }
-  const cncstream::Cutter& cutter() const { return cutter_; }
+  const cncstream::cam::HeightFieldStock& stock() const { return stock_; }
+  const cncstream::cam::Cutter& cutter() const { return cutter_; }
   // A tool change: later moves cut with this cutter.
-  void set_cutter(const cncstream::Cutter& cutter) { cutter_ = cutter; }
+  void set_cutter(const cncstream::cam::Cutter& cutter) { cutter_ = cutter; }
   std::size_t segments() const { return segments_; }
   // The deepest any one move cut (the largest height drop of a node in one
   // straight piece of motion), per tool number selected when it ran (0
@@ -70,12 +70,12 @@ class MaterialRemoval {
   // recorded, so a later setup places it; nullopt: machine coordinates, no
   // origin recorded. Returns the STL's path.
   std::filesystem::path write_result(const std::filesystem::path& path,
-                                     std::optional<cncstream::Vec3> work_offset = std::nullopt,
-                                     std::optional<cncstream::Vec3> work_origin = std::nullopt) const;
+                                     std::optional<cncstream::geometry::Vec3> work_offset = std::nullopt,
+                                     std::optional<cncstream::geometry::Vec3> work_origin = std::nullopt) const;
 
  private:
-  cncstream::HeightFieldStock stock_;
-  cncstream::Cutter cutter_;
+  cncstream::cam::HeightFieldStock stock_;
+  cncstream::cam::Cutter cutter_;
   double bottom_;
   std::size_t segments_ = 0;
   ToolTable tools_;
@@ -86,6 +86,6 @@ class MaterialRemoval {
 
 // Rebuilds a stock whose surface equals `heights` (a result file read back):
 // each node is lowered by a plunge of a flat cutter narrower than the grid.
-cncstream::HeightFieldStock stock_from_heights(const cncstream::GridSpec& grid, const std::vector<float>& heights);
+cncstream::cam::HeightFieldStock stock_from_heights(const cncstream::cam::GridSpec& grid, const std::vector<float>& heights);
 
 }  // namespace cncsim

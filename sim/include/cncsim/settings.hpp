@@ -34,7 +34,7 @@ class Settings {
   bool hard_limits() const { return get(21) != 0; }
   bool homing() const { return get(22) != 0; }
   double arc_tolerance() const { return get(12); }
-  cncstream::Vec3 max_travel() const { return {get(130), get(131), get(132)}; }
+  cncstream::geometry::Vec3 max_travel() const { return {get(130), get(131), get(132)}; }
 
   const std::map<int, double>& values() const { return values_; }
 

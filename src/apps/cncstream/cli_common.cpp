@@ -20,7 +20,7 @@ void add_part_options(CLI::App* sub, PartOptions& o) {
 jobs::PartSource part_source(const PartOptions& o) {
   jobs::PartSource p;
   p.stl = o.stl;
-  p.units = parse_length_unit(o.units);
+  p.units = geometry::parse_length_unit(o.units);
   p.scale = o.scale;
   p.max_extent_mm = o.max_part_mm;
   return p;

@@ -25,7 +25,7 @@ namespace {
 
 // The grid's progress and stop (from the engine's workers): throws
 // jobs::Cancelled on a stop request.
-Checkpoint grid_checkpoint(const jobs::JobControl& control) {
+cam::Checkpoint grid_checkpoint(const jobs::JobControl& control) {
   return [&control](double fraction) {
     if (control.stop.stop_requested()) throw jobs::Cancelled();
     if (control.progress) control.progress("CL grid", fraction);
@@ -33,14 +33,14 @@ Checkpoint grid_checkpoint(const jobs::JobControl& control) {
 }
 
 // CSV: header x,y,z, one node per line, x varying fastest. Streamed by tile.
-void write_csv(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
+void write_csv(const cam::ClEngine& engine, const cam::GridSpec& spec, const std::filesystem::path& out,
                const jobs::JobControl& control) {
   std::ofstream f(out, std::ios::binary);
   if (!f) throw std::runtime_error(out.string() + ": cannot open for writing");
   f << "x,y,z\n";
   std::string row;
-  engine.compute_tiles(spec, [&](const ClTile& tile) {
-    const GridSpec& g = tile.grid.spec;
+  engine.compute_tiles(spec, [&](const cam::ClTile& tile) {
+    const cam::GridSpec& g = tile.grid.spec;
     for (std::size_t j = 0; j < g.ny; ++j) {
       row.clear();
       for (std::size_t i = 0; i < g.nx; ++i)
@@ -54,31 +54,31 @@ void write_csv(const ClEngine& engine, const GridSpec& spec, const std::filesyst
 
 // Raw float32 + sidecar, streamed by tile. The sidecar is renamed beside the
 // final name before the data file is (write_file_atomically renames it last).
-void write_f32(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
+void write_f32(const cam::ClEngine& engine, const cam::GridSpec& spec, const std::filesystem::path& out,
                const std::filesystem::path& final_path, const jobs::JobControl& control) {
-  HeightFieldWriter w(out, spec);
-  engine.compute_tiles(spec, [&](const ClTile& tile) { w.append(tile.grid.z); }, grid_checkpoint(control));
+  cam::HeightFieldWriter w(out, spec);
+  engine.compute_tiles(spec, [&](const cam::ClTile& tile) { w.append(tile.grid.z); }, grid_checkpoint(control));
   w.finish();
-  if (out != final_path) std::filesystem::rename(height_field_sidecar(out), height_field_sidecar(final_path));
+  if (out != final_path) std::filesystem::rename(cam::height_field_sidecar(out), cam::height_field_sidecar(final_path));
 }
 
 // A shaded height map a person can look at (the whole grid in memory).
-void write_png_map(const ClEngine& engine, const GridSpec& spec, const std::filesystem::path& out,
+void write_png_map(const cam::ClEngine& engine, const cam::GridSpec& spec, const std::filesystem::path& out,
                    const std::string& title, const jobs::JobControl& control) {
-  const ClGrid g = engine.compute(spec, grid_checkpoint(control));
-  MapGrid mg{spec.nx, spec.ny, spec.dx, spec.dy, spec.x0, spec.y0};
-  HeightMapOptions ho;
+  const cam::ClGrid g = engine.compute(spec, grid_checkpoint(control));
+  image::MapGrid mg{spec.nx, spec.ny, spec.dx, spec.dy, spec.x0, spec.y0};
+  image::HeightMapOptions ho;
   ho.title = title;
   ho.subtitle = engine.cutter().description() + ", grid " + std::to_string(spec.nx) + " x " + std::to_string(spec.ny);
   ho.max_map_pixels = 1000;
-  write_png(out, render_height_map(mg, g.z, {}, ho));
+  image::write_png(out, image::render_height_map(mg, g.z, {}, ho));
 }
 
 // The GL engine's whole grid, written in the same formats as the exact
 // engine's (same nodes, same CSV and float32 layout).
-void write_grid(const ClGrid& g, const std::string& ext, const std::filesystem::path& out,
+void write_grid(const cam::ClGrid& g, const std::string& ext, const std::filesystem::path& out,
                 const std::filesystem::path& final_path, const std::string& title, const std::string& subtitle) {
-  const GridSpec& spec = g.spec;
+  const cam::GridSpec& spec = g.spec;
   if (ext == ".csv") {
     std::ofstream f(out, std::ios::binary);
     if (!f) throw std::runtime_error(out.string() + ": cannot open for writing");
@@ -93,15 +93,15 @@ void write_grid(const ClGrid& g, const std::string& ext, const std::filesystem::
     f.close();
     if (!f) throw std::runtime_error(out.string() + ": write failed");
   } else if (ext == ".f32") {
-    write_height_field(out, spec, g.z);
-    if (out != final_path) std::filesystem::rename(height_field_sidecar(out), height_field_sidecar(final_path));
+    cam::write_height_field(out, spec, g.z);
+    if (out != final_path) std::filesystem::rename(cam::height_field_sidecar(out), cam::height_field_sidecar(final_path));
   } else {
-    MapGrid mg{spec.nx, spec.ny, spec.dx, spec.dy, spec.x0, spec.y0};
-    HeightMapOptions ho;
+    image::MapGrid mg{spec.nx, spec.ny, spec.dx, spec.dy, spec.x0, spec.y0};
+    image::HeightMapOptions ho;
     ho.title = title;
     ho.subtitle = subtitle;
     ho.max_map_pixels = 1000;
-    write_png(out, render_height_map(mg, g.z, {}, ho));
+    image::write_png(out, image::render_height_map(mg, g.z, {}, ho));
   }
 }
 
@@ -139,17 +139,17 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
   add_progress_option(sub, o->progress);
   registry.add(sub, [o] {
     const auto t0 = std::chrono::steady_clock::now();
-    const Cutter cutter = parse_cutter_spec(o->tool);
+    const cam::Cutter cutter = cam::parse_cutter_spec(o->tool);
     const std::string ext = std::filesystem::path(o->out).extension().string();
     if (ext != ".csv" && ext != ".png" && ext != ".f32")
       throw std::invalid_argument(o->out + ": unsupported output type '" + ext + "' (use .csv, .png or .f32)");
     const auto mesh = jobs::load_part(part_source(o->part));
-    XYBounds b = default_bounds(*mesh, cutter);
+    cam::XYBounds b = cam::default_bounds(*mesh, cutter);
     if (!o->bounds.empty()) {
       const auto v = parse_bounds(o->bounds);
       b = {v[0], v[1], v[2], v[3]};
     }
-    const GridSpec spec = GridSpec::covering(b.x0, b.y0, b.x1, b.y1, o->grid, o->grid);
+    const cam::GridSpec spec = cam::GridSpec::covering(b.x0, b.y0, b.x1, b.y1, o->grid, o->grid);
     if (o->engine != "gl" && (o->gl_tolerance || o->trim))
       throw std::invalid_argument("--gl-tolerance and --trim apply to --engine gl only");
     const std::string title = "CL surface (tool tip) of " + std::filesystem::path(o->part.stl).filename().string();
@@ -159,7 +159,7 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
       glo.trim = o->trim;
       glo.floor = o->floor;
       gl::GlClStats st;
-      const ClGrid g = gl::compute_cl_grid_gl(*mesh, cutter, spec, glo, &st);
+      const cam::ClGrid g = gl::compute_cl_grid_gl(*mesh, cutter, spec, glo, &st);
       std::string subtitle = cutter.description();
       subtitle.append(", depth buffer, tolerance ");
       subtitle.append(fmt::format("{:g} mm{}", glo.tolerance, glo.trim ? ", trimmed" : ""));
@@ -173,7 +173,7 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
                 << " tile(s); wrote " << o->out << " in " << s << " s\n";
       return 0;
     }
-    ClOptions clo;
+    cam::ClOptions clo;
     clo.floor = o->floor;
     clo.threads = o->threads;
     LongJob job(o->progress, 0);  // the engine's own --threads
@@ -181,7 +181,7 @@ void register_clgrid(CLI::App& app, CommandRegistry& registry) {
     double floor_z = 0;
     try {
       if (control.stop.stop_requested()) throw jobs::Cancelled();
-      const ClEngine engine(*mesh, cutter, clo);
+      const cam::ClEngine engine(*mesh, cutter, clo);
       floor_z = engine.floor();
       jobs::write_file_atomically(o->out, [&](const std::filesystem::path& file) {
         if (ext == ".csv") write_csv(engine, spec, file, control);

@@ -15,13 +15,13 @@ void register_info(CLI::App& app, CommandRegistry& registry) {
   sub->add_option("stl", o->stl, "STL file")->required();
   add_part_options(sub, *o);
   registry.add(sub, [o] {
-    StlLoadOptions opt;
-    opt.units = parse_length_unit(o->units);
+    geometry::StlLoadOptions opt;
+    opt.units = geometry::parse_length_unit(o->units);
     opt.scale = o->scale;
-    const auto r = load_stl(o->stl, opt);
+    const auto r = geometry::load_stl(o->stl, opt);
     std::cout << o->stl << " (" << (r.binary ? "binary" : "ASCII") << " STL";
     if (!r.solid_name.empty()) std::cout << ", '" << r.solid_name << "'";
-    std::cout << ")\n" << summarize(r.mesh, r.dropped_degenerate).to_string();
+    std::cout << ")\n" << geometry::summarize(r.mesh, r.dropped_degenerate).to_string();
     // Info shows any file, but says what the jobs would refuse.
     try {
       jobs::check_part_size(r.mesh.bounds(), o->stl, o->max_part_mm);

@@ -1,6 +1,6 @@
 // `cncstream probe corner|xy|z PORT`: set work zero with a corner touch
 // plate (protocol/corner_probe.hpp), and `cncstream outline FILE PORT`: trace
-// a program's XY extent at a safe height before cutting
+// a program's XY hull (or box) at a safe height before cutting
 // (protocol/outline_trace.hpp). Each runs on one machine session
 // (routine_session.hpp); the result is shown and confirmed before it is
 // written (--yes confirms it).
@@ -53,14 +53,14 @@ int run_probe(ProbeCliOptions o) {
     throw std::invalid_argument("--plate '" + o.plate +
                                 "': expected THICKNESS,LIP[,SIZE] (mm: thickness > 0, lip >= 0, size > lip)");
   }
-  const Cutter cutter = parse_cutter_spec(o.tool);
+  const cam::Cutter cutter = cam::parse_cutter_spec(o.tool);
   o.cfg.tool_radius = cutter.radius;
   auto routine = std::make_shared<protocol::CornerProbeRoutine>(o.cfg);
   session::SimulatorOptions so = simulator_options(o.sim);
   if (o.conn.port == "sim") {
     // A block with the plate on its X-min/Y-min corner, the bit over the plate.
     const cncsim::StockBox box = cncsim::parse_stock_box(o.sim_stock, 1.0);
-    so.stock = Box3{box.lo, box.hi};
+    so.stock = geometry::Box3{box.lo, box.hi};
     so.cutter = cutter;
     so.corner_plate = o.plate;
     if (!o.sim_start.empty()) {
@@ -69,7 +69,7 @@ int run_probe(ProbeCliOptions o) {
       so.start_position = *p;
     } else {
       const auto& pl = o.cfg.plate;
-      so.start_position = Vec3{box.lo.x - pl.lip + pl.size / 2, box.lo.y - pl.lip + pl.size / 2,
+      so.start_position = geometry::Vec3{box.lo.x - pl.lip + pl.size / 2, box.lo.y - pl.lip + pl.size / 2,
                                box.hi.z + pl.thickness + 10};
     }
   }
@@ -90,13 +90,19 @@ struct OutlineCliOptions {
   std::string file;
   double feed = 1000;
   std::optional<double> safe_z;
+  std::string shape = "hull";
 };
 
 int run_outline(const OutlineCliOptions& o) {
   const auto lines = protocol::read_gcode_lines(o.file);
-  const auto cfg = protocol::outline_from_extent(gcode::program_extent(lines), o.safe_z, o.feed, o.file);
-  std::cerr << fmt::format("outline of {}: X{:.3f}..{:.3f} Y{:.3f}..{:.3f} at work Z{:.3f}, F{:.0f}\n", o.file,
-                           cfg.x0, cfg.x1, cfg.y0, cfg.y1, cfg.safe_z, cfg.feed);
+  const auto cfg =
+      protocol::outline_from_extent(gcode::program_extent(lines), o.safe_z, o.feed, o.file,
+                                    o.shape == "box" ? protocol::OutlineShape::Box : protocol::OutlineShape::Hull);
+  std::cerr << fmt::format(
+      "outline of {}: the {} within X{:.3f}..{:.3f} Y{:.3f}..{:.3f} at work Z{:.3f}, F{:.0f}\n", o.file,
+      cfg.shape == protocol::OutlineShape::Hull ? fmt::format("hull of its moves ({} corners)", cfg.path.size())
+                                                : std::string("bounding box"),
+      cfg.x0, cfg.x1, cfg.y0, cfg.y1, cfg.safe_z, cfg.feed);
   return run_machine_routine(o.conn, simulator_options(o.sim), std::make_shared<protocol::OutlineTraceRoutine>(cfg));
 }
 
@@ -143,14 +149,18 @@ void register_outline(CLI::App& app, CommandRegistry& registry) {
   auto o = std::make_shared<OutlineCliOptions>();
   auto* sub = app.add_subcommand(
       "outline",
-      "Trace a program's XY extent (its bounding box) at a safe height before cutting, to see that the stock is "
-      "where the program expects it");
+      "Trace a program's XY extent (the hull of its moves, or its bounding box) at a safe height before cutting, to "
+      "see that the stock is where the program expects it and the clamps are clear of it");
   sub->add_option("file", o->file, "G-code program")->required()->check(CLI::ExistingFile);
   sub->add_option("port", o->conn.port, "Serial port, 'auto' (the one known controller board) or 'sim'")->required();
   add_link_options(sub, o->conn);
   add_sim_machine_options(sub, o->sim);
   sub->add_option("--feed", o->feed, "Trace feed, mm/min")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--safe-z", o->safe_z, "Work Z of the trace (default and lowest: the program's highest Z)");
+  sub->add_option("--shape", o->shape,
+                  "hull: the convex hull of the program's XY moves (within 0.1 mm); box: their bounding box")
+      ->check(CLI::IsMember({"hull", "box"}))
+      ->capture_default_str();
   sub->add_option("--timeout", o->conn.timeout_s, "Give up after this many seconds (0: never)")
       ->check(CLI::NonNegativeNumber);
   registry.add(sub, [o] { return detail_cmd_probe::run_outline(*o); });

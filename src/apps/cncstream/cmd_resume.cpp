@@ -75,7 +75,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     if (last) {
       in.last_line = last->last_line;
       if (last->status_work_pos)
-        in.status_work_pos = Vec3{(*last->status_work_pos)[0], (*last->status_work_pos)[1], (*last->status_work_pos)[2]};
+        in.status_work_pos = geometry::Vec3{(*last->status_work_pos)[0], (*last->status_work_pos)[1], (*last->status_work_pos)[2]};
       in.status_line = last->status_line;
     }
     if (rec->resumed_from > 0) in.resumed_after = rec->from_line;
@@ -102,7 +102,7 @@ void register_resume(CLI::App& app, CommandRegistry& registry) {
     job.source_lines = std::move(plan.source_lines);
     const auto limits = planning_limits(o->conn, o->sim);
     EtaEstimator eta = estimate_job(job, limits, planning_link(o->conn, o->sim));
-    const Vec3 p = at.work_position();
+    const geometry::Vec3 p = at.work_position();
     std::cout << "resume job " << rec->id << " (" << rec->outcome.value_or("interrupted") << "): " << file.string()
               << "\n  continue after line " << n << " of " << whole.total_lines << " (last answered: "
               << (last ? std::to_string(last->last_line) : std::string("none")) << ")\n"

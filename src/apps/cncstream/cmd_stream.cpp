@@ -37,7 +37,7 @@ std::filesystem::path program_path(const ConnectionOptions& c, const std::string
   return dir / (std::filesystem::path(stl).stem().string() + "-" + sha.substr(0, 12) + ".nc");
 }
 
-std::string bounds_text(const Box3& b) {
+std::string bounds_text(const geometry::Box3& b) {
   return "X " + format_gcode_number(b.lo.x) + " .. " + format_gcode_number(b.hi.x) + ", Y " +
          format_gcode_number(b.lo.y) + " .. " + format_gcode_number(b.hi.y) + ", Z " + format_gcode_number(b.lo.z) +
          " .. " + format_gcode_number(b.hi.z);
@@ -125,7 +125,7 @@ void register_stream(CLI::App& app, CommandRegistry& registry) {
           jobs::ToolpathParams params = toolpath_params(o->tp);
           // The built-in simulator powers on with G54 and G92 at zero (unless a settings file says otherwise).
           if (c.port == "sim" && o->sim.settings.empty() && params.stock && !params.stock->work_origin)
-            params.stock->work_origin = Vec3{};
+            params.stock->work_origin = geometry::Vec3{};
           feeds = apply_feeds(params, feeds_request);
           params.link = planning_link(c, o->sim);  // the machine's own link (the simulator's, a profile's, --serial)
           program = jobs::generate_toolpath(params, generation.control());

@@ -30,10 +30,10 @@ void use_depth_buffer(jobs::ToolpathParams& params, double tolerance, const std:
   glo.tolerance = tolerance;
   glo.floor = params.floor;
   glo.lift_to_bound = true;
-  params.raster_grid = [glo, stats](const Mesh& mesh, const Cutter& cutter, const GridSpec& spec) {
+  params.raster_grid = [glo, stats](const geometry::Mesh& mesh, const cam::Cutter& cutter, const cam::GridSpec& spec) {
     const auto t0 = std::chrono::steady_clock::now();
     gl::GlClStats st;
-    ClGrid g = gl::compute_cl_grid_gl(mesh, cutter, spec, glo, &st);
+    cam::ClGrid g = gl::compute_cl_grid_gl(mesh, cutter, spec, glo, &st);
     stats->grids += 1;
     stats->nodes += spec.size();
     stats->seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -30,7 +30,7 @@ namespace cncstream::app {
 namespace {
 
 // "X,Y,Z" -> a point; the option's name in the error.
-Vec3 parse_view_point(const std::string& text, const char* option) {
+geometry::Vec3 parse_view_point(const std::string& text, const char* option) {
   double v[3] = {0, 0, 0};
   std::size_t pos = 0;
   for (int k = 0; k < 3; ++k) {
@@ -59,7 +59,7 @@ std::pair<int, int> parse_view_size(const std::string& text) {
 
 }  // namespace
 
-std::optional<jobs::WorkSetup> program_work_origin(const std::string& text, const Box3& part) {
+std::optional<jobs::WorkSetup> program_work_origin(const std::string& text, const geometry::Box3& part) {
   const auto at = text.find("(work origin: XY at ");
   if (at > 4096) return std::nullopt;  // in the header, or not at all (npos)
   const std::string line = text.substr(at, text.find('\n', at) - at);
@@ -126,7 +126,7 @@ void register_view(CLI::App& app, CommandRegistry& registry) {
       fo.machine = o->follow;
       fo.job = o->job;
       fo.part = o->part;
-      if (!o->cutter.empty()) fo.cutter = parse_cutter_spec(o->cutter);
+      if (!o->cutter.empty()) fo.cutter = cam::parse_cutter_spec(o->cutter);
       fo.tolerance = o->tolerance;
       fo.arc_tolerance = o->arc_tolerance;
       fo.until_done = o->until_done;
@@ -139,23 +139,23 @@ void register_view(CLI::App& app, CommandRegistry& registry) {
     if (!o->daemon.empty() || o->job || o->until_done)
       throw std::invalid_argument("--daemon, --job and --until-done go with --follow MACHINE");
     Scene scene;
-    std::optional<Mesh> part;
+    std::optional<geometry::Mesh> part;
     if (!o->part.empty()) {
-      part = load_stl(o->part).mesh;
+      part = geometry::load_stl(o->part).mesh;
       scene.part = part_surface(*part);
     }
     if (!o->cut.empty()) {
       if (o->design.empty() && !part) throw std::invalid_argument("--cut needs the design: give --design PART.stl or the part");
-      const Mesh design = o->design.empty() ? *part : load_stl(o->design).mesh;
-      HeightFieldData field = read_height_field(o->cut);
+      const geometry::Mesh design = o->design.empty() ? *part : geometry::load_stl(o->design).mesh;
+      cam::HeightFieldData field = cam::read_height_field(o->cut);
       if (field.work_offset) {
         // Cut in work coordinates (the job's simulator): into the design's
         // (and the part's, the program's) model coordinates.
-        const Vec3 w = *field.work_offset;
+        const geometry::Vec3 w = *field.work_offset;
         field.grid.x0 -= w.x;
         field.grid.y0 -= w.y;
         for (float& z : field.z) z = static_cast<float>(static_cast<double>(z) - w.z);
-        std::cout << "cut placed on the design by its work origin: offset " << format_position(Vec3{} - w) << "\n";
+        std::cout << "cut placed on the design by its work origin: offset " << format_position(geometry::Vec3{} - w) << "\n";
       }
       scene.cut = cut_surface(field.grid, field.z, design, o->tolerance);
       std::cout << "cut " << o->cut << ": " << field.grid.nx << " x " << field.grid.ny << " nodes, "
@@ -169,7 +169,7 @@ void register_view(CLI::App& app, CommandRegistry& registry) {
       viewer::ToolpathOptions to;
       to.arc_tolerance = o->arc_tolerance;
       if (o->program_offset == "auto") {
-        const Box3 ref = part ? part->bounds() : Box3{};
+        const geometry::Box3 ref = part ? part->bounds() : geometry::Box3{};
         if (const auto ws = ref.empty() ? std::nullopt : program_work_origin(text, ref)) {
           to.offset = -ws->offset;
           std::cout << "program placed on the part by its work origin: offset "
@@ -193,7 +193,7 @@ void register_view(CLI::App& app, CommandRegistry& registry) {
     } else if (o->timeline) {
       throw std::invalid_argument("--timeline goes with --program");
     }
-    if (!o->cutter.empty()) scene.cutter = parse_cutter_spec(o->cutter);
+    if (!o->cutter.empty()) scene.cutter = cam::parse_cutter_spec(o->cutter);
     if (!o->at.empty()) {
       if (!scene.cutter) throw std::invalid_argument("--at places the cutter: give --cutter SPEC too");
       scene.cutter_at = parse_view_point(o->at, "--at");
@@ -202,8 +202,8 @@ void register_view(CLI::App& app, CommandRegistry& registry) {
 
     if (!o->screenshot.empty()) {
       std::string renderer;
-      const RgbImage img = screenshot(scene, view, width, height, &renderer);
-      jobs::write_file_atomically(o->screenshot, [&](const std::filesystem::path& file) { write_png(file, img); });
+      const image::RgbImage img = screenshot(scene, view, width, height, &renderer);
+      jobs::write_file_atomically(o->screenshot, [&](const std::filesystem::path& file) { image::write_png(file, img); });
       std::cout << "screenshot " << o->screenshot << ": " << width << " x " << height << ", " << o->view
                 << " view, " << renderer << "\n";
       return 0;

@@ -265,7 +265,7 @@ int hand_off_to_daemon(const DaemonOwner& daemon, const HandoffJob& job, const C
   const double estimated_s = num_or(program, "estimated_s", -1);
   const std::string est_text = estimated_s >= 0 ? format_duration(estimated_s) : std::string("unknown");
   if (job.stl) {
-    const Cutter cutter = parse_cutter_spec(job.tp.tool);
+    const cam::Cutter cutter = cam::parse_cutter_spec(job.tp.tool);
     const json gen = obj_or(j, "generation");
     const bool cached = gen.contains("cached") && gen["cached"].is_boolean() && gen["cached"].get<bool>();
     std::cout << "plan for " << job.file << " (tool path by the daemon at " << daemon.address.url()

@@ -51,7 +51,7 @@ std::array<double, 2> xy_option(const std::string& text, const char* flag) {
 }  // namespace
 
 std::optional<protocol::ToolChangeConfig> tool_change_config(const ConnectionOptions& c, bool changes,
-                                                             session::SimulatorOptions* so, std::optional<Box3> stock) {
+                                                             session::SimulatorOptions* so, std::optional<geometry::Box3> stock) {
   std::string method = c.tool_change_method;
   if (method.empty()) method = so ? (stock ? "plate" : "pause") : "manual";
   if (method == "pause") return std::nullopt;
@@ -280,7 +280,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
     session::SimulatorOptions so = simulator_options(s);
     if (!s.design.empty()) {
       if (s.tool.empty()) throw std::invalid_argument("--sim-design needs --sim-tool (the cutter that cuts it)");
-      verify = VerifyTarget{load_stl(s.design).mesh, parse_cutter_spec(s.tool), {}, std::nullopt, std::nullopt};
+      verify = VerifyTarget{geometry::load_stl(s.design).mesh, cam::parse_cutter_spec(s.tool), {}, std::nullopt, std::nullopt};
     }
     if (verify && !s.no_verify) {
       so.design = verify->design;
@@ -301,7 +301,7 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
       throw std::invalid_argument("--sim-tool-table and --sim-result need a cut to simulate: an STL job, or --sim-design "
                                   "with --sim-tool (and not --no-sim-verify)");
     }
-    std::optional<Box3> stock = so.stock;
+    std::optional<geometry::Box3> stock = so.stock;
     if (!stock && so.design) stock = so.design->bounds();
     ro.tool_change = tool_change_config(c, changes_tools, &so, stock);
     sim = std::make_shared<session::SimulatorPort>(so);
@@ -434,8 +434,8 @@ int run_session(const ConnectionOptions& c, const SimCliOptions& s, const sessio
   viewer::LiveCursor cursor;
   std::unique_ptr<LiveFeed> feed;
   if (c.view) {
-    live = make_live_scene(read_program_text(job.file.string()), verify ? std::optional<Mesh>(verify->design) : std::nullopt, true,
-                           verify ? std::optional<Cutter>(verify->cutter) : std::nullopt,
+    live = make_live_scene(read_program_text(job.file.string()), verify ? std::optional<geometry::Mesh>(verify->design) : std::nullopt, true,
+                           verify ? std::optional<cam::Cutter>(verify->cutter) : std::nullopt,
                            verify ? verify->stock : std::nullopt, s.tolerance, 0.002);
     if (live->cut) live->scene.cut = live->cut_surface();
     live->scene.progress = 0;

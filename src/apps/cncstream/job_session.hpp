@@ -85,15 +85,15 @@ std::optional<std::string> device_path(const std::string& port);
 // stock in machine = work coordinates, if any) also where its plate or sensor
 // is, when not given. nullopt: the M0 goes to the controller (pause).
 std::optional<protocol::ToolChangeConfig> tool_change_config(const ConnectionOptions& c, bool changes,
-                                                             session::SimulatorOptions* so, std::optional<Box3> stock);
+                                                             session::SimulatorOptions* so, std::optional<geometry::Box3> stock);
 
 // What the simulator should verify the cut against (from an STL job).
 struct VerifyTarget {
-  Mesh design;  // in work = machine coordinates of the sim
-  Cutter cutter;
-  std::map<int, Cutter> tools;  // T number -> cutter, for a program of several tools (else `cutter` throughout)
-  std::optional<Box3> stock;    // the job's stock block (else the design's box)
-  std::optional<Vec3> work_offset;  // work = model + offset (an STL job's placement), recorded with --sim-result
+  geometry::Mesh design;  // in work = machine coordinates of the sim
+  cam::Cutter cutter;
+  std::map<int, cam::Cutter> tools;  // T number -> cutter, for a program of several tools (else `cutter` throughout)
+  std::optional<geometry::Box3> stock;    // the job's stock block (else the design's box)
+  std::optional<geometry::Vec3> work_offset;  // work = model + offset (an STL job's placement), recorded with --sim-result
 };
 
 // Motion limits for a plan shown before connecting: the simulator's settings

@@ -20,7 +20,7 @@ using Clock = std::chrono::steady_clock;
 constexpr auto kSurfaceEvery = std::chrono::milliseconds(250);  // the cut's mesh is remade at most this often
 constexpr std::size_t kSlice = 2000;  // segments cut between looks at new reports
 
-bool same_cutter(const Cutter& a, const Cutter& b) {
+bool same_cutter(const cam::Cutter& a, const cam::Cutter& b) {
   return a.type == b.type && a.radius == b.radius && a.corner_radius == b.corner_radius &&
          a.half_angle_deg == b.half_angle_deg && a.tip_radius == b.tip_radius && a.grown == b.grown;
 }
@@ -50,8 +50,8 @@ std::string LiveScene::stock_text() const {
                      design ? ", coloured by deviation from the part" : "");
 }
 
-std::unique_ptr<LiveScene> make_live_scene(const std::string& program, std::optional<Mesh> part, bool part_in_work,
-                                           std::optional<Cutter> cutter, std::optional<Box3> part_stock,
+std::unique_ptr<LiveScene> make_live_scene(const std::string& program, std::optional<geometry::Mesh> part, bool part_in_work,
+                                           std::optional<cam::Cutter> cutter, std::optional<geometry::Box3> part_stock,
                                            double tolerance, double arc_tolerance) {
   auto s = std::make_unique<LiveScene>();
   s->tolerance = tolerance;
@@ -66,14 +66,14 @@ std::unique_ptr<LiveScene> make_live_scene(const std::string& program, std::opti
   if (cutters.empty() && cutter) cutters.push_back({0, *cutter});
   if (!cutters.empty()) {
     s->scene.cutter = cutters.front().cutter;
-    std::optional<Box3> stock = viewer::program_stock(program);
-    if (stock) stock = Box3{stock->lo + s->offset, stock->hi + s->offset};
+    std::optional<geometry::Box3> stock = viewer::program_stock(program);
+    if (stock) stock = geometry::Box3{stock->lo + s->offset, stock->hi + s->offset};
     else if (part_stock) stock = part_stock;
     else if (part) stock = part->bounds();  // as the simulator takes it: the part's box
     viewer::LiveCutOptions lo;
     lo.work_z0 = s->offset.z;
     s->cut.emplace(*s->scene.program, std::move(cutters), stock, lo);
-    if (part) s->design = design_heights(*part, s->cut->grid());
+    if (part) s->design = cam::design_heights(*part, s->cut->grid());
   }
   // With the removed material shown, the part is inside the stock (the
   // cut's colours compare with it); without, the part itself.
@@ -102,7 +102,7 @@ LiveFeed::~LiveFeed() {
   thread_.join();
 }
 
-void LiveFeed::position(const Vec3& work_position) { live_.set_cutter_position(work_position + s_.offset); }
+void LiveFeed::position(const geometry::Vec3& work_position) { live_.set_cutter_position(work_position + s_.offset); }
 
 void LiveFeed::progress(double segments_done, const std::string& status) {
   {
@@ -141,7 +141,7 @@ double LiveFeed::removed_volume() const {
 void LiveFeed::run() {
   double shown_progress = -1;
   std::string shown_status;
-  Cutter shown_cutter = s_.scene.cutter.value_or(Cutter{});
+  cam::Cutter shown_cutter = s_.scene.cutter.value_or(cam::Cutter{});
   auto last_surface = Clock::now() - kSurfaceEvery;
   bool stale = false;  // the cut changed since its mesh was sent
   std::unique_lock<std::mutex> lock(mutex_);

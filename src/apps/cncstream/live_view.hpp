@@ -23,9 +23,9 @@ namespace cncstream::app {
 
 struct LiveScene {
   viewer::Scene scene;
-  Vec3 offset{};  // work coordinates -> the scene's frame
+  geometry::Vec3 offset{};  // work coordinates -> the scene's frame
   std::optional<viewer::LiveCut> cut;  // without a cutter: none
-  std::optional<DesignHeights> design;
+  std::optional<cam::DesignHeights> design;
   double tolerance = 0.05;
 
   // The stock as it stands: coloured by its deviation from the part, plain without one.
@@ -40,8 +40,8 @@ struct LiveScene {
 // stock the program names, else `part_stock` (in the part's frame), else
 // the part's box (as the simulator takes it), else the moves' extent. Held
 // by pointer: the cut refers to the scene's path.
-std::unique_ptr<LiveScene> make_live_scene(const std::string& program, std::optional<Mesh> part, bool part_in_work,
-                                           std::optional<Cutter> cutter, std::optional<Box3> part_stock,
+std::unique_ptr<LiveScene> make_live_scene(const std::string& program, std::optional<geometry::Mesh> part, bool part_in_work,
+                                           std::optional<cam::Cutter> cutter, std::optional<geometry::Box3> part_stock,
                                            double tolerance, double arc_tolerance);
 
 // A program read in one piece (a 5-million-line program is over 100 MB);
@@ -60,7 +60,7 @@ class LiveFeed {
   LiveFeed& operator=(const LiveFeed&) = delete;
 
   // From any thread; each returns at once.
-  void position(const Vec3& work_position);
+  void position(const geometry::Vec3& work_position);
   void progress(double segments_done, const std::string& status);
   void end(double segments_done, const std::string& status);
   // After end(): waits until every move up to the end is cut and shown.

@@ -38,17 +38,17 @@ namespace {
 
 // The pair, and a third cutter beside them if given.
 void parse_cutters(const std::string& tools, const std::string& library, jobs::SelectionParams& p) {
-  std::vector<Cutter> cs;
+  std::vector<cam::Cutter> cs;
   std::stringstream ss(tools);
   ToolLookup lookup(library);
   for (std::string item; std::getline(ss, item, ',');)
-    if (!item.empty()) cs.push_back(parse_cutter_spec(lookup.choose(item).spec()));
+    if (!item.empty()) cs.push_back(cam::parse_cutter_spec(lookup.choose(item).spec()));
   if (cs.size() != 2 && cs.size() != 3)
     throw std::invalid_argument("--tools '" + tools +
                                 "': give the ball and the radiused cutter, e.g. ball:3.175,bull:3.175:0.79, and "
                                 "optionally a third, e.g. taper:1:5:3.175");
-  if (cs[0].type != CutterType::Ball) std::swap(cs[0], cs[1]);
-  p.cutters = CutterPair(cs[0], cs[1]);
+  if (cs[0].type != cam::CutterType::Ball) std::swap(cs[0], cs[1]);
+  p.cutters = cam::CutterPair(cs[0], cs[1]);
   if (cs.size() == 3) p.tapered = cs[2];
 }
 
@@ -60,7 +60,7 @@ jobs::SelectionParams selection_params(const SelectionOptions& o) {
   p.part = part_source(o.part);
   p.stepover = o.stepover;
   p.step = o.step;
-  p.direction = o.direction == "y" ? RasterDirection::Y : RasterDirection::X;
+  p.direction = o.direction == "y" ? cam::RasterDirection::Y : cam::RasterDirection::X;
   p.scallop_tol = o.scallop_tol;
   p.reach_pitch = o.reach_pitch;
   return p;
@@ -79,7 +79,7 @@ jobs::PlanParams plan_params(const SelectionOptions& o, std::string* feeds_repor
     // finishes from the part's top), within the machine's rate.
     std::string report;
     ToolLookup lookup(o.tool_library);
-    const Cutter* cutters[] = {&p.selection.cutters.ball, &p.selection.cutters.radiused};
+    const cam::Cutter* cutters[] = {&p.selection.cutters.ball, &p.selection.cutters.radiused};
     std::optional<jobs::PlanParams::CutterRate>* rates[] = {&p.ball_rate, &p.radiused_rate};
     for (int k = 0; k < 2; ++k) {
       jobs::ToolpathParams t;

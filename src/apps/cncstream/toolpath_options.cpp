@@ -116,11 +116,11 @@ void add_toolpath_options(CLI::App* sub, ToolpathOptions& o, bool tool_required)
 
 jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   jobs::ToolpathParams p;
-  p.cutter = parse_cutter_spec(o.tool);
+  p.cutter = cam::parse_cutter_spec(o.tool);
   p.part = part_source(o.part);
   p.stepover = o.stepover;
   p.step = o.step;
-  p.direction = o.direction == "y" ? RasterDirection::Y : RasterDirection::X;
+  p.direction = o.direction == "y" ? cam::RasterDirection::Y : cam::RasterDirection::X;
   p.strategy = o.strategy == "raster" ? jobs::FinishStrategy::Raster : jobs::FinishStrategy::SteepShallow;
   p.steep_angle = o.steep_angle;
   p.scallop = o.scallop;
@@ -133,7 +133,7 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
   p.controller_arc_tolerance = o.controller_arc_tolerance;
   if (!o.bounds.empty()) {
     const auto v = parse_bounds(o.bounds);
-    p.bounds = XYBounds{v[0], v[1], v[2], v[3]};
+    p.bounds = cam::XYBounds{v[0], v[1], v[2], v[3]};
   }
   p.floor = o.floor;
   p.origin = o.origin == "center" ? XYOrigin::PartCenter : o.origin == "model" ? XYOrigin::Model : XYOrigin::PartMin;
@@ -145,8 +145,8 @@ jobs::ToolpathParams toolpath_params(const ToolpathOptions& o) {
     if (p.stock) p.stock->work_origin = *v;
   }
   p.max_depth = o.max_depth;
-  if (!o.rough.empty()) p.rough = parse_cutter_spec(o.rough);
-  if (!o.rest.empty()) p.rest = parse_cutter_spec(o.rest);
+  if (!o.rough.empty()) p.rough = cam::parse_cutter_spec(o.rough);
+  if (!o.rest.empty()) p.rest = cam::parse_cutter_spec(o.rest);
   p.rough_max_depth = o.rough_max_depth;
   p.leave = o.leave;
   p.step_down = o.step_down;

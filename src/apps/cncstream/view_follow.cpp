@@ -25,11 +25,11 @@ namespace {
 
 using json = nlohmann::json;
 
-std::optional<Vec3> vec3_of(const json& j, const char* key) {
+std::optional<geometry::Vec3> vec3_of(const json& j, const char* key) {
   if (!j.is_object() || !j.contains(key) || !j[key].is_array() || j[key].size() < 3) return std::nullopt;
   const json& a = j[key];
   if (!a[0].is_number() || !a[1].is_number() || !a[2].is_number()) return std::nullopt;
-  return Vec3{a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+  return geometry::Vec3{a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
 }
 
 // The job to follow: the one named, else the machine's current job, else
@@ -117,15 +117,15 @@ Followed load_followed(const DaemonClient& api, const FollowOptions& o) {
   f.total_lines = num_or(obj_or(job, "program"), "lines", 0);
   const std::string program = api.get_text(jpath + "/gcode");
 
-  std::optional<Mesh> part;
+  std::optional<geometry::Mesh> part;
   if (!o.part.empty()) {
-    part = load_stl(o.part).mesh;
+    part = geometry::load_stl(o.part).mesh;
   } else if (str_or(job, "kind") == "stl") {
     const json params = obj_or(job, "params");
-    StlLoadOptions so;
-    so.units = parse_length_unit(str_or(params, "units", "mm"));
+    geometry::StlLoadOptions so;
+    so.units = geometry::parse_length_unit(str_or(params, "units", "mm"));
     so.scale = num_or(params, "scale", 1);
-    part = parse_stl(api.get_text("/api/v1/files/" + str_or(job, "file") + "/content"), f.file_name, so).mesh;
+    part = geometry::parse_stl(api.get_text("/api/v1/files/" + str_or(job, "file") + "/content"), f.file_name, so).mesh;
   }
   f.live = make_live_scene(program, std::move(part), false, o.cutter, std::nullopt, o.tolerance, o.arc_tolerance);
   if (!f.live->cut)
@@ -147,8 +147,8 @@ int screenshot_of_job(const DaemonClient& api, Followed& f, const FollowOptions&
     if (const auto wpos = vec3_of(obj_or(m, "status"), "wpos")) s.scene.cutter_at = *wpos + s.offset;
   }
   std::string renderer;
-  const RgbImage img = viewer::screenshot(s.scene, o.view, o.width, o.height, &renderer);
-  jobs::write_file_atomically(o.screenshot, [&](const std::filesystem::path& file) { write_png(file, img); });
+  const image::RgbImage img = viewer::screenshot(s.scene, o.view, o.width, o.height, &renderer);
+  jobs::write_file_atomically(o.screenshot, [&](const std::filesystem::path& file) { image::write_png(file, img); });
   std::cout << f.summary(done, s.cut ? s.cut->removed_volume() : 0) << "\n";
   if (s.design) std::cout << s.scene.cut->stats.summary() << "\n";
   std::cout << "screenshot " << o.screenshot << ": " << o.width << " x " << o.height << ", " << renderer << std::endl;

@@ -20,7 +20,7 @@ struct FollowOptions {
   std::string machine;
   std::optional<long> job;  // default: the machine's current job, else its first unfinished one
   std::string part;         // a local STL to show instead of an STL job's own
-  std::optional<Cutter> cutter;  // for a program that names none (not a cncstream job)
+  std::optional<cam::Cutter> cutter;  // for a program that names none (not a cncstream job)
   double tolerance = 0.05;       // deviation within which the cut is on the part, mm
   double arc_tolerance = 0.002;
   bool until_done = false;  // close the window when the job has ended
@@ -36,6 +36,6 @@ int follow_job_in_viewer(const FollowOptions& options);
 
 // The work origin a cncstream program names in its header ("work origin: XY
 // at part minimum, Z0 at part top"), so its path can be drawn on the part.
-std::optional<jobs::WorkSetup> program_work_origin(const std::string& text, const Box3& part);
+std::optional<jobs::WorkSetup> program_work_origin(const std::string& text, const geometry::Box3& part);
 
 }  // namespace cncstream::app

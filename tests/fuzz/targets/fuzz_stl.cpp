@@ -9,9 +9,9 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string bytes(reinterpret_cast<const char*>(data), size);
   try {
-    const auto r = cncstream::parse_stl(bytes, "fuzz.stl");
+    const auto r = cncstream::geometry::parse_stl(bytes, "fuzz.stl");
     (void)r.mesh.bounds();
-  } catch (const cncstream::StlError&) {
+  } catch (const cncstream::geometry::StlError&) {
   }
   return 0;
 }
