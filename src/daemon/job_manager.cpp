@@ -881,6 +881,23 @@ void JobManager::on_start_failed(const std::string& machine, const std::string& 
 
 // ---- resume from a line -----------------------------------------------------
 
+// Plans on the pool (tracing a big program takes a while); `done` gets the
+// plan, or why there is none, on the event loop while this still exists.
+void JobManager::plan_resume_async(jobs::ResumeInput in, ResumePlanned done) {
+  boost::asio::post(pool_, [this, in = std::move(in), done = std::move(done), alive = alive_]() mutable {
+    std::optional<jobs::ResumePlan> plan;
+    std::string error;
+    try {
+      plan = jobs::plan_resume(in);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    boost::asio::post(io_, [plan = std::move(plan), error, done = std::move(done), alive]() mutable {
+      if (*alive) done(std::move(plan), error);
+    });
+  });
+}
+
 jobs::ResumeInput JobManager::resume_input(const Program& p, const transport::DaemonJobRow& ran) const {
   jobs::ResumeInput in;
   in.file = p.path;
@@ -935,32 +952,22 @@ void JobManager::program_ready(DaemonJob& j) {
   if (j.row.state != "generating") set_state(j, "generating");
   j.stage = "planning the resume";
   publish_job(j);
-  boost::asio::post(pool_, [this, in = std::move(in), id = j.row.id, sr, alive = alive_] {
-    std::optional<jobs::ResumePlan> plan;
-    std::string error;
-    try {
-      plan = jobs::plan_resume(in);
-    } catch (const std::exception& e) {
-      error = e.what();
+  plan_resume_async(std::move(in), [this, id = j.row.id, sr](std::optional<jobs::ResumePlan> plan, const std::string& error) {
+    const auto it = jobs_.find(id);
+    if (it == jobs_.end() || it->second->row.state != "generating") return;  // cancelled meanwhile
+    auto& j = *it->second;
+    j.shop_resume.reset();
+    if (!plan) {
+      set_state(j, "failed", fmt::format("the resume after line {} cannot be planned: {}", sr.after_line, error));
+      return;
     }
-    boost::asio::post(io_, [this, plan = std::move(plan), error, id, sr, alive]() mutable {
-      if (!*alive) return;
-      const auto it = jobs_.find(id);
-      if (it == jobs_.end() || it->second->row.state != "generating") return;  // cancelled meanwhile
-      auto& j = *it->second;
-      j.shop_resume.reset();
-      if (!plan) {
-        set_state(j, "failed", fmt::format("the resume after line {} cannot be planned: {}", sr.after_line, error));
-        return;
-      }
-      j.row.from_line = plan->from_line;
-      j.stage = "done";
-      j.resume = std::move(*plan);
-      spdlog::info("job {}: a shop resume after line {} (the hub's line {}): {}", id, j.resume->from_line,
-                   sr.after_line, j.resume->reason);
-      set_state(j, "ready", fmt::format("resumes after line {} (the machine last reported line {}): {}",
-                                        j.resume->from_line, sr.after_line, j.resume->reason));
-    });
+    j.row.from_line = plan->from_line;
+    j.stage = "done";
+    j.resume = std::move(*plan);
+    spdlog::info("job {}: a shop resume after line {} (the hub's line {}): {}", id, j.resume->from_line, sr.after_line,
+                 j.resume->reason);
+    set_state(j, "ready", fmt::format("resumes after line {} (the machine last reported line {}): {}",
+                                      j.resume->from_line, sr.after_line, j.resume->reason));
   });
 }
 
@@ -998,30 +1005,21 @@ void JobManager::resume_plan(std::int64_t id, long from_line, const std::string&
   if (from_line > j.program->total_lines)
     throw ApiError{400, "bad_request", "from_line " + std::to_string(from_line) + " is past the program's " +
                                            std::to_string(j.program->total_lines) + " lines"};
-  boost::asio::post(pool_, [this, in = std::move(in), id, client, respond, alive = alive_] {
-    std::optional<jobs::ResumePlan> plan;
-    std::string error;
-    try {
-      plan = jobs::plan_resume(in);
-    } catch (const std::exception& e) {
-      error = e.what();
+  plan_resume_async(std::move(in), [this, id, client, respond](std::optional<jobs::ResumePlan> plan,
+                                                               const std::string& error) {
+    if (!plan) {
+      respond(Response::error(400, "bad_request", error));
+      return;
     }
-    boost::asio::post(io_, [this, plan = std::move(plan), error, id, client, respond, alive]() mutable {
-      if (!*alive) return;
-      if (!plan) {
-        respond(Response::error(400, "bad_request", error));
-        return;
-      }
-      const std::string plan_id = random_token_hex(12);
-      json r = {{"plan_id", plan_id}, {"job", id},          {"from_line", plan->from_line}, {"reason", plan->reason},
-                {"preamble", plan->preamble}, {"lines", plan->lines.size()}, {"expires_in_s", 600}};
-      // The tool the job goes on with: the operator mounts it before confirming.
-      if (const auto& op = plan->operation)
-        r["operation"] = {{"number", op->number}, {"name", op->name}, {"tool", op->tool}, {"cutter", op->cutter}};
-      std::erase_if(plans_, [now = steady_s()](const auto& e) { return e.second.expires < now; });
-      plans_[plan_id] = PendingPlan{id, client, std::move(*plan), steady_s() + 600};
-      respond(Response::json(200, r));
-    });
+    const std::string plan_id = random_token_hex(12);
+    json r = {{"plan_id", plan_id}, {"job", id},          {"from_line", plan->from_line}, {"reason", plan->reason},
+              {"preamble", plan->preamble}, {"lines", plan->lines.size()}, {"expires_in_s", 600}};
+    // The tool the job goes on with: the operator mounts it before confirming.
+    if (const auto& op = plan->operation)
+      r["operation"] = {{"number", op->number}, {"name", op->name}, {"tool", op->tool}, {"cutter", op->cutter}};
+    std::erase_if(plans_, [now = steady_s()](const auto& e) { return e.second.expires < now; });
+    plans_[plan_id] = PendingPlan{id, client, std::move(*plan), steady_s() + 600};
+    respond(Response::json(200, r));
   });
 }
 

@@ -41,16 +41,6 @@ std::vector<std::string> lines_of(const std::string& text) {
   return out;
 }
 
-struct DaemonChild {
-  pid_t pid = -1;
-  void kill9() {
-    if (pid <= 0) return;
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, nullptr, 0);
-    pid = -1;
-  }
-  ~DaemonChild() { kill9(); }
-};
 
 // What a machine's session was given to stream when its job started.
 struct StartedJob {
@@ -92,7 +82,7 @@ TEST(ShopResume, RequeuedOnItsMachineTheJobIsAResumeFromItsLastLineThereAndAnywh
   // PC A's daemon in a child process: routerA claims the job, its operator
   // starts it, and the PC dies mid-cut (kill -9).
   {
-    detail_shop_resume::DaemonChild a;
+    shoptest::DaemonChild a;
     a.pid = ::fork();
     ASSERT_GE(a.pid, 0);
     if (a.pid == 0) {

@@ -151,6 +151,8 @@ class JobManager {
   // `ran` ran this same program, its journal's last progress, planner depth,
   // earlier resume and refused lines.
   jobs::ResumeInput resume_input(const Program& p, const transport::DaemonJobRow& ran) const;
+  using ResumePlanned = std::function<void(std::optional<jobs::ResumePlan> plan, const std::string& error)>;
+  void plan_resume_async(jobs::ResumeInput in, ResumePlanned done);
   // The program cache's key: the file, the job's parameters and, for a part, the machine's link.
   std::string generation_key(const std::string& file_id, const nlohmann::json& params, const std::string& machine);
   void on_generated(const std::string& key, const std::shared_ptr<const Program>& p, const std::string& error,
