@@ -2,8 +2,8 @@
 // daemon's API v1 (docs/api-v1.md): REST for commands and files, one WebSocket
 // for status, job progress, events and the continuous-jog dead man.
 
-// The shop view: its own module (pollShop/pollShopSoon also for a push that says the shop changed).
-import { setupShop, pollShop, pollShopSoon } from './shop.js';
+// The shop view: its own module (applyShopFrame draws a push that says what in the shop changed).
+import { setupShop, applyShopFrame } from './shop.js';
 // The tool library: its panel, the tool-path form's pickers, the tool change's name and stick-out.
 import { setupTools, pickedLibraryTool, toolChangeLibraryText } from './tools.js';
 import { setupRoutines, onRoutineFrame, renderRoutines } from './routines.js';
@@ -1070,8 +1070,8 @@ function onMessage(m) {
       break;
     }
     case 'queue': reloadJobsSoon(); break;
-    // The hub said the shop changed (docs/api-v1.md): the shop view reads it now.
-    case 'shop': pollShopSoon(0); break;
+    // The hub said what in the shop changed (docs/api-v1.md): the shop view draws it.
+    case 'shop': applyShopFrame(m); break;
     case 'event': onEvent(m); break;
     case 'console': log(m.machine, m.dir === 'out' ? '> ' + m.text : m.text, m.dir === 'out' ? 'out' : /^error|alarm/i.test(m.text) ? 'err' : ''); break;
     case 'link': {

@@ -7,9 +7,13 @@ const enc = encodeURIComponent;
 
 // ---------------------------------------------------------------- shop
 // The shop view (docs/shop.md): the hub's machines, queue and history, read
-// through this daemon (GET /shop/…). The hub sends no notification of state
-// changes, so the page polls, about once a second while the tab is visible.
-const SHOP = { member: false, pollMs: 1000, timer: null, eventsJob: null, machinesSig: null, jobsSig: null, eventsSig: null };
+// through this daemon (GET /shop/…). The daemon pushes what changed as a
+// `shop` WebSocket frame (the machine rows and jobs the hub's NOTIFY named,
+// docs/api-v1.md), which applyShopFrame draws into what is shown; a frame
+// marked `resync` or `more` (or a change it cannot place) reads the whole
+// view. A slow poll (`poll_ms`, 5 s) stays as the fallback, not while the tab is hidden.
+const SHOP = { member: false, pollMs: 5000, timer: null, eventsJob: null, machinesSig: null, jobsSig: null, eventsSig: null,
+  machines: null, jobs: null };
 const when = (t) => (t ? new Date(t).toLocaleString([], { month: 'short', day: 'numeric', hour: '2-digit', minute: '2-digit', second: '2-digit' }) : '—');
 // MTConnect's execution as the page's state colours.
 const EXECUTION_CLASS = { READY: 'idle', ACTIVE: 'run', FEED_HOLD: 'hold', INTERRUPTED: 'door', STOPPED: 'alarm', PROGRAM_COMPLETED: 'idle' };
@@ -20,7 +24,7 @@ export async function setupShop() {
   $('#panel-shop').hidden = !SHOP.member;
   $('#shop-nav').hidden = !SHOP.member;
   if (!SHOP.member) return;
-  SHOP.pollMs = r.poll_ms || 1000;
+  SHOP.pollMs = r.poll_ms || 5000;
   $('#shop-name').textContent = `“${r.name}” · this PC: ${r.pc}`;
   $('#shop-status-filter').addEventListener('change', () => pollShopSoon(0));
   $('#shop-machine-filter').addEventListener('change', () => pollShopSoon(0));
@@ -59,7 +63,49 @@ export async function pollShop() {
   pollShopSoon(SHOP.pollMs);
 }
 
+// A `shop` frame: its rows drawn into what is shown, without reading the
+// view again; a whole read when the frame asks for one or a job cannot be
+// placed under the filters (its old status unknown, so the counts would drift).
+export function applyShopFrame(f) {
+  if (!SHOP.member) return;
+  if (f.resync || f.more || !SHOP.machines || !SHOP.jobs) { pollShopSoon(0); return; }
+  if ((f.machines || []).length) {
+    const list = SHOP.machines.slice();
+    for (const m of f.machines) {
+      const i = list.findIndex((x) => x.name === m.name);
+      if (i >= 0) list[i] = m; else list.push(m);
+    }
+    list.sort((a, b) => (a.pc === b.pc ? a.name.localeCompare(b.name) : a.pc.localeCompare(b.pc)));
+    renderShopMachines(list);
+  }
+  if ((f.jobs || []).length) {
+    const statuses = $('#shop-status-filter').value ? $('#shop-status-filter').value.split(',') : null;
+    const machineFilter = $('#shop-machine-filter').value;
+    const shown = (j) => (!statuses || statuses.includes(j.status)) &&
+      (!machineFilter || j.machine === machineFilter || j.requested_machine === machineFilter);
+    const r = { ...SHOP.jobs, jobs: SHOP.jobs.jobs.slice(), counts: { ...(SHOP.jobs.counts || {}) } };
+    const newest = r.jobs.length ? r.jobs[0].id : 0;
+    for (const j of f.jobs) {
+      const i = r.jobs.findIndex((x) => x.id === j.id);
+      if (i >= 0) {
+        const old = r.jobs[i];
+        r.counts[old.status] = (r.counts[old.status] || 1) - 1;
+        if (!r.counts[old.status]) delete r.counts[old.status];
+        if (shown(j)) { r.jobs[i] = j; r.counts[j.status] = (r.counts[j.status] || 0) + 1; } else r.jobs.splice(i, 1);
+      } else if (j.id > newest) {
+        if (shown(j)) { r.jobs.unshift(j); r.counts[j.status] = (r.counts[j.status] || 0) + 1; }
+      } else { pollShopSoon(0); return; }  // an older job not on the page: its old status is not known here
+    }
+    r.jobs.sort((a, b) => b.id - a.id);
+    renderShopJobs(r);
+    if (SHOP.eventsJob && f.jobs.some((j) => j.id === SHOP.eventsJob))
+      api('GET', `/shop/jobs/${SHOP.eventsJob}/events`).then(renderShopEvents, () => {});
+  }
+  if (f.now) $('#shop-status').textContent = `Pushed by the hub at ${new Date(f.now).toLocaleTimeString()}`;
+}
+
 function renderShopMachines(list) {
+  SHOP.machines = list;
   const sig = JSON.stringify(list.map((m) => [m.name, m.pc, m.state, m.job, Math.round(m.heartbeat_age_s)]));
   if (sig === SHOP.machinesSig) return;
   SHOP.machinesSig = sig;
@@ -133,7 +179,9 @@ function jobActions(j) {
   if (['interrupted', 'failed', 'cancelled'].includes(j.status)) {
     const again = (on) => () => api('POST', `/shop/jobs/${j.id}/requeue`, { on });
     return [
-      j.machine ? act(`Requeue on ${j.machine}`, 'requeue-same', again('same_machine'), `Back to ${j.machine}: it waits for its operator there, who may start it from a line (it stopped at line ${j.last_line || 0})`) : null,
+      j.machine ? act(`Resume on ${j.machine}`, 'requeue-same', again('same_machine'), j.last_line
+        ? `Back to ${j.machine} as a resume after line ${j.last_line} (its last reported line; the daemon backs off what the controller may not have cut): it waits for its operator there`
+        : `Back to ${j.machine}, from the top (no line was reported): it waits for its operator there`) : null,
       act('Requeue anywhere', 'requeue-any', again('any_machine'), 'Back into the queue for any machine that can do it: a restart from the beginning'),
     ];
   }
@@ -141,6 +189,7 @@ function jobActions(j) {
 }
 
 function renderShopJobs(r) {
+  SHOP.jobs = r;
   const sig = JSON.stringify([r.jobs.map((j) => [j.id, j.status, j.machine, j.last_line, j.message, j.ended_at]), r.counts]);
   if (sig === SHOP.jobsSig) return;
   SHOP.jobsSig = sig;

@@ -186,6 +186,7 @@ void JobManager::recover() {
         if (rec && !rec->outcome) journal_.end_job(row.journal_id, "interrupted", j->row.message);
       }
       journal_.update_daemon_job(j->row);
+      interrupted_at_recovery_.push_back(row.id);
     } else if (!is_final(row.state) && tool_change_lost) {
       // Fail closed: without its own settings its change would run the machine's.
       j->row.state = "failed";
@@ -359,7 +360,7 @@ bool JobManager::has_unfinished(const std::string& machine) const {
 
 // ---- create, list ---------------------------------------------------------
 
-json JobManager::create(const json& body) {
+json JobManager::create(const json& body, std::optional<ShopResume> shop_resume) {
   if (!body.is_object()) throw ApiError{400, "bad_request", "expected a JSON object"};
   if (!body.contains("machine") || !body["machine"].is_string())
     throw ApiError{400, "bad_request", "machine: required, a machine name"};
@@ -403,6 +404,15 @@ json JobManager::create(const json& body) {
   for (auto* u : unfinished(machine)) pos = std::max(pos, u->row.position + 1);
   r.position = pos;
   r.created_at = transport::Journal::now_iso8601();
+  if (shop_resume) {
+    if (shop_resume->after_line <= 0) throw ApiError{400, "bad_request", "a resume needs the line it continues after (> 0)"};
+    // Recorded at once: a daemon restart before the plan is made fails the
+    // job (kick_generation) rather than run it from the top.
+    r.resumed_from = shop_resume->ran_as;
+    r.from_line = shop_resume->after_line;
+    r.message = "a resume after line " + std::to_string(shop_resume->after_line) + ", planned once the program is ready";
+    j->shop_resume = shop_resume;
+  }
   r.id = journal_.insert_daemon_job(r);
   auto& ref = *j;
   jobs_[r.id] = std::move(j);
@@ -480,7 +490,7 @@ std::string JobManager::generation_key(const std::string& file_id, const json& p
 }
 
 void JobManager::kick_generation(DaemonJob& j) {
-  if (j.row.resumed_from && !j.resume) {
+  if ((j.row.resumed_from || j.row.from_line) && !j.resume && !j.shop_resume) {
     // A confirmed resume whose lines were lost with a restart: plan it again from its recorded line.
     set_state(j, "failed", "the resume plan was lost with a daemon restart: plan the resume again from job " +
                                std::to_string(j.row.resumed_from));
@@ -493,7 +503,7 @@ void JobManager::kick_generation(DaemonJob& j) {
     j.cached = true;
     j.stage = "done";
     j.fraction = 1;
-    set_state(j, "ready");
+    program_ready(j);
     return;
   }
   j.cached = false;
@@ -623,7 +633,7 @@ void JobManager::on_generated(const std::string& key, const std::shared_ptr<cons
       j.stage = "done";
       j.fraction = 1;
       spdlog::info("job {}: ready: {} lines in {:.3f} s", id, p->lines.size(), p->seconds);
-      set_state(j, "ready");
+      program_ready(j);
     } else if (cancelled) {
       set_state(j, "cancelled", "generation cancelled");
     } else {
@@ -889,6 +899,97 @@ void JobManager::on_start_failed(const std::string& machine, const std::string& 
 
 // ---- resume from a line -----------------------------------------------------
 
+// Plans on the pool (tracing a big program takes a while); `done` gets the
+// plan, or why there is none, on the event loop while this still exists.
+void JobManager::plan_resume_async(jobs::ResumeInput in, ResumePlanned done) {
+  boost::asio::post(pool_, [this, in = std::move(in), done = std::move(done), alive = alive_]() mutable {
+    std::optional<jobs::ResumePlan> plan;
+    std::string error;
+    try {
+      plan = jobs::plan_resume(in);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    boost::asio::post(io_, [plan = std::move(plan), error, done = std::move(done), alive]() mutable {
+      if (*alive) done(std::move(plan), error);
+    });
+  });
+}
+
+jobs::ResumeInput JobManager::resume_input(const Program& p, const transport::DaemonJobRow& ran) const {
+  jobs::ResumeInput in;
+  in.file = p.path;
+  in.file_sha256 = p.sha256;
+  in.lines = p.lines;
+  in.last_line = ran.last_line;
+  if (!ran.journal_id) return in;
+  const auto rec = journal_.job(ran.journal_id);
+  // Another program's journal (a part generated differently) says nothing about this one.
+  if (rec && !rec->file_sha256.empty() && rec->file_sha256 != p.sha256) return in;
+  if (const auto pr = journal_.last_progress(ran.journal_id)) {
+    in.last_line = pr->last_line;
+    if (pr->status_work_pos)
+      in.status_work_pos = geometry::Vec3{(*pr->status_work_pos)[0], (*pr->status_work_pos)[1], (*pr->status_work_pos)[2]};
+    in.status_line = pr->status_line;
+  }
+  // As `cncstream resume` reads it: the planner depth the job streamed
+  // with, the resume it continued, and the lines the controller refused.
+  if (rec) {
+    in.planner_blocks = static_cast<int>(rec->planner_blocks);
+    if (rec->resumed_from > 0) in.resumed_after = rec->from_line;
+  }
+  in.error_lines = journal_.progress_lines(ran.journal_id, "error");
+  return in;
+}
+
+void JobManager::program_ready(DaemonJob& j) {
+  if (!j.shop_resume) {
+    set_state(j, "ready");
+    return;
+  }
+  // A shop job requeued on this machine: ready only as a resume. Its line is
+  // the hub's last reported one; an `ok` only means the controller planned
+  // a line, so the continuation is chosen as `cncstream resume` chooses it
+  // (from the earlier run's journal when this daemon holds it: its status
+  // report and planner depth; else backing off the planner's depth).
+  const ShopResume sr = *j.shop_resume;
+  transport::DaemonJobRow ran;
+  if (sr.ran_as)
+    if (const auto it = jobs_.find(sr.ran_as); it != jobs_.end() && it->second->row.machine == j.row.machine)
+      ran = it->second->row;
+  jobs::ResumeInput in = resume_input(*j.program, ran);
+  // The hub's line is where it resumes from: a status report that came
+  // after it (this journal ran further than it shipped) does not move the
+  // choice later; backing off from the hub's line only cuts air twice.
+  in.last_line = sr.after_line;
+  if (in.status_line > sr.after_line) {
+    in.status_work_pos.reset();
+    in.status_line = 0;
+  }
+  in.from_line = -1;
+  if (j.row.state != "generating") set_state(j, "generating");
+  j.stage = "planning the resume";
+  publish_job(j);
+  plan_resume_async(std::move(in), [this, id = j.row.id, sr](std::optional<jobs::ResumePlan> plan, const std::string& error) {
+    const auto it = jobs_.find(id);
+    if (it == jobs_.end() || it->second->row.state != "generating") return;  // cancelled meanwhile
+    auto& j = *it->second;
+    j.shop_resume.reset();
+    if (!plan) {
+      set_state(j, "failed", fmt::format("the resume after line {} cannot be planned: {}", sr.after_line, error));
+      return;
+    }
+    j.row.from_line = plan->from_line;
+    j.stage = "done";
+    j.resume = std::move(*plan);
+    spdlog::info("job {}: a shop resume after line {} (the hub's line {}): {}", id, j.resume->from_line, sr.after_line,
+                 j.resume->reason);
+    set_state(j, "ready", fmt::format("resumes after line {} (the machine last reported line {}): {}",
+                                      j.resume->from_line, sr.after_line, j.resume->reason));
+  });
+}
+
+
 void JobManager::resume_plan(std::int64_t id, long from_line, const std::string& client,
                              const Respond& respond) {
   auto& j = get(id);
@@ -917,54 +1018,26 @@ void JobManager::resume_plan(std::int64_t id, long from_line, const std::string&
     }
   }
   if (!j.program) throw ApiError{409, "bad_state", "job " + std::to_string(id) + "'s program is not available"};
-  jobs::ResumeInput in;
-  in.file = j.program->path;
-  in.file_sha256 = j.program->sha256;
-  in.lines = j.program->lines;
+  jobs::ResumeInput in = resume_input(*j.program, j.row);
   in.from_line = from_line;
-  in.last_line = j.row.last_line;
-  if (j.row.journal_id)
-    if (const auto p = journal_.last_progress(j.row.journal_id)) {
-      in.last_line = p->last_line;
-      if (p->status_work_pos) in.status_work_pos = geometry::Vec3{(*p->status_work_pos)[0], (*p->status_work_pos)[1], (*p->status_work_pos)[2]};
-      in.status_line = p->status_line;
-    }
-  if (j.row.journal_id) {
-    // As `cncstream resume` reads it: the planner depth the job streamed
-    // with, the resume it continued, and the lines the controller refused.
-    if (const auto rec = journal_.job(j.row.journal_id)) {
-      in.planner_blocks = static_cast<int>(rec->planner_blocks);
-      if (rec->resumed_from > 0) in.resumed_after = rec->from_line;
-    }
-    in.error_lines = journal_.progress_lines(j.row.journal_id, "error");
-  }
   if (from_line > j.program->total_lines)
     throw ApiError{400, "bad_request", "from_line " + std::to_string(from_line) + " is past the program's " +
                                            std::to_string(j.program->total_lines) + " lines"};
-  boost::asio::post(pool_, [this, in = std::move(in), id, client, respond, alive = alive_] {
-    std::optional<jobs::ResumePlan> plan;
-    std::string error;
-    try {
-      plan = jobs::plan_resume(in);
-    } catch (const std::exception& e) {
-      error = e.what();
+  plan_resume_async(std::move(in), [this, id, client, respond](std::optional<jobs::ResumePlan> plan,
+                                                               const std::string& error) {
+    if (!plan) {
+      respond(Response::error(400, "bad_request", error));
+      return;
     }
-    boost::asio::post(io_, [this, plan = std::move(plan), error, id, client, respond, alive]() mutable {
-      if (!*alive) return;
-      if (!plan) {
-        respond(Response::error(400, "bad_request", error));
-        return;
-      }
-      const std::string plan_id = random_token_hex(12);
-      json r = {{"plan_id", plan_id}, {"job", id},          {"from_line", plan->from_line}, {"reason", plan->reason},
-                {"preamble", plan->preamble}, {"lines", plan->lines.size()}, {"expires_in_s", 600}};
-      // The tool the job goes on with: the operator mounts it before confirming.
-      if (const auto& op = plan->operation)
-        r["operation"] = {{"number", op->number}, {"name", op->name}, {"tool", op->tool}, {"cutter", op->cutter}};
-      std::erase_if(plans_, [now = steady_s()](const auto& e) { return e.second.expires < now; });
-      plans_[plan_id] = PendingPlan{id, client, std::move(*plan), steady_s() + 600};
-      respond(Response::json(200, r));
-    });
+    const std::string plan_id = random_token_hex(12);
+    json r = {{"plan_id", plan_id}, {"job", id},          {"from_line", plan->from_line}, {"reason", plan->reason},
+              {"preamble", plan->preamble}, {"lines", plan->lines.size()}, {"expires_in_s", 600}};
+    // The tool the job goes on with: the operator mounts it before confirming.
+    if (const auto& op = plan->operation)
+      r["operation"] = {{"number", op->number}, {"name", op->name}, {"tool", op->tool}, {"cutter", op->cutter}};
+    std::erase_if(plans_, [now = steady_s()](const auto& e) { return e.second.expires < now; });
+    plans_[plan_id] = PendingPlan{id, client, std::move(*plan), steady_s() + 600};
+    respond(Response::json(200, r));
   });
 }
 

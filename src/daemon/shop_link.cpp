@@ -57,6 +57,15 @@ ShopLink::ShopLink(boost::asio::io_context& io, const DaemonConfig& config, File
     client_->job_state(j.row.id, j.row.machine, j.row.state, static_cast<long>(j.row.last_line), j.row.message,
                        j.row.file_name);
   };
+  // Jobs this daemon found running when it started again (it had died
+  // under them): the hub hears they were interrupted, with their last line,
+  // rather than a lease its heartbeats would renew for ever.
+  for (const auto id : jobs_.interrupted_at_recovery()) {
+    try {
+      jobs_.on_state_change(jobs_.get(id));
+    } catch (const ApiError&) {
+    }
+  }
 }
 
 ShopLink::~ShopLink() {
@@ -78,7 +87,7 @@ bool ShopLink::free_for_shop_job(const std::string& machine) {
   return !jobs_.has_unfinished(machine);
 }
 
-std::int64_t ShopLink::add_shop_job(const std::string& machine, const shop::ClaimedJob& job) {
+std::int64_t ShopLink::add_shop_job(const std::string& machine, const shop::ClaimedJob& job, std::int64_t earlier_local) {
   const auto temp = files_.temp_path();
   {
     std::ofstream out(temp, std::ios::binary | std::ios::trunc);
@@ -89,7 +98,9 @@ std::int64_t ShopLink::add_shop_job(const std::string& machine, const shop::Clai
     const auto [info, fresh] = files_.ingest(temp, job.file_name);
     nlohmann::json body = {{"machine", machine}, {"file", info.id}};
     if (!job.params_json.empty()) body["params"] = nlohmann::json::parse(job.params_json);
-    const auto created = jobs_.create(body);
+    std::optional<ShopResume> resume;
+    if (job.resume_after_line > 0) resume = ShopResume{job.resume_after_line, earlier_local};
+    const auto created = jobs_.create(body, resume);
     return created.at("id").get<std::int64_t>();
   } catch (const ApiError& e) {
     throw std::runtime_error(e.message);

@@ -10,8 +10,8 @@
 namespace cncstream::daemon {
 
 namespace detail_shop_watch {
-// A frame names at most this many changes (a burst over many machines says
-// "more": the view itself is whole either way).
+// A frame carries at most this many changes; a burst over more says "more"
+// and the pages read the whole view.
 constexpr std::size_t kMaxChanged = 64;
 }  // namespace detail_shop_watch
 
@@ -67,15 +67,26 @@ void ShopWatch::arm(boost::asio::steady_timer::time_point at) {
 }
 
 void ShopWatch::start_read() {
-  in_flight_ = true;
   queued_ = false;
   last_start_ = std::chrono::steady_clock::now();
   auto changed = std::move(pending_);
   pending_.clear();
   const bool resync = pending_resync_;
   pending_resync_ = false;
+  if (resync || changed.size() > detail_shop_watch::kMaxChanged) {
+    // The page reads the whole view itself: nothing to read here.
+    send_whole(std::move(changed), resync);
+    if (queued_) request();
+    return;
+  }
+  in_flight_ = true;
   ++reads_;
-  view_.submit([](shop::PgConnection& db) -> std::optional<nlohmann::json> { return shop::view_machines(db); },
+  // The read's own copy: the answer's callback takes `changed` itself (the
+  // two arguments are built in no set order).
+  shop::ShopViewReader::Read read = [payloads = changed](shop::PgConnection& db) -> std::optional<nlohmann::json> {
+    return shop::view_changes(db, payloads);
+  };
+  view_.submit(std::move(read),
                [this, &io = io_, alive = alive_, changed = std::move(changed), resync](shop::ViewAnswer a) mutable {
                  boost::asio::post(io, [this, alive, a = std::move(a), changed = std::move(changed), resync]() mutable {
                    if (*alive) read_done(std::move(a), std::move(changed), resync);
@@ -96,17 +107,29 @@ void ShopWatch::read_done(shop::ViewAnswer a, std::vector<std::string> changed, 
     return;
   }
   failed_ = false;
-  {
-    nlohmann::json f = {{"type", "shop"}, {"now", a.body.value("now", nlohmann::json())},
-                        {"machines", a.body.value("machines", nlohmann::json::array())}, {"resync", resync}};
-    const bool more = changed.size() > detail_shop_watch::kMaxChanged;
-    if (more) changed.resize(detail_shop_watch::kMaxChanged);
-    f["changed"] = std::move(changed);
-    f["more"] = more;
-    hub_.broadcast(WsHub::frame(dump_json(f)));
-    ++frames_sent_;
-  }
+  nlohmann::json f = {{"type", "shop"},
+                      {"now", a.body.value("now", nlohmann::json())},
+                      {"machines", a.body.value("machines", nlohmann::json::array())},
+                      {"jobs", a.body.value("jobs", nlohmann::json::array())},
+                      {"resync", resync},
+                      {"more", false},
+                      {"changed", std::move(changed)}};
+  hub_.broadcast(WsHub::frame(dump_json(f)));
+  ++frames_sent_;
   if (queued_) request();
+}
+
+// A frame that asks the pages to read the whole view: after the listener
+// (re)connected (whatever changed meanwhile sent nothing), or after more
+// changes than a frame names.
+void ShopWatch::send_whole(std::vector<std::string> changed, bool resync) {
+  const bool more = changed.size() > detail_shop_watch::kMaxChanged;
+  if (more) changed.resize(detail_shop_watch::kMaxChanged);
+  nlohmann::json f = {{"type", "shop"}, {"now", nullptr}, {"machines", nlohmann::json::array()},
+                      {"jobs", nlohmann::json::array()}, {"resync", resync}, {"more", more},
+                      {"changed", std::move(changed)}};
+  hub_.broadcast(WsHub::frame(dump_json(f)));
+  ++frames_sent_;
 }
 
 }  // namespace cncstream::daemon

@@ -32,7 +32,7 @@ std::vector<HubJobStatus> Hub::heartbeat(const MachineInfo& m, const MachineStat
 }
 
 std::optional<ClaimedJob> Hub::claim_job(const std::string& machine, double lease_s) {
-  const auto r = db_.exec("SELECT id, file_name, kind, content, params FROM shop.claim_job($1, $2)",
+  const auto r = db_.exec("SELECT id, file_name, kind, content, params, resume_after_line FROM shop.claim_job($1, $2)",
                           {machine, fmt::format("{}", lease_s)});
   if (r.rows() == 0) return std::nullopt;
   ClaimedJob j;
@@ -41,6 +41,7 @@ std::optional<ClaimedJob> Hub::claim_job(const std::string& machine, double leas
   j.kind = r.text(0, 2);
   j.content = bytes_from_bytea_hex(r.text(0, 3));
   j.params_json = r.text(0, 4);
+  j.resume_after_line = r.i64(0, 5);
   return j;
 }
 
@@ -67,6 +68,8 @@ std::int64_t Hub::submit_job(const Submission& s) {
 }
 
 void Hub::cancel_job(std::int64_t id) { db_.exec("SELECT shop.cancel_job($1)", {std::to_string(id)}); }
+
+void Hub::ping() { db_.exec("SELECT 1"); }
 
 void Hub::requeue_job(std::int64_t id, bool same_machine) {
   db_.exec("SELECT shop.requeue_job($1, $2)", {std::to_string(id), same_machine ? "true" : "false"});

@@ -14,8 +14,9 @@
 
 namespace cncstream::shop {
 
-HubListener::HubListener(std::string url, OnWake on_wake, double retry_s, double keepalive_s)
-    : url_(std::move(url)), on_wake_(std::move(on_wake)), retry_s_(retry_s), keepalive_s_(keepalive_s) {
+HubListener::HubListener(std::string url, OnWake on_wake, double retry_s, double check_s, double reply_timeout_s)
+    : url_(std::move(url)), on_wake_(std::move(on_wake)), retry_s_(retry_s), check_s_(check_s),
+      reply_timeout_s_(reply_timeout_s) {
   stop_fd_ = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
   if (stop_fd_ < 0) throw ShopError("shop: the hub listener cannot make an eventfd");
   thread_ = std::thread([this] { run(); });
@@ -47,7 +48,7 @@ void HubListener::run() {
     }
     std::unique_ptr<PgConnection> db;
     try {
-      db = std::make_unique<PgConnection>(url_);
+      db = std::make_unique<PgConnection>(url_, reply_timeout_s_);
       db->exec(std::string("LISTEN ") + kStateChannel);
     } catch (const std::exception& e) {
       if (!said_down) spdlog::warn("shop: the hub's wake-ups are not heard ({}); the shop view is read on request", e.what());
@@ -64,13 +65,13 @@ void HubListener::run() {
       auto last_heard = std::chrono::steady_clock::now();
       while (true) {
         pollfd fds[2] = {{db->socket(), POLLIN, 0}, {stop_fd_, POLLIN, 0}};
-        const int rc = ::poll(fds, 2, static_cast<int>(keepalive_s_ * 1000));
+        const int rc = ::poll(fds, 2, static_cast<int>(check_s_ * 1000));
         if (rc < 0 && errno != EINTR) throw ShopError("shop: the hub listener's poll failed");
         if (fds[1].revents) {
           listening_ = false;
           return;
         }
-        if (rc == 0 || std::chrono::steady_clock::now() - last_heard > std::chrono::duration<double>(keepalive_s_)) {
+        if (rc == 0 || std::chrono::steady_clock::now() - last_heard > std::chrono::duration<double>(check_s_)) {
           // Silence for a while: ask, so a hub that vanished without closing is noticed.
           db->exec("SELECT 1");
           last_heard = std::chrono::steady_clock::now();

@@ -421,6 +421,152 @@ GRANT EXECUTE ON FUNCTION shop.submit_job(text, text, bytea, jsonb, text[], text
   shop.requeue_job(bigint, boolean) TO cncstream_web_operator;
 )SQL";
 
+
+// 5: resume on the same machine, and the live view's changed rows
+// (docs/shop.md). A job requeued on the machine it ran on carries the line
+// to resume after (its last reported line, what that machine's journal
+// shipped): only that machine claims it, and its daemon queues it as a
+// resume from that line (the same planning as `cncstream resume`), waiting
+// for the operator like every claimed job. Requeued anywhere, it is a
+// restart from the top. claim_job returns the line (a new column: the
+// function is made again with the same name, arguments and grant, so a PC's
+// role still holds exactly its three functions). view_changes reads only the
+// machines and jobs a wake-up named, as view_machines and view_jobs show
+// them, so a daemon pushes what changed rather than the whole view.
+constexpr const char* kMigration5 = R"SQL(
+-- Set by a requeue on the machine it ran on: only that machine claims it
+-- (the submitter's own `machine` stays as asked), after that line (NULL: from the top).
+ALTER TABLE shop.jobs ADD COLUMN resume_machine_id bigint REFERENCES shop.machines(id),
+  ADD COLUMN resume_after_line bigint CHECK (resume_after_line IS NULL OR resume_after_line > 0);
+
+CREATE OR REPLACE FUNCTION shop.requeue_job(p_job bigint, p_same_machine boolean) RETURNS void
+LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE j shop.jobs; ran_on text;
+BEGIN
+  SELECT * INTO j FROM shop.jobs WHERE id = p_job FOR UPDATE;
+  IF NOT FOUND OR j.status NOT IN ('interrupted', 'failed', 'cancelled') THEN
+    RAISE EXCEPTION 'requeue_job: job % is not interrupted, failed or cancelled', p_job;
+  END IF;
+  SELECT m.name INTO ran_on FROM shop.machines m WHERE m.id = j.machine_id;
+  IF p_same_machine AND ran_on IS NULL THEN
+    RAISE EXCEPTION 'requeue_job: job % never reached a machine; requeue it on any machine', p_job;
+  END IF;
+  UPDATE shop.jobs SET status = 'pending', lease_until = NULL, ended_at = NULL, claimed_at = NULL, started_at = NULL,
+    resume_machine_id = CASE WHEN p_same_machine THEN j.machine_id END,
+    resume_after_line = CASE WHEN p_same_machine AND j.last_line > 0 THEN j.last_line END,
+    last_line = CASE WHEN p_same_machine THEN j.last_line ELSE 0 END,
+    machine_id = NULL,
+    message = CASE WHEN p_same_machine AND j.last_line > 0
+                   THEN format('requeued by %s on %s, to resume after line %s; after: %s', session_user, ran_on,
+                               j.last_line, j.message)
+                   WHEN p_same_machine
+                   THEN format('requeued by %s on %s (no line was reported: from the top); after: %s', session_user,
+                               ran_on, j.message)
+                   ELSE format('requeued by %s on any machine, from the top; after: %s', session_user, j.message) END
+  WHERE id = p_job;
+  PERFORM pg_notify('cncstream_jobs', p_job::text);
+END $f$;
+
+DROP FUNCTION shop.claim_job(text, double precision);
+CREATE FUNCTION shop.claim_job(p_machine text, p_lease_s double precision)
+RETURNS TABLE (id bigint, file_name text, kind text, content bytea, params jsonb, resume_after_line bigint)
+LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+DECLARE m shop.machines;
+BEGIN
+  IF p_lease_s IS NULL OR p_lease_s <= 0 OR p_lease_s > 86400 THEN
+    RAISE EXCEPTION 'claim_job: lease_s % is out of range (0, 86400]', p_lease_s;
+  END IF;
+  SELECT * INTO m FROM shop.machines WHERE name = p_machine;
+  IF NOT FOUND THEN
+    RAISE EXCEPTION 'claim_job: no machine named % (a heartbeat registers it)', p_machine;
+  END IF;
+  PERFORM shop.expire_leases();
+  RETURN QUERY
+  UPDATE shop.jobs j SET status = 'assigned', machine_id = m.id, claimed_at = now(),
+    lease_until = now() + make_interval(secs => p_lease_s), message = ''
+  WHERE j.id = (SELECT c.id FROM shop.jobs c
+                WHERE c.status = 'pending' AND (c.machine IS NULL OR c.machine = m.name)
+                  AND (c.resume_machine_id IS NULL OR c.resume_machine_id = m.id)
+                  AND c.needs <@ m.capabilities
+                ORDER BY c.id FOR UPDATE SKIP LOCKED LIMIT 1)
+  RETURNING j.id, j.file_name, j.kind, j.content, j.params, j.resume_after_line;
+END $f$;
+REVOKE ALL ON FUNCTION shop.claim_job(text, double precision) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION shop.claim_job(text, double precision) TO cncstream_pc;
+
+CREATE OR REPLACE FUNCTION shop.job_json(j shop.jobs) RETURNS jsonb
+LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+  SELECT jsonb_build_object('id', j.id, 'file_name', j.file_name, 'kind', j.kind, 'bytes', octet_length(j.content),
+    'params', j.params, 'needs', to_jsonb(j.needs), 'requested_machine', j.machine,
+    'machine', (SELECT m.name FROM shop.machines m WHERE m.id = j.machine_id), 'status', j.status,
+    'last_line', j.last_line, 'resume_after_line', j.resume_after_line,
+    'resume_machine', (SELECT m.name FROM shop.machines m WHERE m.id = j.resume_machine_id), 'message', j.message,
+    'submitted_by', j.submitted_by, 'created_at', j.created_at, 'claimed_at', j.claimed_at,
+    'started_at', j.started_at, 'ended_at', j.ended_at, 'lease_until', j.lease_until)
+$f$;
+
+-- One machine as the view shows it (view_machines' row).
+CREATE FUNCTION shop.machine_json(m shop.machines) RETURNS jsonb
+LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+  SELECT jsonb_build_object(
+    'name', m.name, 'pc', m.pc, 'profile', m.profile, 'travel_mm', to_jsonb(m.travel_mm),
+    'capabilities', to_jsonb(m.capabilities), 'registered_at', m.registered_at, 'last_seen', m.last_seen,
+    'heartbeat_age_s', round(extract(epoch FROM now() - m.last_seen)::numeric, 3),
+    'state', (SELECT jsonb_build_object(
+      'availability', s.availability, 'execution', s.execution, 'controller_mode', s.controller_mode,
+      'program', s.program, 'line', s.line, 'path_position', to_jsonb(s.path_position),
+      'path_feedrate', s.path_feedrate, 'feed_override', s.feed_override, 'alarm', s.alarm,
+      'updated_at', s.updated_at) FROM shop.machine_state s WHERE s.machine_id = m.id),
+    'job', (SELECT jsonb_build_object('id', j.id, 'file_name', j.file_name, 'status', j.status, 'last_line', j.last_line)
+            FROM shop.jobs j WHERE j.machine_id = m.id AND j.status IN ('assigned', 'awaiting_operator', 'running')
+            ORDER BY j.id DESC LIMIT 1))
+$f$;
+
+CREATE OR REPLACE FUNCTION shop.view_machines() RETURNS jsonb
+LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+  SELECT jsonb_build_object('now', now(),
+    'machines', coalesce(jsonb_agg(shop.machine_json(m) ORDER BY m.pc, m.name), '[]'::jsonb))
+  FROM shop.machines m
+$f$;
+
+-- The machines and jobs named (a wake-up's payloads), as the view shows
+-- them, with the machine each job is on (its row shows the job); a name or
+-- id that is not (any more) is left out.
+CREATE FUNCTION shop.view_changes(p_machines text[], p_jobs bigint[]) RETURNS jsonb
+LANGUAGE sql STABLE SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+  SELECT jsonb_build_object('now', now(),
+    'machines', coalesce((SELECT jsonb_agg(shop.machine_json(m) ORDER BY m.pc, m.name) FROM shop.machines m
+                          WHERE m.name = ANY (coalesce(p_machines, '{}'))
+                             OR m.id IN (SELECT j.machine_id FROM shop.jobs j WHERE j.id = ANY (coalesce(p_jobs, '{}')))),
+                         '[]'::jsonb),
+    'jobs', coalesce((SELECT jsonb_agg(shop.job_json(j) ORDER BY j.id DESC) FROM shop.jobs j
+                      WHERE j.id = ANY (coalesce(p_jobs, '{}'))), '[]'::jsonb))
+$f$;
+
+-- A claim whose answer never reached its PC (the hub fell silent after it
+-- committed, the PC gave up waiting): the PC, finding at a heartbeat a job
+-- assigned to its machine that it never received, reports it "released"
+-- through its outbox, and the job goes back to the queue as it was. Only
+-- an assigned job (never a program loaded, never a line cut). The earlier
+-- apply_event does the rest, unchanged.
+ALTER FUNCTION shop.apply_event(bigint, bigint, text, jsonb) RENAME TO apply_event_4;
+CREATE FUNCTION shop.apply_event(p_machine_id bigint, p_job bigint, p_kind text, p_body jsonb)
+RETURNS void LANGUAGE plpgsql SECURITY DEFINER SET search_path = shop, pg_temp AS $f$
+BEGIN
+  IF p_kind = 'job' AND p_job IS NOT NULL AND p_body->>'state' = 'released' THEN
+    UPDATE shop.jobs SET status = 'pending', machine_id = NULL, claimed_at = NULL, lease_until = NULL,
+      message = coalesce(p_body->>'message', 'its claim never reached the machine; back in the queue')
+    WHERE id = p_job AND machine_id = p_machine_id AND status = 'assigned';
+    RETURN;
+  END IF;
+  PERFORM shop.apply_event_4(p_machine_id, p_job, p_kind, p_body);
+END $f$;
+
+REVOKE ALL ON FUNCTION shop.apply_event(bigint, bigint, text, jsonb) FROM PUBLIC;
+REVOKE ALL ON FUNCTION shop.machine_json(shop.machines), shop.view_changes(text[], bigint[]) FROM PUBLIC;
+GRANT EXECUTE ON FUNCTION shop.view_changes(text[], bigint[]) TO cncstream_pc, cncstream_operator, cncstream_reader;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -429,6 +575,7 @@ const std::vector<Migration>& migrations() {
       {2, "the shop view's reads: view_machines, view_jobs, view_job_events", kMigration2},
       {3, "NOTIFY cncstream_state when a machine's state or a job changes", kMigration3},
       {4, "cncstream_web_operator: a daemon's web page submits, cancels and requeues", kMigration4},
+      {5, "requeue on the same machine resumes after the last reported line; view_changes", kMigration5},
   };
   return all;
 }

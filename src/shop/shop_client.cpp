@@ -231,7 +231,7 @@ void ShopClient::worker() {
     }
     if (!db && steady_now() >= next_connect) {
       try {
-        db = std::make_unique<PgConnection>(settings_.url);
+        db = std::make_unique<PgConnection>(settings_.url, settings_.hub_timeout_s);
         spdlog::info("shop: connected to the hub {}", redact_url(settings_.url));
         said_down = false;
       } catch (const std::exception& e) {
@@ -278,16 +278,42 @@ void ShopClient::worker() {
 // One round with the hub (the worker's thread): heartbeats when due (they
 // register the machines first), the outbox, then the claims asked for.
 void ShopClient::serve(Hub& hub) {
+  bool talked = false;
   if (!registered_ || steady_now() >= next_heartbeat_) {
+    talked = true;
     std::vector<std::pair<MachineInfo, MachineState>> beats;
     {
       std::lock_guard lock(mu_);
       for (const auto& [name, info] : infos_) beats.emplace_back(info, states_[name]);
     }
     std::vector<std::int64_t> cancelled;
+    std::vector<std::pair<std::string, std::int64_t>> unknown;  // assigned here, never received
     for (const auto& [info, st] : beats)
-      for (const auto& j : hub.heartbeat(info, st, settings_.lease_s))
+      for (const auto& j : hub.heartbeat(info, st, settings_.lease_s)) {
         if (j.status == "cancelled") cancelled.push_back(j.id);
+        if (j.status == "assigned" && !received_.count(j.id) && !released_.count(j.id))
+          unknown.emplace_back(info.name, j.id);
+      }
+    // A claim the hub committed whose answer never came (it fell silent, the
+    // call timed out): released through the outbox, back to the queue,
+    // unless this daemon holds it after all (an earlier run's claim).
+    for (const auto& [machine, id] : unknown) {
+      released_.insert(id);
+      boost::asio::post(io_, [this, machine = machine, id = id, alive = alive_] {
+        if (!*alive) return;
+        try {
+          if (outbox_.local_job_of(id)) return;
+        } catch (const std::exception& e) {
+          spdlog::warn("shop: {}", e.what());
+          return;
+        }
+        spdlog::warn("shop: shop job {} is assigned to {} but its claim never arrived; released to the queue", id, machine);
+        append(machine, "job", id,
+               nlohmann::json{{"state", "released"},
+                              {"message", "its claim's answer never reached " + machine + " (the hub did not answer in time); "
+                                          "back in the queue"}}.dump());
+      });
+    }
     registered_ = true;
     // Jobs cancelled on the hub (the shop view, an operator) after this PC
     // claimed them leave the local queue; each once.
@@ -310,6 +336,7 @@ void ShopClient::serve(Hub& hub) {
       const auto batch = outbox_.unsent(machine, 500);
       if (batch.empty()) break;
       hub.report_events(machine, batch);  // committed when it returns
+      talked = true;
       outbox_.mark_sent(machine, batch.back().seq);
       if (batch.size() < 500) break;
     }
@@ -322,7 +349,17 @@ void ShopClient::serve(Hub& hub) {
       machine = claim_requests_.front();
       claim_requests_.pop_front();
     }
-    auto job = hub.claim_job(machine, settings_.lease_s);
+    std::optional<ClaimedJob> job;
+    try {
+      job = hub.claim_job(machine, settings_.lease_s);
+    } catch (...) {
+      // Not claimed: back with the asks the failure hands back (worker()).
+      std::lock_guard lock(mu_);
+      claim_requests_.push_front(machine);
+      throw;
+    }
+    talked = true;
+    if (job) received_.insert(job->id);
     boost::asio::post(io_, [this, machine, job = std::move(job), alive = alive_]() mutable {
       if (!*alive) return;
       Reporter* r = nullptr;
@@ -330,11 +367,17 @@ void ShopClient::serve(Hub& hub) {
         if (x->machine.name == machine) r = x.get();
       if (r) r->claim_in_flight = false;
       if (!job) return;
-      spdlog::info("shop: machine {} claimed shop job {} ({}); it waits for the operator", machine, job->id,
-                   job->file_name);
+      if (job->resume_after_line > 0)
+        spdlog::info("shop: machine {} claimed shop job {} ({}) to resume after line {}; it waits for the operator",
+                     machine, job->id, job->file_name, job->resume_after_line);
+      else
+        spdlog::info("shop: machine {} claimed shop job {} ({}); it waits for the operator", machine, job->id,
+                     job->file_name);
       adding_ = std::make_pair(machine, job->id);
       try {
-        const auto local_id = local_.add_shop_job(machine, *job);
+        std::int64_t earlier = 0;
+        if (job->resume_after_line > 0) earlier = outbox_.local_job_of(job->id).value_or(0);
+        const auto local_id = local_.add_shop_job(machine, *job, earlier);
         outbox_.link_job(local_id, job->id, machine);
       } catch (const std::exception& e) {
         spdlog::warn("shop: shop job {} cannot be added on {}: {}", job->id, machine, e.what());
@@ -343,6 +386,13 @@ void ShopClient::serve(Hub& hub) {
       adding_.reset();
     });
   }
+  // A quiet hub is asked, so one that vanished is noticed within
+  // hub_check_s + hub_timeout_s even with nothing to send.
+  if (!talked && steady_now() - last_talk_ >= settings_.hub_check_s) {
+    hub.ping();
+    talked = true;
+  }
+  if (talked) last_talk_ = steady_now();
 }
 
 }  // namespace cncstream::shop

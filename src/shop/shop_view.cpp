@@ -40,14 +40,29 @@ nlohmann::json view_jobs(PgConnection& db, const JobFilter& f) {
                                  "view_jobs");
 }
 
+nlohmann::json view_changes(PgConnection& db, const std::vector<std::string>& payloads) {
+  std::vector<std::string> machines, jobs;
+  for (const auto& p : payloads) {
+    if (p.rfind("machine:", 0) == 0) {
+      machines.push_back(p.substr(8));
+    } else if (p.rfind("job:", 0) == 0) {
+      const auto id = p.substr(4);
+      if (!id.empty() && id.size() < 19 && id.find_first_not_of("0123456789") == std::string::npos) jobs.push_back(id);
+    }
+  }
+  return detail_shop_view::parse(db.exec("SELECT shop.view_changes($1::text[], $2::bigint[])",
+                                         {pg_text_array(machines), pg_text_array(jobs)}),
+                                 "view_changes");
+}
+
 std::optional<nlohmann::json> view_job_events(PgConnection& db, std::int64_t job, int limit) {
   const auto r = db.exec("SELECT shop.view_job_events($1::bigint, $2::integer)", {std::to_string(job), std::to_string(limit)});
   if (r.rows() == 0 || r.is_null(0, 0)) return std::nullopt;
   return detail_shop_view::parse(r, "view_job_events");
 }
 
-ShopViewReader::ShopViewReader(std::string url, double retry_s, std::size_t max_pending)
-    : url_(std::move(url)), retry_s_(retry_s), max_pending_(max_pending) {
+ShopViewReader::ShopViewReader(std::string url, double retry_s, std::size_t max_pending, double reply_timeout_s)
+    : url_(std::move(url)), retry_s_(retry_s), max_pending_(max_pending), reply_timeout_s_(reply_timeout_s) {
   thread_ = std::thread([this] { worker(); });
 }
 
@@ -95,7 +110,7 @@ ViewAnswer ShopViewReader::answer(const Read& read) {
       db_.reset();
       if (detail_shop_view::steady_s() < down_until_) return {Kind::hub_unavailable, {}, down_reason_, {}};
       try {
-        db_ = std::make_unique<PgConnection>(url_);
+        db_ = std::make_unique<PgConnection>(url_, reply_timeout_s_);
         // A hub that hangs must not hold the view's thread for long.
         db_->exec("SET statement_timeout = 5000");
       } catch (const ShopError& e) {
@@ -118,6 +133,12 @@ ViewAnswer ShopViewReader::answer(const Read& read) {
       const std::string& st = db_->last_sqlstate();
       if (db_->ok() && (st == "P0001" || st == "42501" || st.rfind("22", 0) == 0 || st.rfind("23", 0) == 0))
         return {Kind::refused, {}, db_->last_error(), st};
+      // A hub that does not answer: the next reads say so at once for a while.
+      if (db_->timed_out()) {
+        down_until_ = detail_shop_view::steady_s() + retry_s_;
+        down_reason_ = e.what();
+        return {Kind::hub_unavailable, {}, down_reason_, {}};
+      }
       // A connection the server dropped (a restart): once more on a fresh one.
       if (!db_->ok() && attempt == 0) continue;
       return {Kind::hub_unavailable, {}, e.what(), {}};

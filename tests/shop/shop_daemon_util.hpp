@@ -4,6 +4,9 @@
 // the jobs that wait at the machines.
 #include <boost/asio/post.hpp>
 
+#include <signal.h>
+#include <sys/wait.h>
+
 #include <future>
 
 #include "../daemon/daemon_test_util.hpp"
@@ -60,6 +63,19 @@ inline int start_ready_jobs(cncstream::daemon::Daemon& d) {
     return n;
   });
 }
+
+// A daemon in a child process (forked while the test has no thread), killed
+// by the test with SIGKILL as a PC that dies; reaped in any case.
+struct DaemonChild {
+  pid_t pid = -1;
+  void kill9() {
+    if (pid <= 0) return;
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, nullptr, 0);
+    pid = -1;
+  }
+  ~DaemonChild() { kill9(); }
+};
 
 inline std::string tiny_program(int i) {
   return "G21\nG90\nG0 X" + std::to_string(1 + i % 7) + "\nG1 X0 F3000\n";

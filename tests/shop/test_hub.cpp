@@ -114,6 +114,10 @@ TEST(ShopSecurity, APcRoleWorksOnlyThroughItsFunctions) {
   EXPECT_NE(view.find("\"a.nc\""), std::string::npos) << view;
   EXPECT_EQ(view.find("content"), std::string::npos) << view;
   EXPECT_NE(pc.exec("SELECT shop.view_machines()").text(0, 0).find("router1"), std::string::npos);
+  const auto changes = pc.exec("SELECT shop.view_changes('{router1}', $1::bigint[])", {"{" + std::to_string(id) + "}"}).text(0, 0);
+  EXPECT_NE(changes.find("\"router1\""), std::string::npos) << changes;
+  EXPECT_NE(changes.find("\"a.nc\""), std::string::npos) << changes;
+  EXPECT_EQ(changes.find("content"), std::string::npos) << changes;
   EXPECT_NE(pc.exec("SELECT shop.view_job_events($1, 10)", {std::to_string(id)}).text(0, 0).find("\"ready\""), std::string::npos);
   // Nothing else: no table read or written, no other function.
   const std::vector<std::string> refused = {
@@ -128,6 +132,7 @@ TEST(ShopSecurity, APcRoleWorksOnlyThroughItsFunctions) {
       "SELECT shop.expire_leases()",
       "SELECT shop.apply_event(1, 1, 'job', '{\"state\":\"done\"}')",
       "SELECT shop.job_json(NULL::shop.jobs)",
+      "SELECT shop.machine_json(NULL::shop.machines)",
       "CREATE TABLE shop.mine (x int)",
   };
   for (const auto& sql : refused) {
@@ -265,4 +270,64 @@ TEST(ShopLease, ALapsedLeaseInterruptsTheJobWithItsLastLineAndNobodyTakesIt) {
   const auto again = hub.claim_job("r1", 30);
   ASSERT_TRUE(again);
   EXPECT_EQ(again->id, id2);
+  EXPECT_EQ(again->resume_after_line, 0) << "no line was reported: the same machine starts from the top";
+}
+
+// Migration 5: requeued on the machine it ran on, a job carries its last
+// reported line to resume after, and only that machine claims it; requeued
+// anywhere, it is a restart from the top that any machine that can claims.
+TEST(ShopLease, RequeuedOnTheSameMachineItResumesAfterItsLastLineThereAnywhereItRestarts) {
+  SHOP_REQUIRE_POSTGRES();
+  shoptest::TempPostgres pg;
+  PgConnection db(pg.create_database("resume"));
+  migrate(db);
+  Hub hub(db);
+  hub.heartbeat(machine("r1"), MachineState{}, 30);
+  hub.heartbeat(machine("r2"), MachineState{}, 30);
+  const auto id = hub.submit_job(gcode_job("part.nc"));
+  EXPECT_THROW(hub.requeue_job(id, true), ShopError) << "a pending job is not requeued";
+  ASSERT_TRUE(hub.claim_job("r1", 0.3));
+  hub.report_events("r1", {{1, "2026-01-01T00:00:00Z", "job", id, R"({"state":"running","last_line":0})"},
+                           {2, "2026-01-01T00:00:01Z", "progress", id, R"({"line":23})"}});
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  hub.heartbeat(machine("r2"), MachineState{}, 30);  // sweeps r1's lapsed lease
+  const auto row = [&] {
+    return db.exec("SELECT j.status, j.last_line, j.resume_after_line, m.name, j.message, j.machine FROM shop.jobs j"
+                   " LEFT JOIN shop.machines m ON m.id = j.resume_machine_id WHERE j.id = $1",
+                   {std::to_string(id)});
+  };
+  ASSERT_EQ(row().text(0, 0), "interrupted");
+  hub.requeue_job(id, true);
+  EXPECT_EQ(row().text(0, 0), "pending");
+  EXPECT_EQ(row().i64(0, 2), 23) << "the line to resume after is the last one reported";
+  EXPECT_EQ(row().text(0, 3), "r1");
+  EXPECT_TRUE(row().is_null(0, 5)) << "the submitter's own choice of machine (any) is kept";
+  EXPECT_NE(row().text(0, 4).find("to resume after line 23"), std::string::npos) << row().text(0, 4);
+  EXPECT_FALSE(hub.claim_job("r2", 30)) << "a resume went to another machine";
+  const auto resumed = hub.claim_job("r1", 0.3);
+  ASSERT_TRUE(resumed);
+  EXPECT_EQ(resumed->id, id);
+  EXPECT_EQ(resumed->resume_after_line, 23);
+  // Interrupted again, now requeued anywhere: from the top, for any machine.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  hub.heartbeat(machine("r2"), MachineState{}, 30);
+  ASSERT_EQ(row().text(0, 0), "interrupted");
+  hub.requeue_job(id, false);
+  EXPECT_TRUE(row().is_null(0, 2));
+  EXPECT_EQ(row().i64(0, 1), 0);
+  EXPECT_TRUE(row().is_null(0, 3)) << "a restart anywhere is for any machine that can";
+  EXPECT_TRUE(row().is_null(0, 5));
+  const auto restarted = hub.claim_job("r2", 30);
+  ASSERT_TRUE(restarted);
+  EXPECT_EQ(restarted->id, id);
+  EXPECT_EQ(restarted->resume_after_line, 0);
+  // A job that never reached a machine cannot go back to "its" machine.
+  const auto never = hub.submit_job(gcode_job("never.nc"));
+  hub.cancel_job(never);
+  try {
+    hub.requeue_job(never, true);
+    ADD_FAILURE() << "a job that never reached a machine was requeued on one";
+  } catch (const ShopError& e) {
+    EXPECT_NE(std::string(e.what()).find("never reached a machine"), std::string::npos) << e.what();
+  }
 }

@@ -125,9 +125,11 @@ TEST(ShopActs, ThePageSubmitsCancelsAndRequeuesThroughTheHubUnderAGrantedPcLogin
              " machine_id = (SELECT id FROM shop.machines WHERE name = 'w1') WHERE id = $1", {lost});
   const auto same = http.post("/api/v1/shop/jobs/" + lost + "/requeue", {{"on", "same_machine"}});
   ASSERT_EQ(same.status, 200) << same.body;
-  const auto back = admin.exec("SELECT status, machine FROM shop.jobs WHERE id = $1", {lost});
+  const auto back = admin.exec("SELECT j.status, m.name, j.resume_after_line FROM shop.jobs j"
+                               " LEFT JOIN shop.machines m ON m.id = j.resume_machine_id WHERE j.id = $1", {lost});
   EXPECT_EQ(back.text(0, 0), "pending");
   EXPECT_EQ(back.text(0, 1), "w1");
+  EXPECT_EQ(back.i64(0, 2), 3) << "a resume after the line it stopped at";
   EXPECT_EQ(http.post("/api/v1/shop/jobs/abc/cancel").status, 404);  // not a job id: no such route
 
   // The grant adds those three functions only: still no table.

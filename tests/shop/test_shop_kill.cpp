@@ -28,17 +28,6 @@ std::string long_program() {
   return p;
 }
 
-// The daemon in a child process, killed by the test; reaped in any case.
-struct DaemonChild {
-  pid_t pid = -1;
-  void kill9() {
-    if (pid <= 0) return;
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, nullptr, 0);
-    pid = -1;
-  }
-  ~DaemonChild() { kill9(); }
-};
 
 }  // namespace detail_shop_kill
 
@@ -64,7 +53,7 @@ TEST(ShopLease, ADaemonKilledMidJobLeavesItInterruptedAtItsLastLineAndNobodyElse
 
   // Daemon A in a child process (forked while this one has no thread): its
   // machine claims the only job, and its operator starts it.
-  detail_shop_kill::DaemonChild a;
+  shoptest::DaemonChild a;
   a.pid = ::fork();
   ASSERT_GE(a.pid, 0);
   if (a.pid == 0) {

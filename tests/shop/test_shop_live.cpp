@@ -82,7 +82,26 @@ TEST(ShopLive, AChangeOnOnePcReachesAnotherPcsWebSocketAtOnceAndAfterTheHubResta
   EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(4))
       << "the claim, the report and the push took longer than the fallback poll";
   EXPECT_FALSE((*seen)["resync"].get<bool>());
-  EXPECT_EQ(machine_in(*seen, "b1")["state"]["availability"], "AVAILABLE") << "the frame is the whole shop";
+  // The frame carries what changed, not the whole shop: a1's row and the
+  // job itself as the view's job list shows it; b1 did not change.
+  EXPECT_TRUE(machine_in(*seen, "b1").is_null()) << seen->dump();
+  const auto job_in = [](const json& frame, std::int64_t id) {
+    for (const auto& j : frame.value("jobs", json::array()))
+      if (j.value("id", std::int64_t{0}) == id) return j;
+    return json(nullptr);
+  };
+  json pushed = job_in(*seen, job);  // the same frame, or a later one
+  if (!pushed.is_object() || pushed["status"] != "awaiting_operator") {
+    const auto seen_job = ws.wait_message([&](const json& f) {
+      const json j = job_in(f, job);
+      return f.value("type", "") == "shop" && j.is_object() && j["status"] == "awaiting_operator";
+    }, 10);
+    ASSERT_TRUE(seen_job) << "no shop frame carried the job awaiting its operator";
+    pushed = job_in(*seen_job, job);
+  }
+  EXPECT_EQ(pushed["machine"], "a1");
+  EXPECT_EQ(pushed["file_name"], "live.nc");
+  EXPECT_FALSE(pushed.contains("content")) << "a frame never carries a job's file";
 
   // The hub restarted: the listener LISTENs again by itself (a resync frame
   // says so), and the next change is pushed again.
@@ -91,6 +110,7 @@ TEST(ShopLive, AChangeOnOnePcReachesAnotherPcsWebSocketAtOnceAndAfterTheHubResta
   pg.start();
   const auto resync = ws.wait_message([](const json& f) { return f.value("type", "") == "shop" && f.value("resync", false); }, 15);
   ASSERT_TRUE(resync) << "no frame after the hub came back";
+  EXPECT_TRUE((*resync)["machines"].empty()) << "a resync frame asks the page to read the whole view";
   EXPECT_TRUE(watch->listening());
   while (ws.recv(0.3)) {  // what A's reconnection ships
   }
@@ -99,7 +119,9 @@ TEST(ShopLive, AChangeOnOnePcReachesAnotherPcsWebSocketAtOnceAndAfterTheHubResta
   const auto done = ws.wait_message([&](const json& f) {
     if (f.value("type", "") != "shop" || f.value("resync", false)) return false;
     const json m = machine_in(f, "a1");
-    return changed_has(f, "job:" + std::to_string(job)) && m.is_object() && m["job"].is_null();
+    const json j = job_in(f, job);
+    return changed_has(f, "job:" + std::to_string(job)) && m.is_object() && m["job"].is_null() && j.is_object() &&
+           j["status"] == "completed";
   }, 10);
   ASSERT_TRUE(done) << "the finished job was not pushed after the hub restarted";
   PgConnection admin_again(pg.url("live"));  // the restart closed the first

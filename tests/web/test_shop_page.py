@@ -6,7 +6,9 @@ postgres on 127.0.0.1 and a free port, `cncstream shop init`):
   the page shows the Shop section with this daemon's machine -> a program
   submitted from the page's form appears in the shop's queue, pending ->
   its Cancel button moves it to cancelled (on the hub too) -> its
-  "Requeue anywhere" button puts it back, pending.
+  "Requeue anywhere" button puts it back, pending -> a change made on the
+  hub is drawn from the pushed `shop` frame while the page's own reads of
+  the view are refused.
 
 The daemon logs in as a PC (cncstream_pc) granted cncstream_web_operator,
 as docs/shop.md tells a shop to do. PostgreSQL missing is a failure (the
@@ -171,6 +173,19 @@ def shop_flow(args, out, d, hub):
         p.click(f'{row}[data-job="{job}"] button[data-act="requeue-any"]')
         p.wait("the job pending again", lambda: status_of(job) == "pending", 10)
         assert hub.sql(f"SELECT status FROM shop.jobs WHERE id = {job}") == "pending"
+
+        # A change on the hub is drawn from the `shop` frame alone: the page's
+        # reads of the view are refused meanwhile, so nothing else can show it.
+        d.execute_script("""
+            window.__shopFetch = window.fetch;
+            window.__blockedReads = 0;
+            window.fetch = (u, ...a) => /\/shop\/(jobs|machines)(\?|$)/.test(String(u))
+              ? (window.__blockedReads++, Promise.reject(new Error('blocked by the test')))
+              : window.__shopFetch(u, ...a);""")
+        hub.sql(f"UPDATE shop.jobs SET message = 'noted on the hub' WHERE id = {job}")
+        p.wait("the hub's change drawn from the frame", lambda: any(
+            j == job and "noted on the hub" in text for j, _, text in job_rows()), 10)
+        d.execute_script("window.fetch = window.__shopFetch;")
         p.full_shot("shop-view")
         errors = [e for e in p.console_errors() if "favicon" not in e.get("message", "")]
         assert not errors, f"errors in the browser's console: {errors}"

@@ -61,6 +61,14 @@ struct EtaTable {
   double estimated_s = 0;
 };
 
+// A shop job requeued on the machine it ran on (docs/shop.md, "Resume or
+// restart"): queued as a resume after the hub's last reported line, planned
+// as `cncstream resume` plans one once its program is ready.
+struct ShopResume {
+  std::int64_t after_line = 0;  // the hub's last reported line of the earlier run (> 0)
+  std::int64_t ran_as = 0;      // that run's local job here (0: this daemon does not hold it)
+};
+
 struct DaemonJob {
   transport::DaemonJobRow row;
   nlohmann::json params;  // canonical (STL) or null (G-code)
@@ -73,6 +81,7 @@ struct DaemonJob {
   protocol::JobProgress progress;
   std::optional<SimVerifyReport> verify;
   std::optional<jobs::ResumePlan> resume;  // a confirmed resume: its lines
+  std::optional<ShopResume> shop_resume;    // to plan once the program is ready (then `resume`)
   // The job's own tool-change settings over the machine's (its `tool_change`
   // object as given; null: the machine's). Not kept across a restart.
   nlohmann::json tool_change = nullptr;
@@ -88,8 +97,13 @@ class JobManager {
   // After a restart: running/held -> interrupted (with the last answered
   // line), unfinished ones regenerated; nothing is started.
   void recover();
+  // The jobs recover() found running and marked interrupted (the shop's
+  // hub is told once it is joined: src/daemon/shop_link.cpp).
+  const std::vector<std::int64_t>& interrupted_at_recovery() const { return interrupted_at_recovery_; }
 
-  nlohmann::json create(const nlohmann::json& body);  // throws ApiError
+  // throws ApiError; `shop_resume`: a shop job requeued on this machine,
+  // which becomes ready only with its resume planned.
+  nlohmann::json create(const nlohmann::json& body, std::optional<ShopResume> shop_resume = std::nullopt);
   nlohmann::json list(const std::optional<std::string>& machine, const std::optional<std::string>& state) const;
   DaemonJob& get(std::int64_t id);  // throws ApiError 404
   nlohmann::json to_json(const DaemonJob& j) const;
@@ -131,6 +145,14 @@ class JobManager {
 
  private:
   void kick_generation(DaemonJob& j);
+  // The program is there: ready, or (a shop resume) its resume planned first.
+  void program_ready(DaemonJob& j);
+  // What `cncstream resume` reads of a run: the program's lines and, when
+  // `ran` ran this same program, its journal's last progress, planner depth,
+  // earlier resume and refused lines.
+  jobs::ResumeInput resume_input(const Program& p, const transport::DaemonJobRow& ran) const;
+  using ResumePlanned = std::function<void(std::optional<jobs::ResumePlan> plan, const std::string& error)>;
+  void plan_resume_async(jobs::ResumeInput in, ResumePlanned done);
   // The program cache's key: the file, the job's parameters and, for a part, the machine's link.
   std::string generation_key(const std::string& file_id, const nlohmann::json& params, const std::string& machine);
   void on_generated(const std::string& key, const std::shared_ptr<const Program>& p, const std::string& error,
@@ -182,6 +204,7 @@ class JobManager {
     double expires;
   };
   std::map<std::string, PendingPlan> plans_;
+  std::vector<std::int64_t> interrupted_at_recovery_;
   Previews previews_;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };

@@ -25,7 +25,7 @@ class ShopLink final : public shop::LocalJobs {
            JobManager& jobs);
   ~ShopLink() override;
   bool free_for_shop_job(const std::string& machine) override;
-  std::int64_t add_shop_job(const std::string& machine, const shop::ClaimedJob& job) override;
+  std::int64_t add_shop_job(const std::string& machine, const shop::ClaimedJob& job, std::int64_t earlier_local) override;
   void shop_job_cancelled(std::int64_t local_id) override;
   shop::ShopClient& client() { return *client_; }
   // The shop view's reads of the hub (a connection and a thread of their own).

@@ -1,13 +1,15 @@
 #pragma once
 // The shop view pushed (docs/shop.md, "The shop view"; docs/api-v1.md, the
 // `shop` frame): the hub's wake-ups (shop::HubListener, its own connection
-// and thread) make the daemon re-read every machine of the shop through the
-// view's reader (its own connection and thread) and send the answer to its
-// WebSocket clients, so a page shows a change without waiting for its poll.
-// Bursts coalesce: at most one read in flight and one waiting, the waiting
-// one carrying every wake-up's payloads, and reads start at most every
-// `min_interval_s` (a busy shop wakes every daemon many times a second; each
-// read costs the hub the whole view). Everything but the two threads runs
+// and thread) make the daemon read the machines and jobs they name through
+// the view's reader (its own connection and thread, shop.view_changes) and
+// send those rows to its WebSocket clients, which apply them to what they
+// show; after the listener (re)connected, or a burst of more than a frame
+// carries, the frame asks them to read the whole view instead. Bursts
+// coalesce: at most one read in flight and one waiting, the waiting one
+// carrying every wake-up's payloads, and reads start at most every
+// `min_interval_s` (a busy shop wakes every daemon many times a second).
+// Everything but the two threads runs
 // on the event loop, which never waits on the hub. A read the hub does not
 // answer is tried again a second later (its wake-ups kept); a hub that is
 // down costs nothing here but the listener's retries.
@@ -48,6 +50,7 @@ class ShopWatch {
   void arm(boost::asio::steady_timer::time_point at);
   void start_read();
   void read_done(shop::ViewAnswer a, std::vector<std::string> changed, bool resync);
+  void send_whole(std::vector<std::string> changed, bool resync);
 
   boost::asio::io_context& io_;
   shop::ShopViewReader& view_;

@@ -27,6 +27,9 @@ struct ClaimedJob {
   std::string kind;     // "stl" | "gcode"
   std::string content;  // the file's bytes
   std::string params_json;  // "" : none
+  // Requeued on the machine it ran on (migration 5): resume after this
+  // 1-based line, its last reported one (0: from the top).
+  std::int64_t resume_after_line = 0;
 };
 
 // One journal event on its way to the hub.
@@ -65,6 +68,8 @@ class Hub {
   std::int64_t submit_job(const Submission& s);
   void cancel_job(std::int64_t id);
   void requeue_job(std::int64_t id, bool same_machine);
+  // Asks the hub for nothing (SELECT 1): whether it still answers.
+  void ping();
 
  private:
   PgConnection& db_;

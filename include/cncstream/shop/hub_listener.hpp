@@ -30,7 +30,11 @@ class HubListener {
  public:
   // Called on the listener's thread; must not block for long.
   using OnWake = std::function<void(HubWake)>;
-  HubListener(std::string url, OnWake on_wake, double retry_s = 1.0, double keepalive_s = 30.0);
+  // A connection quiet for `check_s` is asked (SELECT 1), and one that does
+  // not answer within `reply_timeout_s` is dropped (a hub that vanished
+  // without closing it): noticed within about check_s + reply_timeout_s.
+  HubListener(std::string url, OnWake on_wake, double retry_s = 1.0, double check_s = 1.0,
+              double reply_timeout_s = 3.0);
   ~HubListener();  // stops and joins the thread
   HubListener(const HubListener&) = delete;
   HubListener& operator=(const HubListener&) = delete;
@@ -46,7 +50,7 @@ class HubListener {
 
   std::string url_;
   OnWake on_wake_;
-  double retry_s_, keepalive_s_;
+  double retry_s_, check_s_, reply_timeout_s_;
   int stop_fd_ = -1;  // an eventfd: written to stop the poll
   std::mutex mu_;
   std::condition_variable cv_;

@@ -3,6 +3,7 @@
 // (the shop client's own thread, or a command-line tool). Parameters go as
 // text ($1, $2 ...); errors name the hub (its URL without the password) and
 // the server's message.
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -49,8 +50,12 @@ struct PgNotification {
 
 class PgConnection {
  public:
-  // Connects (3 s time-out unless the URL sets connect_timeout); throws ShopError.
-  explicit PgConnection(const std::string& url);
+  // Connects (3 s time-out unless the URL sets connect_timeout; TCP
+  // keepalives unless the URL sets them); throws ShopError. `reply_timeout_s`
+  // > 0: every exec waits at most this long for the hub's answer, then drops
+  // the connection and throws (a hub that vanished without closing it); 0:
+  // as long as the hub takes (`cncstream shop init`'s migrations).
+  explicit PgConnection(const std::string& url, double reply_timeout_s = 0);
   ~PgConnection();
   PgConnection(const PgConnection&) = delete;
   PgConnection& operator=(const PgConnection&) = delete;
@@ -60,6 +65,9 @@ class PgConnection {
   PgResult exec(const std::string& sql, const PgParams& params = {});
   bool ok() const;
   const std::string& url() const { return url_; }
+  // Whether the last exec failed because the hub did not answer within the
+  // reply time-out (the connection was dropped).
+  bool timed_out() const { return timed_out_; }
   // The SQLSTATE of the last failed exec ("" : none).
   const std::string& last_sqlstate() const { return sqlstate_; }
   // The server's own words for the last failed exec, without the hub or the
@@ -74,8 +82,14 @@ class PgConnection {
   std::vector<PgNotification> take_notifications();
 
  private:
+  pg_result* exec_bounded(const std::string& sql, const PgParams& params);
+  bool wait_socket(short events, std::chrono::steady_clock::time_point deadline);
+  [[noreturn]] void drop(const std::string& why);
+
   pg_conn* c_ = nullptr;
   std::string url_;
+  double reply_timeout_s_ = 0;
+  bool timed_out_ = false;
   std::string sqlstate_;
   std::string error_;
 };

@@ -37,6 +37,11 @@ struct ShopSettings {
   double heartbeat_s = 5;
   double retry_s = 2;        // reconnecting to a hub that is down
   double progress_s = 1;     // at most one line-progress event per machine this often
+  // A hub not heard from for hub_check_s is asked (SELECT 1); an answer that
+  // takes longer than hub_timeout_s (any call) means it is gone, though its
+  // connection never closed: claiming pauses and the thread connects again.
+  double hub_check_s = 1;
+  double hub_timeout_s = 3;
   std::optional<MqttSettings> mqtt;  // live telemetry to a broker (none: no MQTT)
 };
 
@@ -54,8 +59,10 @@ class LocalJobs {
   // Connected, not in alarm, nothing unfinished in its local queue.
   virtual bool free_for_shop_job(const std::string& machine) = 0;
   // Creates the local job (never started by itself); returns its id;
-  // throws std::exception with the reason it cannot.
-  virtual std::int64_t add_shop_job(const std::string& machine, const ClaimedJob& job) = 0;
+  // throws std::exception with the reason it cannot. A job requeued on this
+  // machine (job.resume_after_line > 0) is queued as a resume after that
+  // line; `earlier_local` is the local job that ran it here before (0: none).
+  virtual std::int64_t add_shop_job(const std::string& machine, const ClaimedJob& job, std::int64_t earlier_local) = 0;
   // The hub cancelled the shop job this local job holds: drop it if it has
   // not started (a started one is the operator's to stop).
   virtual void shop_job_cancelled(std::int64_t local_id) = 0;
@@ -119,6 +126,9 @@ class ShopClient {
   std::thread thread_;
   // The worker's own: when the next heartbeats are due.
   double next_heartbeat_ = 0;
+  double last_talk_ = 0;  // when the hub last answered
+  std::set<std::int64_t> received_;  // shop jobs whose claim this process received
+  std::set<std::int64_t> released_;  // shop jobs assigned here whose claim never arrived, released
   bool registered_ = false;
   // A claimed job being added (event loop only): its state changes belong to it.
   std::optional<std::pair<std::string, std::int64_t>> adding_;

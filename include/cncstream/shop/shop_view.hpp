@@ -35,6 +35,10 @@ struct JobFilter {
 // The reads themselves, on a connection of the caller's (throws ShopError).
 nlohmann::json view_machines(PgConnection& db);
 nlohmann::json view_jobs(PgConnection& db, const JobFilter& f);
+// The machines and jobs a wake-up named ("machine:NAME", "job:ID"; others
+// ignored), as view_machines and view_jobs show them, with the machine each
+// job is on: {"now", "machines": [...], "jobs": [...]} (migration 5).
+nlohmann::json view_changes(PgConnection& db, const std::vector<std::string>& payloads);
 // nullopt: no such job.
 std::optional<nlohmann::json> view_job_events(PgConnection& db, std::int64_t job, int limit);
 
@@ -59,7 +63,10 @@ class ShopViewReader {
 
   // `retry_s`: after a failed connection, reads fail at once with its reason
   // for this long instead of each waiting for the connect time-out.
-  explicit ShopViewReader(std::string url, double retry_s = 1.0, std::size_t max_pending = 32);
+  // `reply_timeout_s`: a read the hub does not answer this long fails (503)
+  // and drops the connection (a hub that vanished without closing it).
+  explicit ShopViewReader(std::string url, double retry_s = 1.0, std::size_t max_pending = 32,
+                          double reply_timeout_s = 3.0);
   ~ShopViewReader();  // answers what still waits "stopping", joins the thread
   ShopViewReader(const ShopViewReader&) = delete;
   ShopViewReader& operator=(const ShopViewReader&) = delete;
@@ -75,6 +82,7 @@ class ShopViewReader {
   std::string url_;
   double retry_s_;
   std::size_t max_pending_;
+  double reply_timeout_s_;
   std::mutex mu_;
   std::condition_variable cv_;
   std::deque<std::pair<Read, Done>> queue_;

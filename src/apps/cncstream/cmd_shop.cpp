@@ -1,6 +1,7 @@
 // `cncstream shop init URL`: creates or migrates the shop hub's schema;
 // `cncstream shop jobs URL`: the shop's queue and history;
-// `cncstream shop requeue URL ID`: an interrupted job back into the queue;
+// `cncstream shop requeue URL ID [--anywhere]`: an interrupted job back into the
+// queue, as a resume on the machine it ran on or a restart anywhere;
 // `cncstream submit PART.stl|PART.nc --shop URL [--machine NAME | --needs TAG...]`:
 // a job for the shop's queue (docs/shop.md).
 #include <fstream>
@@ -83,11 +84,29 @@ void register_shop(CLI::App& app, CommandRegistry& registry) {
   auto* requeue = shop->add_subcommand("requeue", "Put an interrupted, failed or cancelled job back into the queue");
   requeue->add_option("URL", rq->url, "postgresql://OPERATOR@HOST/DB")->required();
   requeue->add_option("JOB", rq->id, "The shop's job id")->required();
-  requeue->add_flag("--anywhere", rq->anywhere, "Any machine that can do it (default: the machine it ran on)");
+  requeue->add_flag("--anywhere", rq->anywhere,
+                    "A restart from the top on any machine that can do it (default: a resume on the machine it ran "
+                    "on, after the last line it reported)");
   registry.add(requeue, [rq] {
     shop::PgConnection db(rq->url);
     shop::Hub(db).requeue_job(rq->id, !rq->anywhere);
-    std::cout << "job " << rq->id << " is pending again" << (rq->anywhere ? "" : " on the machine it ran on") << "\n";
+    std::cout << "job " << rq->id << " is pending again";
+    if (rq->anywhere) {
+      std::cout << ": a restart from the top on any machine that can do it\n";
+    } else {
+      std::string where = " on the machine it ran on";
+      try {  // an operator's login reads the tables; a web operator's does not
+        const auto r = db.exec("SELECT m.name, j.resume_after_line FROM shop.jobs j"
+                               " LEFT JOIN shop.machines m ON m.id = j.resume_machine_id WHERE j.id = $1",
+                               {std::to_string(rq->id)});
+        if (r.rows() && r.is_null(0, 1))
+          where = std::string(": on ").append(r.text(0, 0)).append(", from the top (no line was reported)");
+        else if (r.rows())
+          where = std::string(": a resume on ").append(r.text(0, 0)).append(" after line ").append(r.text(0, 1));
+      } catch (const shop::ShopError&) {
+      }
+      std::cout << where << " (its operator starts it there)\n";
+    }
     return 0;
   });
 
