@@ -304,27 +304,73 @@ TEST(PendantController, TheLcdShowsTheMachineEvery200ms) {
   }, 2));
 }
 
+namespace {
+
+// A pendant plugged into a session on the built-in simulator.
+struct SimPendant {
+  boost::asio::io_context io;
+  std::shared_ptr<cncstream::session::SimulatorPort> sim;
+  std::unique_ptr<MachineSession> session;
+  FakePendantUsb usb;
+  std::unique_ptr<PendantController> controller;
+  std::unique_ptr<UsbPendantReader> reader;
+
+  SimPendant(const cncstream::session::SimulatorOptions& so, double lease_s,
+             std::optional<cncstream::protocol::ToolChangeConfig> tool_change = std::nullopt) {
+    sim = std::make_shared<cncstream::session::SimulatorPort>(so);
+    MachineOptions o;
+    o.name = "sim";
+    o.port = sim;
+    o.profiles_dir = cncstream::protocol::default_profiles_dir();
+    o.tool_change = tool_change;
+    session = std::make_unique<MachineSession>(io, o);
+    session->open();
+    EXPECT_TRUE(run_until(io, [&] { return session->ready() && session->status().has_value(); }));
+    controller = std::make_unique<PendantController>(*session, config(lease_s));
+    ReaderOptions ro;
+    ro.reopen_delay = std::chrono::milliseconds(100);
+    reader = std::make_unique<UsbPendantReader>(usb, *controller, ro);
+    usb.plug();
+  }
+  ~SimPendant() {
+    reader.reset();
+    session->close();
+    io.run_for(std::chrono::milliseconds(50));
+    sim->finish(false);
+  }
+};
+
+// The tool-length sensor machine of the tool-change tests: T2 7.3 mm longer than T1.
+cncstream::session::SimulatorOptions two_tools_and_a_sensor() {
+  cncstream::session::SimulatorOptions so;
+  so.speed = "max";
+  so.stick_outs = {{1, 30.0}, {2, 37.3}};
+  so.tool_sensor = "-30,0,-10";
+  return so;
+}
+
+cncstream::protocol::ToolChangeConfig sensor_change() {
+  cncstream::protocol::ToolChangeConfig tc;
+  tc.method = cncstream::protocol::ToolChangeMethod::Sensor;
+  tc.safe_z = 30;
+  tc.probe_x = -30;
+  tc.probe_y = 0;
+  return tc;
+}
+
+}  // namespace
+
 // The same dead man against the simulated machine: the jog really stops. The
 // built-in simulator runs in real time (rates 500 mm/min, 10 mm/s^2); the
 // lease is 5 s, so only the unplug can stop the jog this soon.
 TEST(PendantController, UnpluggedTheSimulatedMachineStopsWithinItsDeceleration) {
-  boost::asio::io_context io;
   cncstream::session::SimulatorOptions so;
   so.speed = "1";
-  auto sim = std::make_shared<cncstream::session::SimulatorPort>(so);
-  MachineOptions o;
-  o.name = "sim";
-  o.port = sim;
-  o.profiles_dir = cncstream::protocol::default_profiles_dir();
-  MachineSession session(io, o);
-  session.open();
-  ASSERT_TRUE(run_until(io, [&] { return session.ready() && session.status().has_value(); }));
-  FakePendantUsb usb;
-  PendantController controller(session, config(5.0));
-  ReaderOptions ro;
-  ro.reopen_delay = std::chrono::milliseconds(100);
-  auto reader = std::make_unique<UsbPendantReader>(usb, controller, ro);
-  usb.plug();
+  SimPendant rig(so, 5.0);
+  auto& io = rig.io;
+  auto& session = *rig.session;
+  auto& usb = rig.usb;
+  auto& controller = *rig.controller;
   usb.send(report(0x1b, 0x11, 0, 0x0e));  // MPG, 100 %, X
   usb.send(report(0x1b, 0x11));
   ASSERT_TRUE(run_until(io, [&] { return controller.mode() == JogMode::Continuous; }));
@@ -357,41 +403,17 @@ TEST(PendantController, UnpluggedTheSimulatedMachineStopsWithinItsDeceleration) 
   const double stopped_at = mx();
   io.run_for(std::chrono::milliseconds(500));
   EXPECT_DOUBLE_EQ(mx(), stopped_at);  // nothing queued runs on later
-  reader.reset();
-  session.close();
-  io.run_for(std::chrono::milliseconds(50));
-  sim->finish(false);
 }
 
 // At a tool change the pendant is the operator's hands: its wheel jogs at
 // the prompt, Start/Pause continues (the tool is mounted), and the job goes
 // on with the new tool measured on the sensor.
 TEST(PendantController, AtAToolChangeTheWheelJogsAndStartPauseContinues) {
-  boost::asio::io_context io;
-  cncstream::session::SimulatorOptions so;
-  so.speed = "max";
-  so.stick_outs = {{1, 30.0}, {2, 37.3}};
-  so.tool_sensor = "-30,0,-10";
-  auto sim = std::make_shared<cncstream::session::SimulatorPort>(so);
-  MachineOptions o;
-  o.name = "sim";
-  o.port = sim;
-  o.profiles_dir = cncstream::protocol::default_profiles_dir();
-  cncstream::protocol::ToolChangeConfig tc;
-  tc.method = cncstream::protocol::ToolChangeMethod::Sensor;
-  tc.safe_z = 30;
-  tc.probe_x = -30;
-  tc.probe_y = 0;
-  o.tool_change = tc;
-  MachineSession session(io, o);
-  session.open();
-  ASSERT_TRUE(run_until(io, [&] { return session.ready() && session.status().has_value(); }));
-  FakePendantUsb usb;
-  PendantController controller(session, config(0.2));
-  ReaderOptions ro;
-  ro.reopen_delay = std::chrono::milliseconds(100);
-  auto reader = std::make_unique<UsbPendantReader>(usb, controller, ro);
-  usb.plug();
+  SimPendant rig(two_tools_and_a_sensor(), 0.2, sensor_change());
+  auto& io = rig.io;
+  auto& session = *rig.session;
+  auto& usb = rig.usb;
+  auto& sim = rig.sim;
   JobInput job;
   job.file = "two-tools.nc";
   job.lines = {"G21 G90", "T1", "G0 Z5", "G1 X10 F500", "T2", "M0", "G1 X20 F500", "M2"};
@@ -419,45 +441,22 @@ TEST(PendantController, AtAToolChangeTheWheelJogsAndStartPauseContinues) {
   ASSERT_TRUE(session.status() && session.status()->wco);
   EXPECT_NEAR((*session.status()->wco)[2], 7.3, 1e-3);
   sub.reset();
-  reader.reset();
-  session.close();
-  io.run_for(std::chrono::milliseconds(50));
-  sim->finish(false);
 }
 
 // Outside a job the same key answers a routine's prompt: a tool change run
 // from the page or the API waits for the tool to be mounted; the wheel jogs
 // at the prompt, and Start/Pause confirms it.
 TEST(PendantController, AtARoutinesPromptStartPauseConfirms) {
-  boost::asio::io_context io;
-  cncstream::session::SimulatorOptions so;
-  so.speed = "max";
-  so.stick_outs = {{1, 30.0}, {2, 37.3}};
-  so.tool_sensor = "-30,0,-10";
-  auto sim = std::make_shared<cncstream::session::SimulatorPort>(so);
-  MachineOptions o;
-  o.name = "sim";
-  o.port = sim;
-  o.profiles_dir = cncstream::protocol::default_profiles_dir();
-  MachineSession session(io, o);
-  session.open();
-  ASSERT_TRUE(run_until(io, [&] { return session.ready() && session.status().has_value(); }));
-  FakePendantUsb usb;
-  PendantController controller(session, config(0.2));
-  ReaderOptions ro;
-  ro.reopen_delay = std::chrono::milliseconds(100);
-  auto reader = std::make_unique<UsbPendantReader>(usb, controller, ro);
-  usb.plug();
+  SimPendant rig(two_tools_and_a_sensor(), 0.2);
+  auto& io = rig.io;
+  auto& session = *rig.session;
+  auto& usb = rig.usb;
+  auto& sim = rig.sim;
   std::optional<bool> ended;
   auto sub = session.subscribe([&](const SessionEvent& e) {
     if (e.kind == SessionEventKind::Routine && e.routine_succeeded) ended = *e.routine_succeeded;
   });
-  cncstream::protocol::ToolChangeConfig tc;
-  tc.method = cncstream::protocol::ToolChangeMethod::Sensor;
-  tc.safe_z = 30;
-  tc.probe_x = -30;
-  tc.probe_y = 0;
-  const auto start = session.run_tool_routine(tc, cncstream::protocol::ToolRoutineKind::Change, 2, 0.1);
+  const auto start = session.run_tool_routine(sensor_change(), cncstream::protocol::ToolRoutineKind::Change, 2, 0.1);
   ASSERT_TRUE(start.result) << start.result.reason;
   ASSERT_TRUE(run_until(io, [&] {
     const auto* r = session.routine();
@@ -479,8 +478,4 @@ TEST(PendantController, AtARoutinesPromptStartPauseConfirms) {
   ASSERT_TRUE(session.status() && session.status()->wco);
   EXPECT_NEAR((*session.status()->wco)[2], 7.3, 1e-3);  // T2 is 7.3 mm longer: the work offset moved with it
   sub.reset();
-  reader.reset();
-  session.close();
-  io.run_for(std::chrono::milliseconds(50));
-  sim->finish(false);
 }

@@ -192,6 +192,17 @@ class Page:
         self.shots.append(path)
         say(f"screenshot {path}")
 
+    def keep_failure(self, name):
+        """A failed flow's screenshot, page source and browser console, kept in the output folder."""
+        try:
+            self.shot("FAILED-" + name)
+            with open(os.path.join(self.out, f"FAILED-{name}.html"), "w") as f:
+                f.write(self.d.page_source)
+            for e in self.console_errors():
+                say(f"browser console: {e}")
+        except Exception:  # the browser itself may be what failed
+            pass
+
     def dro(self, axis):
         t = self.text(f"#dro-{axis}")
         return float(t) if t not in ("", "—") else None
@@ -510,14 +521,7 @@ def main_flow(args, out, d):
         assert not errs, f"errors in the browser console: {errs}"
         return p.shots
     except Exception:
-        try:
-            p.shot("FAILED-main")
-            with open(os.path.join(out, "FAILED-main.html"), "w") as f:
-                f.write(d.page_source)
-            for e in p.console_errors():
-                say(f"browser console: {e}")
-        except Exception:
-            pass
+        p.keep_failure("main")
         raise
     finally:
         d.get("about:blank")  # leave before the daemon goes, or the page's reconnects are logged as errors
@@ -560,10 +564,7 @@ def token_flow(args, out, d):
         errs = [e for e in p.console_errors() if "401" not in e["message"]]  # the first, refused request is expected
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:
-        try:
-            p.shot("FAILED-token")
-        except Exception:
-            pass
+        p.keep_failure("token")
         raise
     finally:
         d.get("about:blank")  # leave before the daemon goes, or the page's reconnects are logged as errors
@@ -687,12 +688,7 @@ def tool_change_flow(args, out, d):
         errs = p.console_errors()
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:
-        try:
-            p.shot("FAILED-toolchange")
-            with open(os.path.join(out, "FAILED-toolchange.html"), "w") as f:
-                f.write(d.page_source)
-        except Exception:
-            pass
+        p.keep_failure("toolchange")
         raise
     finally:
         d.get("about:blank")

@@ -129,12 +129,7 @@ def setup_flow(args, out, d):
         errs = p.console_errors()
         assert not errs, f"errors in the browser console: {errs}"
     except Exception:
-        try:
-            p.shot("FAILED-setup")
-            with open(os.path.join(out, "FAILED-setup.html"), "w") as f:
-                f.write(d.page_source)
-        except Exception:
-            pass
+        p.keep_failure("setup")
         raise
     finally:
         d.get("about:blank")

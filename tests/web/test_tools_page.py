@@ -144,10 +144,7 @@ def tools_flow(args, out, d):
         errors = [e for e in p.console_errors() if "status of 40" not in e.get("message", "")]
         assert not errors, f"errors in the browser's console: {errors}"
     except Exception:
-        try:
-            p.shot("FAILED-tools")
-        except Exception:
-            pass
+        p.keep_failure("tools")
         raise
     finally:
         daemon.stop()
