@@ -1297,6 +1297,6 @@ run('Loading the shop', setupShop);
 run('Loading the tool library', setupTools);
 setupRoutines();
 // The shop view (shop.js) and the tool library (tools.js) use the page's helpers.
-export { $, el, api, run, duration, S, controlled };
+export { $, el, api, run, duration, S, controlled, enc };
 // For the browser tests and for debugging from the console.
 window.cncstream = { state: S, showPreview };  // the browser test drives and reads these

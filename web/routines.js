@@ -5,9 +5,7 @@
 // answered here (POST /machines/{m}/routine/confirm|decline) and its end comes
 // as a `routine` frame with what it found or why it failed. A module of its
 // own beside app.js (as tools.js and shop.js).
-import { $, api, run, S, controlled } from './app.js';
-
-const enc = encodeURIComponent;
+import { $, api, run, S, controlled, enc } from './app.js';
 
 function start(label, name, body) {
   const m = S.current;

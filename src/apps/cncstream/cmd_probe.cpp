@@ -9,14 +9,13 @@
 #include <iostream>
 #include <memory>
 
-#include "cncsim/number_text.hpp"
 #include "cncsim/probe_targets.hpp"
-#include "cncsim/removal.hpp"
 #include "cncstream/cam/cutter.hpp"
 #include "cncstream/gcode/program_extent.hpp"
 #include "cncstream/protocol/corner_probe.hpp"
 #include "cncstream/protocol/line_cleaner.hpp"
 #include "cncstream/protocol/outline_trace.hpp"
+#include "cncstream/session/simulator_port.hpp"
 #include "commands.hpp"
 #include "routine_session.hpp"
 
@@ -59,14 +58,16 @@ int run_probe(ProbeCliOptions o) {
   session::SimulatorOptions so = simulator_options(o.sim);
   if (o.conn.port == "sim") {
     // A block with the plate on its X-min/Y-min corner, the bit over the plate.
-    const cncsim::StockBox box = cncsim::parse_stock_box(o.sim_stock, 1.0);
-    so.stock = geometry::Box3{box.lo, box.hi};
+    const geometry::Box3 box = session::parse_sim_stock(o.sim_stock);
+    so.stock = box;
     so.cutter = cutter;
     so.corner_plate = o.plate;
     if (!o.sim_start.empty()) {
-      const auto p = cncsim::vec3_from(o.sim_start);
-      if (!p) throw std::invalid_argument("--sim-start '" + o.sim_start + "': expected X,Y,Z (machine mm)");
-      so.start_position = *p;
+      try {
+        so.start_position = session::parse_sim_position(o.sim_start);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(std::string("--sim-start ") + e.what());
+      }
     } else {
       const auto& pl = o.cfg.plate;
       so.start_position = geometry::Vec3{box.lo.x - pl.lip + pl.size / 2, box.lo.y - pl.lip + pl.size / 2,
