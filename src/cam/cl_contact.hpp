@@ -108,10 +108,10 @@ struct FaceOffset {
     return true;
   }
   double value(double x, double y) const { return z0 + gx * (x - ox) + gy * (y - oy); }
-  double xmin() const { return std::fmin(qx[0], std::fmin(qx[1], qx[2])) - tol; }
-  double xmax() const { return std::fmax(qx[0], std::fmax(qx[1], qx[2])) + tol; }
-  double ymin() const { return std::fmin(qy[0], std::fmin(qy[1], qy[2])) - tol; }
-  double ymax() const { return std::fmax(qy[0], std::fmax(qy[1], qy[2])) + tol; }
+  double xmin() const { return std::min(qx[0], std::min(qx[1], qx[2])) - tol; }
+  double xmax() const { return std::max(qx[0], std::max(qx[1], qx[2])) + tol; }
+  double ymin() const { return std::min(qy[0], std::min(qy[1], qy[2])) - tol; }
+  double ymax() const { return std::max(qy[0], std::max(qy[1], qy[2])) + tol; }
 };
 
 // Facets whose upward unit normal has n_z below this are treated as vertical:

@@ -6,6 +6,9 @@
 #include <stdexcept>
 #include <string>
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include "cl_contact.hpp"
 #include "cl_point_index.hpp"
 #include "cl_primitives.hpp"
@@ -23,6 +26,9 @@ struct ClEngine::Impl {
   ClOptions options;
   double floor = 0;
   cl_detail::ClPrimitives prims;
+  // The drawn facets' face offsets, prepared once: every grid and the point
+  // index use them (the finishing's rows alone draw the part 47 times).
+  std::vector<cl_detail::FaceOffset> faces;
   ClEngineStats stats;
   mutable std::once_flag index_once;
   mutable std::unique_ptr<cl_detail::PointIndex> index;
@@ -32,7 +38,7 @@ struct ClEngine::Impl {
   void rows(const GridSpec& spec, std::size_t j0, std::size_t j1, double* z, std::uint8_t* on_floor,
             const Checkpoint& checkpoint) const {
     run_with_thread_limit(options.threads,
-                          [&] { cl_detail::rasterize_rows(*mesh, prims, shape, spec, j0, j1, z, checkpoint); });
+                          [&] { cl_detail::rasterize_rows(*mesh, prims, faces, shape, spec, j0, j1, z, checkpoint); });
     const std::size_t n = (j1 - j0) * spec.nx;
     for (std::size_t k = 0; k < n; ++k) {
       const bool untouched = z[k] == kNoContact;
@@ -98,6 +104,15 @@ ClEngine::ClEngine(const geometry::Mesh& mesh, const Cutter& cutter, ClOptions o
     d.floor = b.empty() ? 0.0 : b.lo.z;
   }
   d.prims = cl_detail::select_primitives(mesh, d.shape, d.options.skip_concave_edges);
+  d.faces.resize(d.prims.faces.size());
+  run_with_thread_limit(d.options.threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.faces.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        const auto& t = mesh.triangles[d.prims.faces[k]];
+        d.faces[k] = cl_detail::face_offset(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], d.shape);
+      }
+    });
+  });
   d.stats.facets = mesh.triangles.size();
   d.stats.face_offsets = d.prims.faces.size();
   d.stats.edges = d.prims.edges_total;
@@ -151,10 +166,24 @@ void ClEngine::compute_tiles(const GridSpec& spec, const std::function<void(cons
 
 double ClEngine::height_at(double x, double y, bool& on_floor) const {
   const Impl& d = *impl_;
-  std::call_once(d.index_once, [&] { d.index = std::make_unique<cl_detail::PointIndex>(*d.mesh, d.prims, d.shape); });
+  std::call_once(d.index_once, [&] { d.index = std::make_unique<cl_detail::PointIndex>(*d.mesh, d.prims, d.faces, d.shape); });
   const double z = d.index->drop(x, y);
   on_floor = z == kNoContact;
   return on_floor || (d.options.floor_is_lowest && z < d.floor) ? d.floor : z;
+}
+
+std::size_t ClEngine::first_above(const SampledLine& line, std::size_t k0, std::size_t k1, double limit) const {
+  const Impl& d = *impl_;
+  if (!(d.floor <= limit)) {
+    // Where nothing is touched the floor itself is above the limit: point by point.
+    for (std::size_t k = k0; k <= k1; ++k)
+      if (height_at(line.x(k), line.y(k)) > limit) return k;
+    return k1 + 1;
+  }
+  std::call_once(d.index_once, [&] { d.index = std::make_unique<cl_detail::PointIndex>(*d.mesh, d.prims, d.faces, d.shape); });
+  // At or below the limit, the floor never decides: a height is above it
+  // exactly when a primitive's drop is.
+  return d.index->first_above(line, k0, k1, limit);
 }
 
 double ClEngine::height_at(double x, double y) const {

@@ -23,12 +23,12 @@ double PointIndex::top(std::uint32_t item) const {
   switch (item & ~kIdMask) {
     case kFace: {
       const auto& t = mesh_.triangles[prims_.faces[id]];
-      const double z = std::fmax(mesh_.vertices[t[0]].z, std::fmax(mesh_.vertices[t[1]].z, mesh_.vertices[t[2]].z));
+      const double z = std::max(mesh_.vertices[t[0]].z, std::max(mesh_.vertices[t[1]].z, mesh_.vertices[t[2]].z));
       return z + 1e-6;  // the inclusive test may evaluate the plane a hair outside
     }
     case kEdge: {
       const auto& e = prims_.edges[id];
-      return std::fmax(mesh_.vertices[e[0]].z, mesh_.vertices[e[1]].z) + 1e-9 * (1 + std::fabs(mesh_.vertices[e[0]].z));
+      return std::max(mesh_.vertices[e[0]].z, mesh_.vertices[e[1]].z) + 1e-9 * (1 + std::fabs(mesh_.vertices[e[0]].z));
     }
     default:
       return mesh_.vertices[prims_.vertices[id]].z;
@@ -48,14 +48,46 @@ double PointIndex::evaluate(std::uint32_t item, double x, double y, double best)
   }
 }
 
-PointIndex::PointIndex(const geometry::Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter)
-    : mesh_(mesh), prims_(prims), cutter_(cutter) {
-  const double R = cutter.R;
-  faces_.reserve(prims.faces.size());
-  for (const auto f : prims.faces) {
-    const auto& t = mesh.triangles[f];
-    faces_.push_back(face_offset(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], cutter));
+double PointIndex::box_bound(std::uint32_t item, double xa, double ya, double xb, double yb) const {
+  const double reach = cutter_.R * (1 + 1e-12) + 1e-9;
+  const std::uint32_t id = item & kIdMask;
+  double z = 0, d = 0;
+  switch (item & ~kIdMask) {
+    case kFace: {
+      // Linear over the box's part of the shifted triangle's box: the
+      // largest value is at a corner of that part.
+      const FaceOffset& f = faces_[id];
+      if (!f.active) return kNoContact;
+      const double ux0 = std::max(xa, f.xmin()), ux1 = std::min(xb, f.xmax());
+      const double uy0 = std::max(ya, f.ymin()), uy1 = std::min(yb, f.ymax());
+      if (ux0 > ux1 || uy0 > uy1) return kNoContact;
+      const double v = std::max(std::max(f.value(ux0, uy0), f.value(ux1, uy0)),
+                                 std::max(f.value(ux0, uy1), f.value(ux1, uy1)));
+      // The margin covers a contained point a rounding outside the box.
+      return std::min(top(item), v + 1e-9 * (1 + std::fabs(v) + std::fabs(f.gx) + std::fabs(f.gy)));
+    }
+    case kEdge:
+      z = edges_[id].zmax;
+      d = rect_segment_distance(edges_[id], xa, ya, xb, yb);
+      break;
+    default: {
+      const geometry::Vec3 v = mesh_.vertices[prims_.vertices[id]];
+      const double ddx = std::max(0.0, std::max(xa - v.x, v.x - xb)), ddy = std::max(0.0, std::max(ya - v.y, v.y - yb));
+      z = v.z;
+      d = std::sqrt(ddx * ddx + ddy * ddy);
+    }
   }
+  if (d > reach) return kNoContact;
+  // h taken a nanometre nearer: the bound must not fall below a drop that
+  // the exact evaluation, at a distance rounded a hair shorter, computes
+  // higher (h is steep at the cutter's rim).
+  return top(item) - cutter_.h(std::max(0.0, d * (1 - 1e-9) - 1e-9)) + 1e-9 * (1 + std::fabs(z));
+}
+
+PointIndex::PointIndex(const geometry::Mesh& mesh, const ClPrimitives& prims, const std::vector<FaceOffset>& faces,
+                       const CutterShape& cutter)
+    : mesh_(mesh), prims_(prims), cutter_(cutter), faces_(faces) {
+  const double R = cutter.R;
   edges_.reserve(prims.edges.size());
   for (const auto& e : prims.edges) edges_.push_back(make_edge(mesh.vertices[e[0]], mesh.vertices[e[1]]));
   // Footprint of each item: the XY box outside which it cannot touch.
@@ -134,41 +166,9 @@ PointIndex::PointIndex(const geometry::Mesh& mesh, const ClPrimitives& prims, co
   // cutter's reach of the cell. Sorting by the top alone made a query at the
   // foot of a wall evaluate the whole wall within the cell's reach (124
   // items a query on the plaque, 96 % of them giving nothing).
-  const double reach = R * (1 + 1e-12) + 1e-9;
   auto cell_bound = [&](std::uint32_t item, std::size_t cx, std::size_t cy) {
     const double xa = x0_ + static_cast<double>(cx) * cell_, ya = y0_ + static_cast<double>(cy) * cell_;
-    const double xb = xa + cell_, yb = ya + cell_;
-    const std::uint32_t id = item & kIdMask;
-    double z = 0, d = 0;
-    switch (item & ~kIdMask) {
-      case kFace: {
-        // Linear over the cell's part of the shifted triangle's box: the
-        // largest value is at a corner of that part.
-        const FaceOffset& f = faces_[id];
-        const double ux0 = std::fmax(xa, f.xmin()), ux1 = std::fmin(xb, f.xmax());
-        const double uy0 = std::fmax(ya, f.ymin()), uy1 = std::fmin(yb, f.ymax());
-        if (ux0 > ux1 || uy0 > uy1) return kNoContact;
-        const double v = std::fmax(std::fmax(f.value(ux0, uy0), f.value(ux1, uy0)),
-                                   std::fmax(f.value(ux0, uy1), f.value(ux1, uy1)));
-        // The margin covers a contained point a rounding outside the box.
-        return std::fmin(top(item), v + 1e-9 * (1 + std::fabs(v) + std::fabs(f.gx) + std::fabs(f.gy)));
-      }
-      case kEdge:
-        z = edges_[id].zmax;
-        d = rect_segment_distance(edges_[id], xa, ya, xb, yb);
-        break;
-      default: {
-        const geometry::Vec3 v = mesh_.vertices[prims_.vertices[id]];
-        const double ddx = std::fmax(0.0, std::fmax(xa - v.x, v.x - xb)), ddy = std::fmax(0.0, std::fmax(ya - v.y, v.y - yb));
-        z = v.z;
-        d = std::sqrt(ddx * ddx + ddy * ddy);
-      }
-    }
-    if (d > reach) return kNoContact;
-    // h taken a nanometre nearer: the bound must not fall below a drop that
-    // the exact evaluation, at a distance rounded a hair shorter, computes
-    // higher (h is steep at the cutter's rim).
-    return top(item) - cutter_.h(std::fmax(0.0, d * (1 - 1e-9) - 1e-9)) + 1e-9 * (1 + std::fabs(z));
+    return box_bound(item, xa, ya, xa + cell_, ya + cell_);
   };
   // Two passes over the items in parallel (isolated: this runs inside the
   // engine's call_once, which a stolen task querying the same engine would
@@ -212,11 +212,51 @@ PointIndex::PointIndex(const geometry::Mesh& mesh, const ClPrimitives& prims, co
   });
 }
 
+std::size_t PointIndex::cell_at(double x, double y) const {
+  const double kx = std::floor((x - x0_) / cell_), ky = std::floor((y - y0_) / cell_);
+  if (!(kx >= 0 && ky >= 0 && kx < static_cast<double>(nx_) && ky < static_cast<double>(ny_))) return npos;
+  return static_cast<std::size_t>(ky) * nx_ + static_cast<std::size_t>(kx);
+}
+
+std::size_t PointIndex::first_above(const SampledLine& line, std::size_t k0, std::size_t k1, double limit) const {
+  if (entries_.empty()) return k1 + 1;
+  for (std::size_t k = k0; k <= k1;) {
+    // The run of points from k that share a cell, and their box.
+    double xa = line.x(k), ya = line.y(k);
+    const std::size_t cell = cell_at(xa, ya);
+    double xb = xa, yb = ya;
+    std::size_t last = k;
+    while (last < k1) {
+      const double x = line.x(last + 1), y = line.y(last + 1);
+      if (cell_at(x, y) != cell) break;
+      xa = std::min(xa, x), xb = std::max(xb, x), ya = std::min(ya, y), yb = std::max(yb, y);
+      ++last;
+    }
+    if (cell != npos) {
+      // drop() at each point is the cell's largest evaluation: an item above
+      // the limit at some point is one whose bound over the run's box is.
+      std::size_t first = last + 1;
+      for (std::uint32_t e = offset_[cell]; e < offset_[cell + 1] && first > k; ++e) {
+        const Entry en = entries_[e];
+        if (en.bound <= limit) break;  // listed highest first
+        if (box_bound(en.item, xa, ya, xb, yb) <= limit) continue;
+        for (std::size_t m = k; m < first; ++m)
+          if (evaluate(en.item, line.x(m), line.y(m), limit) > limit) {
+            first = m;
+            break;
+          }
+      }
+      if (first <= last) return first;
+    }
+    k = last + 1;
+  }
+  return k1 + 1;
+}
+
 double PointIndex::drop(double x, double y) const {
   if (entries_.empty()) return kNoContact;
-  const double kx = std::floor((x - x0_) / cell_), ky = std::floor((y - y0_) / cell_);
-  if (!(kx >= 0 && ky >= 0 && kx < static_cast<double>(nx_) && ky < static_cast<double>(ny_))) return kNoContact;
-  const std::size_t cell = static_cast<std::size_t>(ky) * nx_ + static_cast<std::size_t>(kx);
+  const std::size_t cell = cell_at(x, y);
+  if (cell == npos) return kNoContact;
   double best = kNoContact;
   for (std::uint32_t k = offset_[cell]; k < offset_[cell + 1]; ++k) {
     const Entry e = entries_[k];

@@ -9,15 +9,21 @@
 
 #include "cl_contact.hpp"
 #include "cl_primitives.hpp"
+#include "cncstream/cam/sampled_line.hpp"
 #include "cncstream/geometry/mesh.hpp"
 
 namespace cncstream::cam::cl_detail {
 
 class PointIndex {
  public:
-  PointIndex(const geometry::Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter);
+  // `faces`: face_offset of each of prims.faces (kept by reference).
+  PointIndex(const geometry::Mesh& mesh, const ClPrimitives& prims, const std::vector<FaceOffset>& faces,
+             const CutterShape& cutter);
   // Max drop height at (x, y), or kNoContact.
   double drop(double x, double y) const;
+  // The first k in [k0, k1] whose point's drop exceeds `limit`, else
+  // k1 + 1 (ClEngine::first_above).
+  std::size_t first_above(const SampledLine& line, std::size_t k0, std::size_t k1, double limit) const;
   std::size_t entries() const { return entries_.size(); }
 
  private:
@@ -25,6 +31,12 @@ class PointIndex {
   static constexpr std::uint32_t kIdMask = (1u << 30) - 1;
   double top(std::uint32_t item) const;
   double evaluate(std::uint32_t item, double x, double y, double best) const;
+  // The most the item's drop can be anywhere in [xa, xb] x [ya, yb]
+  // (rounded up), kNoContact where it cannot touch there.
+  double box_bound(std::uint32_t item, double xa, double ya, double xb, double yb) const;
+  // The cell holding (x, y), or npos outside the index.
+  static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+  std::size_t cell_at(double x, double y) const;
 
   const geometry::Mesh& mesh_;
   const ClPrimitives& prims_;
@@ -41,7 +53,7 @@ class PointIndex {
   std::vector<Entry> entries_;
   // Prepared once: a query evaluates many primitives, and preparing them
   // (square roots, normals) costs more than evaluating them.
-  std::vector<FaceOffset> faces_;
+  const std::vector<FaceOffset>& faces_;
   std::vector<EdgeGeom> edges_;
 };
 

@@ -82,6 +82,7 @@ Bins make_bins(const Layout& L, std::size_t n, Footprint footprint) {
 struct Context {
   const geometry::Mesh& mesh;
   const ClPrimitives& prims;
+  const std::vector<FaceOffset>& offsets;
   const CutterShape& cutter;
   const GridSpec& spec;
   Layout layout;
@@ -99,8 +100,7 @@ void draw_faces(const Context& c, std::size_t tile, std::size_t i0, std::size_t 
                 std::size_t jt1, double* z, std::size_t w) {
   const GridSpec& g = c.spec;
   for (const std::uint32_t* p = c.faces.begin(tile); p != c.faces.end(tile); ++p) {
-    const auto& tri = c.mesh.triangles[c.prims.faces[*p]];
-    const FaceOffset f = face_offset(c.mesh.vertices[tri[0]], c.mesh.vertices[tri[1]], c.mesh.vertices[tri[2]], c.cutter);
+    const FaceOffset& f = c.offsets[*p];
     if (!f.active) continue;
     const Range ry = intersect(node_range(f.ymin(), f.ymax(), g.y0, g.dy, g.ny), jt0, jt1);
     for (std::size_t j = ry.lo; j < ry.hi; ++j) {
@@ -264,15 +264,15 @@ void process_tile(const Context& c, std::size_t tile, Scratch& s) {
 
 }  // namespace
 
-void rasterize_rows(const geometry::Mesh& mesh, const ClPrimitives& prims, const CutterShape& cutter, const GridSpec& spec,
+void rasterize_rows(const geometry::Mesh& mesh, const ClPrimitives& prims, const std::vector<FaceOffset>& faces,
+                    const CutterShape& cutter, const GridSpec& spec,
                     std::size_t j0, std::size_t j1, double* z, const Checkpoint& checkpoint) {
   if (j1 <= j0 || spec.nx == 0) return;
   const Layout layout{&spec, j0, j1, (spec.nx + kTile - 1) / kTile, (j1 - j0 + kTile - 1) / kTile};
   const double R = cutter.R;
-  Context c{mesh, prims, cutter, spec, layout, {}, {}, {}, z};
+  Context c{mesh, prims, faces, cutter, spec, layout, {}, {}, {}, z};
   c.faces = make_bins(layout, prims.faces.size(), [&](std::size_t id, Range& rx, Range& ry) {
-    const auto& tri = mesh.triangles[prims.faces[id]];
-    const FaceOffset f = face_offset(mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]], cutter);
+    const FaceOffset& f = faces[id];
     if (!f.active) return false;
     rx = node_range(f.xmin(), f.xmax(), spec.x0, spec.dx, spec.nx);
     ry = node_range(f.ymin(), f.ymax(), spec.y0, spec.dy, spec.ny);

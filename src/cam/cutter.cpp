@@ -9,20 +9,6 @@
 
 namespace cncstream::cam {
 
-double ProfileBand::h(double rho) const {
-  if (kind == Kind::Cone) return h0 + slope * (rho - rho0);
-  const double u = std::clamp(rho - a, 0.0, r);
-  return zc - std::sqrt(std::fmax(0.0, (r - u) * (r + u)));
-}
-
-double CutterProfile::h(double rho) const {
-  if (!(rho > 0)) rho = 0;
-  if (rho >= R) return top;
-  for (std::size_t k = 0; k < count; ++k)
-    if (rho <= band[k].rho1) return band[k].h(std::fmax(rho, band[k].rho0));
-  return top;
-}
-
 double Cutter::profile_height(double rho) const {
   if (!is_apt()) return profile().h(rho);
   const double rc = core_radius();

@@ -86,43 +86,45 @@ void append_lifted(const ClEngine& engine, const std::optional<XYLattice>& lat, 
                    double level, double step, double tolerance, Polyline& out, std::size_t& queries) {
   const double len = xy_dist(a, b);
   const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / step)));
+  const SampledLine line{a.x, a.y, b.x, b.y, n};
   Polyline chord{a};
   for (std::size_t k = 1; k < n; ++k) {
-    const double t = double(k) / double(n);
-    geometry::Vec3 p{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, level};
+    // Only the samples the CL rises above the level at change anything.
+    const std::size_t above = engine.first_above(line, k, n - 1, level);
+    queries += (above < n ? above + 1 : n) - k;
+    if (above >= n) break;
+    k = above;
+    geometry::Vec3 p{line.x(k), line.y(k), level};
     const double cl = engine.height_at(p.x, p.y);
-    ++queries;
-    if (cl > p.z) {
-      // The sample moves sideways out of the CL at the level, so the run
-      // stays level for the band fit and the arcs: a sag of a micron or so
-      // (the chord's ends are on the contour within that) by up to a step;
-      // where the contour bulges out between its points (round an outside
-      // corner of the part) by up to a quarter of the chord. Lifting over
-      // such a bulge instead made a bump of hundredths of a millimetre
-      // every few tenths (a line each, more than a serial link delivers).
-      // The move to it from the point before must stay out of the CL too.
-      if (len > 0) {
-        const double nx = -(b.y - a.y) / len, ny = (b.x - a.x) / len;  // left: the free side
-        const double limit = cl - level < kSmallSag ? step : std::max(step, 0.25 * len);
-        const double d = free_offset(engine, p.x, p.y, nx, ny, level, 0, limit, queries);
-        if (std::isfinite(d)) {
-          const geometry::Vec3 q = on_lattice(engine, lat, {p.x + d * nx, p.y + d * ny, level}, queries);
-          const geometry::Vec3& before = chord.back();
-          ++queries;
-          if (q.z == level && (cl - level < kSmallSag || before.z != level ||
-                               engine.height_at(0.5 * (q.x + before.x), 0.5 * (q.y + before.y)) <= level)) {
-            chord.push_back(q);
-            continue;
-          }
+    // The sample moves sideways out of the CL at the level, so the run
+    // stays level for the band fit and the arcs: a sag of a micron or so
+    // (the chord's ends are on the contour within that) by up to a step;
+    // where the contour bulges out between its points (round an outside
+    // corner of the part) by up to a quarter of the chord. Lifting over
+    // such a bulge instead made a bump of hundredths of a millimetre
+    // every few tenths (a line each, more than a serial link delivers).
+    // The move to it from the point before must stay out of the CL too.
+    if (len > 0) {
+      const double nx = -(b.y - a.y) / len, ny = (b.x - a.x) / len;  // left: the free side
+      const double limit = cl - level < kSmallSag ? step : std::max(step, 0.25 * len);
+      const double d = free_offset(engine, p.x, p.y, nx, ny, level, 0, limit, queries);
+      if (std::isfinite(d)) {
+        const geometry::Vec3 q = on_lattice(engine, lat, {p.x + d * nx, p.y + d * ny, level}, queries);
+        const geometry::Vec3& before = chord.back();
+        ++queries;
+        if (q.z == level && (cl - level < kSmallSag || before.z != level ||
+                             engine.height_at(0.5 * (q.x + before.x), 0.5 * (q.y + before.y)) <= level)) {
+          chord.push_back(q);
+          continue;
         }
       }
-      p.z = cl;
-      p = on_lattice(engine, lat, p, queries);
-      // On the lattice the CL may be higher still: the point sits on it.
-      ++queries;
-      p.z = std::max(p.z, engine.height_at(p.x, p.y));
-      chord.push_back(p);
     }
+    p.z = cl;
+    p = on_lattice(engine, lat, p, queries);
+    // On the lattice the CL may be higher still: the point sits on it.
+    ++queries;
+    p.z = std::max(p.z, engine.height_at(p.x, p.y));
+    chord.push_back(p);
   }
   chord.push_back(b);
   std::vector<double> us(chord.size()), zs(chord.size());
@@ -148,12 +150,17 @@ double push_needed(const ClEngine& engine, const geometry::Vec3& a, const geomet
   if (!(len > 0)) return 0;
   const double nx = -(b.y - a.y) / len, ny = (b.x - a.x) / len;  // left normal
   const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / step)));
+  const SampledLine line{a.x, a.y, b.x, b.y, n};
   double need = 0;
   for (std::size_t k = 1; k < n; ++k) {
-    const double t = double(k) / double(n);
-    const double x = a.x + (b.x - a.x) * t, y = a.y + (b.y - a.y) * t;
-    ++queries;
-    if (engine.height_at(x + need * nx, y + need * ny) <= level) continue;
+    SampledLine pushed = line;
+    pushed.ox = need * nx;
+    pushed.oy = need * ny;
+    const std::size_t above = engine.first_above(pushed, k, n - 1, level);
+    queries += (above < n ? above + 1 : n) - k;
+    if (above >= n) break;
+    k = above;
+    const double x = line.x(k), y = line.y(k);
     // Past four steps it is not a chord's sag: left to the lift.
     need = free_offset(engine, x, y, nx, ny, level, need, step * 4, queries);
     if (!std::isfinite(need)) return HUGE_VAL;
@@ -297,6 +304,47 @@ std::vector<double> flat_heights(const ClGrid& grid, const SlopeMap& slope, doub
   return out;
 }
 
+// A node steep enough for the walls' spacing: the heights its slope spans
+// (the slope map's differences reach its neighbours) and the sine of it.
+struct WallNode {
+  double lo, hi, sine;
+};
+
+std::vector<WallNode> wall_nodes(const ClGrid& grid, const SlopeMap& slope, double min_angle) {
+  std::vector<WallNode> out;
+  const std::size_t nx = grid.spec.nx, ny = grid.spec.ny;
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx; ++i) {
+      const double a = slope.at(i, j);
+      if (a < min_angle || grid.on_floor[j * nx + i]) continue;
+      double lo = grid.at(i, j), hi = lo;
+      auto take = [&](std::size_t ii, std::size_t jj) {
+        lo = std::min(lo, grid.at(ii, jj));
+        hi = std::max(hi, grid.at(ii, jj));
+      };
+      if (i > 0) take(i - 1, j);
+      if (i + 1 < nx) take(i + 1, j);
+      if (j > 0) take(i, j - 1);
+      if (j + 1 < ny) take(i, j + 1);
+      out.push_back({lo, hi, std::sin(a)});
+    }
+  return out;
+}
+
+// The band above z: as high as its gentlest wall node allows. Shrinking the
+// band can only drop nodes, so the loop ends; every node left in it allows it.
+double band_above(const std::vector<WallNode>& nodes, double z, double spacing) {
+  double band = spacing;
+  for (;;) {
+    double sine = 1;
+    for (const WallNode& n : nodes)
+      if (n.hi > z && n.lo <= z + band) sine = std::min(sine, n.sine);
+    const double allowed = spacing * sine;
+    if (allowed >= band) return band;
+    band = allowed;
+  }
+}
+
 struct LevelPieces {
   std::vector<Run> runs;
   std::size_t contours = 0;
@@ -319,7 +367,19 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
   // Levels from the foot of the walls (just above the lowest CL) upwards.
   const double bottom = std::max(o.bottom, lo + 1e-3);
   const double top = std::min(o.top, hi);
-  for (std::size_t k = 0; bottom + double(k) * o.z_step < top; ++k) out.levels.push_back(bottom + double(k) * o.z_step);
+  if (o.wall_spacing > 0) {
+    const std::vector<WallNode> nodes = wall_nodes(grid, slope, o.wall_angle_deg * std::numbers::pi / 180);
+    for (double z = bottom; z < top;) {
+      out.levels.push_back(z);
+      const double band = band_above(nodes, z, o.wall_spacing);
+      out.step_min = out.levels.size() == 1 ? band : std::min(out.step_min, band);
+      out.step_max = std::max(out.step_max, band);
+      z += band;
+    }
+  } else {
+    for (std::size_t k = 0; bottom + double(k) * o.z_step < top; ++k) out.levels.push_back(bottom + double(k) * o.z_step);
+    out.step_min = out.step_max = o.z_step;
+  }
   if (o.flat_levels) {
     const double r = engine.cutter().radius;
     const double min_area = o.flat_min_area > 0 ? o.flat_min_area : std::numbers::pi * r * r / 4;
@@ -357,12 +417,9 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
         // against the exact CL as densely as the lifts are.
         const LevelMoveCheck clear = [&](const geometry::Vec3& a, const geometry::Vec3& b) {
           const auto n = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(xy_dist(a, b) / (o.sample_step / 5))));
-          for (std::size_t k = 0; k <= n; ++k) {
-            const double t = double(k) / double(n);
-            ++lp.queries;
-            if (engine.height_at(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t) > z + kClearSlack) return false;
-          }
-          return true;
+          const std::size_t above = engine.first_above(SampledLine{a.x, a.y, b.x, b.y, n}, 0, n, z + kClearSlack);
+          lp.queries += std::min(above, n) + 1;
+          return above > n;
         };
         r.points = fit_level_run_in_band(
             keep_level(engine, o.lattice, std::move(r.points), r.closed, z, o.sample_step, o.simplify_tolerance,

@@ -71,6 +71,11 @@ void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const cam::ClEn
   const cam::SlopeMap slope(grid);
   cam::WaterlineOptions wo;
   wo.z_step = spacing.z_step;
+  if (spacing.row_widest > 0) {
+    // By the scallop: each band as the walls in it allow.
+    wo.wall_spacing = spacing.row_widest;
+    wo.wall_angle_deg = std::max(1.0, p.steep_angle - kOverlapDeg);
+  }
   wo.steep_angle_deg = p.steep_angle;
   wo.tolerance = p.tolerance;
   wo.lattice = lattice;
@@ -83,7 +88,8 @@ void add_waterlines(ToolpathProgram& r, const ToolpathParams& p, const cam::ClEn
   r.finish_pieces.insert(r.finish_pieces.end(), shallow.pieces.begin(), shallow.pieces.end());
   r.waterline_pieces = w.pieces.size();
   r.waterline_levels = w.levels.size();
-  r.waterline_step = spacing.z_step;
+  r.waterline_step = w.step_min;
+  r.waterline_step_max = w.step_max;
   r.steep_bridges = shallow.bridges;
   if (checkpoint) checkpoint(1.0);
 }

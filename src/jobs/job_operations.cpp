@@ -21,10 +21,16 @@ OperationSummary finishing_summary(const ToolpathProgram& r, const ToolpathParam
   o.detail = fmt::format("raster, {} rows {} mm apart along {}", r.path.rows.size(), row_spacing_text(r.path),
                          p.direction == cam::RasterDirection::Y ? "Y" : "X");
   if (r.waterline_pieces > 0)
+  {
+    const std::string apart = r.waterline_step_max > r.waterline_step + 5e-5
+                                  ? fmt::format("{} to {}", format_gcode_number(r.waterline_step, 4),
+                                                format_gcode_number(r.waterline_step_max, 4))
+                                  : format_gcode_number(r.waterline_step, 4);
     o.detail = fmt::format("waterlines where steeper than {} degrees ({} levels {} mm apart, {} pieces), then {} with "
                            "{} steep stretches left to them",
-                           format_gcode_number(p.steep_angle, 1), r.waterline_levels,
-                           format_gcode_number(r.waterline_step, 4), r.waterline_pieces, o.detail, r.steep_bridges);
+                           format_gcode_number(p.steep_angle, 1), r.waterline_levels, apart, r.waterline_pieces,
+                           o.detail, r.steep_bridges);
+  }
   o.lines = stats.lines;
   o.cut_length = stats.cut_length;
   o.feed_time_s = stats.feed_time_s;

@@ -11,6 +11,7 @@
 #include "cncstream/cam/checkpoint.hpp"
 #include "cncstream/cam/cl_grid.hpp"
 #include "cncstream/cam/cutter.hpp"
+#include "cncstream/cam/sampled_line.hpp"
 #include "cncstream/geometry/mesh.hpp"
 
 namespace cncstream::cam {
@@ -84,6 +85,12 @@ class ClEngine {
   double height_at(double x, double y) const;
   // As height_at, but reports whether any facet was touched.
   double height_at(double x, double y, bool& on_floor) const;
+  // The first k in [k0, k1] whose point on `line` has height_at above
+  // `limit`; k1 + 1 if none has. The same answer as asking height_at point
+  // by point, from fewer evaluations: a primitive that cannot rise above the
+  // limit anywhere among a cell's points is passed over once for all of
+  // them (the waterlines check every chord every 0.01 mm).
+  std::size_t first_above(const SampledLine& line, std::size_t k0, std::size_t k1, double limit) const;
 
  private:
   struct Impl;

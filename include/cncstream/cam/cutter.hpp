@@ -15,7 +15,9 @@
 // Every profile is a list of bands (profile()): each a cone piece (slope 0:
 // a flat disc or annulus) or a circle arc (sphere or torus), convex and
 // non-decreasing in rho, which is what the exact CL engine relies on.
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -39,7 +41,12 @@ struct ProfileBand {
   double a = 0, zc = 0, r = 0;  // Arc
   double sin0 = 0, sin1 = 0;
 
-  double h(double rho) const;
+  // Inline: the CL engine's point queries call it for every primitive.
+  double h(double rho) const {
+    if (kind == Kind::Cone) return h0 + slope * (rho - rho0);
+    const double u = std::clamp(rho - a, 0.0, r);
+    return zc - std::sqrt(std::max(0.0, (r - u) * (r + u)));
+  }
 };
 
 struct CutterProfile {
@@ -50,7 +57,13 @@ struct CutterProfile {
   double top = 0;  // h(R)
 
   // h(rho) for 0 <= rho <= R (clamped at both ends).
-  double h(double rho) const;
+  double h(double rho) const {
+    if (!(rho > 0)) rho = 0;
+    if (rho >= R) return top;
+    for (std::size_t k = 0; k < count; ++k)
+      if (rho <= band[k].rho1) return band[k].h(std::max(rho, band[k].rho0));
+    return top;
+  }
 };
 
 struct Cutter {

@@ -26,6 +26,14 @@ namespace cncstream::cam {
 
 struct WaterlineOptions {
   double z_step = 0.5;            // between levels, mm
+  // Levels spaced by the walls they cut (when > 0, instead of z_step): two
+  // levels' passes touch a wall of slope a at wall_spacing / sin(a) apart
+  // along it, so each band between levels is at most wall_spacing times the
+  // sine of the gentlest node in it that is at least wall_angle_deg steep
+  // (gentler ground is the rows'): never closer than wall_spacing *
+  // sin(wall_angle_deg), up to wall_spacing apart on vertical walls.
+  double wall_spacing = 0;
+  double wall_angle_deg = 35;
   double steep_angle_deg = 45;    // contours where the surface is at least this steep
   double tolerance = 0.002;       // mm: contour points within this of the exact contour
   // mm: points are merged where the straight move stays within this of
@@ -50,6 +58,7 @@ struct WaterlineOptions {
 struct WaterlinePath {
   std::vector<Polyline> pieces;  // in cutting order; the program retracts between them
   std::vector<double> levels;    // the levels used, top down
+  double step_min = 0, step_max = 0;  // between the spaced levels (the flat areas' levels aside)
   std::size_t contours = 0;      // contours traced (before the steepness split)
   std::size_t point_queries = 0;
 };

@@ -153,7 +153,8 @@ struct ToolpathProgram {
   std::vector<cam::Polyline> finish_pieces;
   std::size_t waterline_pieces = 0;  // the first pieces of finish_pieces
   std::size_t waterline_levels = 0;
-  double waterline_step = 0;         // mm between levels
+  double waterline_step = 0;         // mm between levels (the closest two)
+  double waterline_step_max = 0;     // mm between the farthest two (spaced by the walls: wider on steeper ones)
   std::size_t steep_bridges = 0;     // raster stretches left to the waterlines
   cam::Cutter cutter;
   std::size_t facets = 0;
