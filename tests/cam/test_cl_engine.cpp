@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -101,6 +102,60 @@ TEST(ClEngine, HeightAtAgreesWithGridNodes) {
     const cam::ClGrid f = e.compute(fine);
     for (std::size_t j = 0; j < fine.ny; j += 3)
       for (std::size_t i = 0; i < fine.nx; i += 3) ASSERT_NEAR(e.height_at(fine.x(i), fine.y(j)), f.at(i, j), 1e-9);
+  }
+}
+
+// The batched check must give the answer of asking point by point, for
+// every cutter family, with the limit where it matters: at the CL of some
+// point of the line (a contour's chord), a hair above and below it, under
+// the floor, and off the part.
+TEST(ClEngine, FirstAboveIsThePointByPointAnswer) {
+  const geometry::Mesh m = bumpy();
+  std::vector<cam::Cutter> all = cutters();
+  all.push_back(cam::Cutter::tapered_ball(1, 5, 3.175));
+  all.push_back(cam::Cutter::vbit(60, 6));
+  std::mt19937 rng(28);
+  std::uniform_real_distribution<double> at(-5, 45), unit(0, 1);
+  for (const bool lowest : {false, true}) {
+    for (const cam::Cutter& c : all) {
+      SCOPED_TRACE(c.spec() + (lowest ? " (floor is lowest)" : ""));
+      cam::ClOptions o;
+      o.floor_is_lowest = lowest;
+      o.floor = 2.5;
+      const cam::ClEngine e(m, c, o);
+      std::size_t found = 0, none = 0;
+      for (int trial = 0; trial < 400; ++trial) {
+        cam::SampledLine line{at(rng), at(rng), 0, 0, 1 + static_cast<std::size_t>(unit(rng) * 300)};
+        // Short chords (a waterline's) and long moves across cells.
+        const double len = trial % 2 ? 0.05 + unit(rng) : 2 + 20 * unit(rng), dir = 7 * unit(rng);
+        line.bx = line.ax + len * std::cos(dir);
+        line.by = line.ay + len * std::sin(dir);
+        if (trial % 3 == 0) {
+          line.ox = 0.01 * unit(rng);
+          line.oy = -0.01 * unit(rng);
+        }
+        const std::size_t k0 = static_cast<std::size_t>(unit(rng) * double(line.n) / 2);
+        const std::size_t k1 = std::min(line.n, k0 + static_cast<std::size_t>(unit(rng) * double(line.n)));
+        const std::size_t pick = k0 + static_cast<std::size_t>(unit(rng) * double(k1 - k0));
+        const double cl = e.height_at(line.x(pick), line.y(pick));
+        const double limits[] = {cl, cl + 1e-9, cl - 1e-9, cl + 0.05, cl - 0.3, 1.0, 100.0};
+        for (const double limit : limits) {
+          std::size_t expect = k1 + 1;
+          for (std::size_t k = k0; k <= k1; ++k)
+            if (e.height_at(line.x(k), line.y(k)) > limit) {
+              expect = k;
+              break;
+            }
+          ASSERT_EQ(e.first_above(line, k0, k1, limit), expect)
+              << "line " << line.ax << "," << line.ay << " -> " << line.bx << "," << line.by << " n " << line.n << " ["
+              << k0 << ", " << k1 << "] limit " << limit;
+          (expect <= k1 ? found : none) += 1;
+        }
+      }
+      // Both answers came up many times.
+      EXPECT_GT(found, 400u);
+      EXPECT_GT(none, 400u);
+    }
   }
 }
 

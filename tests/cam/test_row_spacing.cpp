@@ -9,6 +9,7 @@
 #include <numbers>
 #include <vector>
 
+#include "cam/cl_test_meshes.hpp"
 #include "cncstream/cam/cl_engine.hpp"
 #include "cncstream/cam/pencil.hpp"
 #include "cncstream/cam/raster.hpp"
@@ -267,4 +268,63 @@ TEST(Pencil, OnePassAlongAVGroovesCreaseOnTheClAndNoneOnAPlane) {
   // Only where wanted; none on the level top.
   EXPECT_TRUE(cam::pencil_passes(engine, b, o, [](double, double) { return false; }).empty());
   EXPECT_TRUE(cam::pencil_passes(engine, cam::XYBounds{1, 2, 12, 18}, o, all).empty());
+}
+
+TEST(WaterlineLevels, SpacedByTheGentlestWallBetweenThem) {
+  // Along x: a 40-degree ramp up to a terrace 4 mm high, then a wall up to 8 mm.
+  const geometry::Mesh m = cl_test::terrain(0, 0, 40, 160, [](double x, double) {
+    return x < 25 ? std::clamp((x - 8) * std::tan(40 * kDeg), 0.0, 4.0) : 8.0;
+  });
+  const cam::ClEngine engine(m, cam::parse_cutter_spec("ball:2"));
+  const cam::ClGrid grid = engine.compute(cam::GridSpec::covering(-2, -2, 42, 42, 0.25, 0.25));
+  const cam::SlopeMap slope(grid);
+  cam::WaterlineOptions o;
+  o.flat_levels = false;
+  o.wall_spacing = 1;
+  o.wall_angle_deg = 35;
+  const cam::WaterlinePath w = cam::build_waterline(engine, grid, slope, o);
+  std::vector<double> up(w.levels.rbegin(), w.levels.rend());
+  ASSERT_GT(up.size(), 5u);
+  // The promise: a node at least 35 degrees steep lies in bands (over the
+  // heights to its neighbours, whose differences give its slope) no taller
+  // than the spacing times the sine of its slope.
+  const std::size_t nx = grid.spec.nx, ny = grid.spec.ny;
+  std::size_t walls = 0;
+  for (std::size_t j = 1; j + 1 < ny; ++j)
+    for (std::size_t i = 1; i + 1 < nx; ++i) {
+      const double a = slope.at(i, j);
+      if (a < 35 * kDeg || grid.on_floor[j * nx + i]) continue;
+      ++walls;
+      const double lo = std::min({grid.at(i, j), grid.at(i - 1, j), grid.at(i + 1, j), grid.at(i, j - 1), grid.at(i, j + 1)});
+      const double hi = std::max({grid.at(i, j), grid.at(i - 1, j), grid.at(i + 1, j), grid.at(i, j - 1), grid.at(i, j + 1)});
+      for (std::size_t k = 0; k + 1 < up.size(); ++k)
+        if (up[k + 1] >= lo && up[k] < hi) {
+          ASSERT_LE(up[k + 1] - up[k], std::sin(a) + 1e-12) << "node " << i << "," << j << " at " << lo << ".." << hi;
+        }
+    }
+  EXPECT_GT(walls, 100u);
+  // Up the ramp the levels are as close as its 40 degrees ask; up the wall's
+  // face (below the ball's roll over its top edge) a whole spacing apart.
+  bool ramp = false, wall = false;
+  for (std::size_t k = 0; k + 1 < up.size(); ++k) {
+    const double gap = up[k + 1] - up[k];
+    EXPECT_GE(gap, std::sin(35 * kDeg) - 1e-12);
+    if (up[k] > 1 && up[k + 1] < 3) {
+      ramp = true;
+      EXPECT_NEAR(gap, std::sin(40 * kDeg), 0.05) << "at " << up[k];
+    }
+    if (up[k] > 4.5 && up[k + 1] < 6.5) {
+      wall = true;
+      EXPECT_GT(gap, 0.9) << "at " << up[k];
+    }
+  }
+  EXPECT_TRUE(ramp);
+  EXPECT_TRUE(wall);
+  EXPECT_NEAR(w.step_min, std::sin(35 * kDeg), 0.05);
+  EXPECT_GT(w.step_max, 0.9);
+  EXPECT_LE(w.step_max, 1.0);
+  // Fewer levels than at the gentlest wall's spacing everywhere.
+  o.wall_spacing = 0;
+  o.z_step = std::sin(35 * kDeg);
+  EXPECT_LT(w.levels.size(), cam::build_waterline(engine, grid, slope, o).levels.size());
 }
