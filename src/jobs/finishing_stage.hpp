@@ -24,8 +24,9 @@ struct FinishSpacing {
 // the slope across them is at most the steep angle plus the split's overlap
 // (10 degrees), so their closest spacing is cos(that) * sqrt(8 rk H)
 // (`stepover`, what evenly spaced rows would take); waterlines run where it
-// is at least the steep angle less the overlap, so their step is
-// sin(that) * sqrt(8 rk H). The rows are spaced row by row by the slope
+// is at least the steep angle less the overlap, so their levels are at most
+// sin(that) * sqrt(8 rk H) apart, farther where every wall between two
+// levels is steeper (waterline.hpp, wall_spacing). The rows are spaced row by row by the slope
 // across them below the steep angle (row_spacing.hpp): up to sqrt(8 rk H)
 // apart over level ground. The scallop is the cusp between passes; the
 // tolerance (merged points, arcs) comes on top of it, as in other CAM.
