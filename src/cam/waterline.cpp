@@ -56,21 +56,49 @@ geometry::Vec3 on_lattice(const ClEngine& engine, const std::optional<XYLattice>
 }
 
 // How far (x, y) must move along (nx, ny), from `from` on, for the CL there
-// to be at or below the level (out by doublings, back in by halves); inf
-// past `limit`.
+// to be at or below the level (out by doublings, then in to 1/4096 of the
+// bracket); inf past `limit`. What it returns was queried at or below the
+// level.
 double free_offset(const ClEngine& engine, double x, double y, double nx, double ny, double level, double from,
                    double limit, std::size_t& queries) {
-  double lo = from, hi = std::max(from, 1e-4);
-  while (engine.height_at(x + hi * nx, y + hi * ny) > level) {
+  auto above = [&](double t) {
     ++queries;
+    return engine.height_at(x + t * nx, y + t * ny) - level;
+  };
+  double lo = from, hi = std::max(from, 1e-4);
+  double f_lo = std::numeric_limits<double>::quiet_NaN(), f_hi = above(hi);
+  while (f_hi > 0) {
     lo = hi;
+    f_lo = f_hi;
     hi *= 2;
     if (hi > limit) return HUGE_VAL;
+    f_hi = above(hi);
   }
-  for (int it = 0; it < 12; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    ++queries;
-    (engine.height_at(x + mid * nx, y + mid * ny) > level ? lo : hi) = mid;
+  // Across a contour the CL is close to linear, so regula falsi (the
+  // Illinois variant, which halves a stale end's value) needs half the
+  // queries of halving the bracket twelve times (the tapered ball's plaque:
+  // 14.5 -> 7 a call, 1.03 M -> 0.53 M queries); it halves where it has no
+  // slope to follow (a cliff, an end on the level).
+  const double width = (hi - lo) / 4096;
+  int last_side = 0;
+  for (int it = 0; it < 24 && hi - lo > width; ++it) {
+    double t = 0.5 * (lo + hi);
+    if (f_lo > 0 && f_hi < 0) {
+      const double s = lo + (hi - lo) * (f_lo / (f_lo - f_hi));
+      if (s > lo && s < hi) t = s;
+    }
+    const double f = above(t);
+    if (f > 0) {
+      lo = t;
+      f_lo = f;
+      if (last_side > 0) f_hi *= 0.5;
+      last_side = 1;
+    } else {
+      hi = t;
+      f_hi = f;
+      if (last_side < 0) f_lo *= 0.5;
+      last_side = -1;
+    }
   }
   return hi;
 }
