@@ -395,24 +395,34 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
   // Levels from the foot of the walls (just above the lowest CL) upwards.
   const double bottom = std::max(o.bottom, lo + 1e-3);
   const double top = std::min(o.top, hi);
-  if (o.wall_spacing > 0) {
-    const std::vector<WallNode> nodes = wall_nodes(grid, slope, o.wall_angle_deg * std::numbers::pi / 180);
-    for (double z = bottom; z < top;) {
-      out.levels.push_back(z);
-      const double band = band_above(nodes, z, o.wall_spacing);
-      out.step_min = out.levels.size() == 1 ? band : std::min(out.step_min, band);
-      out.step_max = std::max(out.step_max, band);
-      z += band;
-    }
-  } else {
-    for (std::size_t k = 0; bottom + double(k) * o.z_step < top; ++k) out.levels.push_back(bottom + double(k) * o.z_step);
-    out.step_min = out.step_max = o.z_step;
+  // On the G-code's grid a level prints as it is. Half a step between two
+  // printed values, a run's sub-micron lifts would print as Z steps of a
+  // whole step, a line each.
+  auto on_grid = [&](double z, bool up) {
+    if (!o.lattice || !(o.lattice->step > 0)) return z;
+    const double k = (z - o.lattice->z0) / o.lattice->step;
+    return o.lattice->z0 + (up ? std::ceil(k) : std::floor(k)) * o.lattice->step;
+  };
+  const std::vector<WallNode> nodes =
+      o.wall_spacing > 0 ? wall_nodes(grid, slope, o.wall_angle_deg * std::numbers::pi / 180) : std::vector<WallNode>{};
+  for (double z = on_grid(bottom, true); z < top;) {
+    out.levels.push_back(z);
+    const double band = o.wall_spacing > 0 ? band_above(nodes, z, o.wall_spacing) : o.z_step;
+    // Down onto the grid: a band never grows past what its walls allow.
+    const double next = on_grid(z + band, false);
+    if (out.levels.size() == 1) out.step_min = out.step_max = band;
+    z = next > z ? next : z + band;
+  }
+  for (std::size_t k = 1; k < out.levels.size(); ++k) {
+    const double gap = out.levels[k] - out.levels[k - 1];
+    out.step_min = k == 1 ? gap : std::min(out.step_min, gap);
+    out.step_max = k == 1 ? gap : std::max(out.step_max, gap);
   }
   if (o.flat_levels) {
     const double r = engine.cutter().radius;
     const double min_area = o.flat_min_area > 0 ? o.flat_min_area : std::numbers::pi * r * r / 4;
     for (const double f : flat_heights(grid, slope, min_area)) {
-      const double z = f + kAboveFlat;
+      const double z = on_grid(f + kAboveFlat, true);
       if (z < bottom || z >= top) continue;
       const bool near = std::any_of(out.levels.begin(), out.levels.end(),
                                     [&](double l) { return l >= f && l <= z + kAboveFlat; });

@@ -7,7 +7,7 @@ namespace cncstream::jobs {
 WorkSetup work_setup(const geometry::Box3& part, XYOrigin xy, ZZero z, int decimals) {
   WorkSetup w;
   w.offset = work_offset(part, xy, z);
-  w.lattice = cam::XYLattice{std::pow(10.0, -decimals), -w.offset.x, -w.offset.y};
+  w.lattice = cam::XYLattice{std::pow(10.0, -decimals), -w.offset.x, -w.offset.y, -w.offset.z};
   return w;
 }
 

@@ -323,6 +323,20 @@ TEST(WaterlineLevels, SpacedByTheGentlestWallBetweenThem) {
   EXPECT_NEAR(w.step_min, std::sin(35 * kDeg), 0.05);
   EXPECT_GT(w.step_max, 0.9);
   EXPECT_LE(w.step_max, 1.0);
+  // On the G-code's grid (work zero 0.3 um off the model's) every level
+  // prints as it is; the bands still keep to their walls.
+  o.lattice = cam::XYLattice{0.001, 0, 0, 0.0003};
+  const cam::WaterlinePath gridded = cam::build_waterline(engine, grid, slope, o);
+  ASSERT_GT(gridded.levels.size(), 5u);
+  for (std::size_t k = 0; k < gridded.levels.size(); ++k) {
+    const double steps = (gridded.levels[k] - 0.0003) / 0.001;
+    EXPECT_NEAR(steps, std::round(steps), 1e-6) << gridded.levels[k];
+    if (k > 0) {
+      EXPECT_LE(gridded.levels[k - 1] - gridded.levels[k], 1.0);
+    }
+  }
+  EXPECT_GE(gridded.step_min, std::sin(35 * kDeg) - 0.001);
+  o.lattice.reset();
   // Fewer levels than at the gentlest wall's spacing everywhere.
   o.wall_spacing = 0;
   o.z_step = std::sin(35 * kDeg);

@@ -28,6 +28,7 @@ struct XYBounds {
 struct XYLattice {
   double step = 0.001;     // mm: 10^-decimals of the G-code
   double x0 = 0, y0 = 0;   // a lattice point: the work origin in model coordinates
+  double z0 = 0;           // the work origin's height: printed Z values lie z0 + k * step
 };
 
 struct RasterOptions {

@@ -43,7 +43,8 @@ struct WaterlineOptions {
   double bridge_max = 0;          // mm: join pieces closer than this by a bridge; 0: 4 cutter radii
   // The G-code's decimal grid: every point is put on it (on the free side,
   // where the CL lets it be at the level), so printing moves none of them
-  // (beside a CL cliff a rounded half micron is a deep vertical error).
+  // (beside a CL cliff a rounded half micron is a deep vertical error); the
+  // levels lie on its Z values (lattice.z0 + k * step).
   std::optional<XYLattice> lattice;
   // A level just above each flat area of the CL (a terrace at least
   // flat_min_area large, the cutter's disc area / 4 by default): the
