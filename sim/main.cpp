@@ -293,8 +293,7 @@ int run(int argc, char** argv) {
       for (int t : removal->unknown_tools())
         std::cerr << "cncsim: warning: T" << t << " is not in the tool table; the cutter was kept\n";
       if (!result_path.empty()) {
-        const auto& parser = machine.parser();
-        const auto stl = removal->write_result(result_path, std::nullopt, parser.coord_system + parser.g92);
+        const auto stl = removal->write_result(result_path, std::nullopt, cncsim::start_tool_work_origin(machine));
         std::cerr << "cncsim: machined surface written to " << result_path << " and " << stl.string() << "\n";
       }
     }

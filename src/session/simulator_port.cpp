@@ -163,8 +163,7 @@ SimulatorPort::Report SimulatorPort::finish(bool let_motion_finish) {
     if (!opt_.result.empty()) {
       // In the job's work coordinates, with where its work zero sat on the
       // machine, so a later setup (its zero elsewhere) places it.
-      const auto& parser = machine_->parser();
-      const auto stl = removal_->write_result(opt_.result, opt_.work_offset, parser.coord_system + parser.g92);
+      const auto stl = removal_->write_result(opt_.result, opt_.work_offset, cncsim::start_tool_work_origin(*machine_));
       o << "sim: machined surface written to " << opt_.result << " (+ .txt) and " << stl.string() << "\n";
     }
     const auto heights = cam::design_heights(*opt_.design, removal_->stock().grid());

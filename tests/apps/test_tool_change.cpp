@@ -105,6 +105,21 @@ TEST(ToolChange, PlateMeasuresTheLongerFinishingToolAndCutsAsWithEqualLengths) {
   EXPECT_NEAR(*changes[0].offset_z, 7.3, 0.0015);
 }
 
+// The cut the job's simulator writes is in work coordinates whichever tool
+// ends the job: after the change to the longer tool it still sits on the
+// design (it came out 7.3 mm below it, every node gouged in the viewer).
+TEST(ToolChange, TheCutWrittenAfterTheChangeSitsOnTheDesign) {
+  const auto cut = temp_dir() / "changed-cut.f32";
+  const auto r = run_job("plate", kTools, {"--sim-result", cut.string(), "--no-journal"});
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(r.has("tool change: T2 measured +7.300 mm from T1 (plate)")) << r.out;
+  const auto png = temp_dir() / "changed-cut.png";
+  const auto v = run_cncstream({"view", "--cut", cut.string(), "--design", v_groove_stl(), "--screenshot", png.string(),
+                                "--view", "top", "--size", "320x200"});
+  ASSERT_EQ(v.code, 0) << v.out;
+  EXPECT_TRUE(v.has(", 0 gouged,")) << v.out;
+}
+
 TEST(ToolChange, SensorMeasuresTheLongerFinishingToolAndCutsAsWithEqualLengths) {
   expect_same_cut_as_equal_lengths("sensor");
 }

@@ -373,4 +373,13 @@ class Machine {
   bool popped_ = false;
 };
 
+// Where the work zero sits in the frame the material removal records: the
+// start tool's tips (Machine::tip_position). A tool change re-zeroes Z on
+// the longer tool, so the coordinate system then sits its tip drop higher;
+// the job's cut written with that origin came out 7.3 mm below the design
+// (`view --cut` showed every node gouged).
+inline cncstream::geometry::Vec3 start_tool_work_origin(const Machine& m) {
+  return m.parser().coord_system + m.parser().g92 - cncstream::geometry::Vec3{0, 0, m.tip_drop()};
+}
+
 }  // namespace cncsim
