@@ -385,6 +385,8 @@ WaterlinePath build_waterline(const ClEngine& engine, const ClGrid& grid, const 
                               const WaterlineOptions& o, const Checkpoint& checkpoint) {
   if (!(o.z_step > 0) || !(o.sample_step > 0) || !(o.tolerance >= 0))
     throw std::invalid_argument("waterline: the level step and the sample step must be positive");
+  if (o.wall_spacing > 0 && !(o.wall_angle_deg > 0 && o.wall_angle_deg <= 90))
+    throw std::invalid_argument("waterline: levels spaced by the walls need a wall angle in (0, 90] degrees");
   WaterlinePath out;
   double lo = HUGE_VAL, hi = -HUGE_VAL;
   for (const double z : grid.z) {
